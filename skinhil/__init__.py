@@ -1,0 +1,1 @@
+"""skinhil: real-time neuromorphic hardware-in-the-loop emulator of touch."""
