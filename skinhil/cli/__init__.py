@@ -1,0 +1,66 @@
+"""The ``skinhil`` command line: one module per subcommand, one error path for all.
+
+Each subcommand module exposes ``add_parser(subparsers)`` and ``run(args) -> int``. Errors
+raised on purpose (:class:`skinhil.errors.SkinhilError`) become one line on stderr and exit
+status 2; Ctrl-C becomes exit status 130.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import logging
+import sys
+from collections.abc import Sequence
+
+from skinhil.errors import SkinhilError
+
+SUBCOMMANDS: tuple[str, ...] = (
+    "demo",
+    "serve",
+    "listen",
+    "train",
+    "simulate",
+    "reproduce",
+    "bench",
+)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The top-level parser with every available subcommand registered."""
+    parser = argparse.ArgumentParser(
+        prog="skinhil",
+        description="Real-time neuromorphic hardware-in-the-loop emulator of touch.",
+    )
+    parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+    for name in SUBCOMMANDS:
+        try:
+            module = importlib.import_module(f"skinhil.cli.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name == f"skinhil.cli.{name}":
+                continue
+            raise
+        module.add_parser(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the process exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    level = logging.WARNING - 10 * min(args.verbose, 2)
+    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+    try:
+        return int(args.run(args) or 0)
+    except SkinhilError as exc:
+        print(f"skinhil: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("skinhil: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
