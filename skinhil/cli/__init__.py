@@ -1,6 +1,7 @@
 """The ``skinhil`` command line: one module per subcommand, one error path for all.
 
-Each subcommand module exposes ``add_parser(subparsers)`` and ``run(args) -> int``. Errors
+Each subcommand module exposes ``add_parser(subparsers)`` (a parser named like the module)
+and ``run(args) -> int``. Errors
 raised on purpose (:class:`skinhil.errors.SkinhilError`) become one line on stderr and exit
 status 2; Ctrl-C becomes exit status 130.
 """
@@ -53,7 +54,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     level = logging.WARNING - 10 * min(args.verbose, 2)
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
     try:
-        return int(args.run(args) or 0)
+        module = importlib.import_module(f"skinhil.cli.{args.command}")
+        return int(module.run(args) or 0)
     except SkinhilError as exc:
         print(f"skinhil: error: {exc}", file=sys.stderr)
         return 2
