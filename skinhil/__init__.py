@@ -1,1 +1,52 @@
-"""skinhil: real-time neuromorphic hardware-in-the-loop emulator of touch."""
+"""skinhil: real-time neuromorphic hardware-in-the-loop emulator of touch.
+
+The model (skin mechanics → spring forces → noisy Izhikevich neurons → spikes → PSP) is
+importable from here; see the submodules for the equations.
+"""
+
+from skinhil.events import EVENT_DTYPE, make_events
+from skinhil.neurons import (
+    IzhikevichParams,
+    NeuronPopulation,
+    events_to_raster,
+    raster_to_events,
+    simulate_spikes,
+)
+from skinhil.psp import PSPFilterBank, PSPParams, psp_kernel
+from skinhil.skin import SkinModel, SkinParams, SkinStepper
+from skinhil.stimuli import (
+    Schedule,
+    ScheduledStimulus,
+    Stimulus,
+    direction_conditions,
+    load_schedule,
+    paper_stimuli,
+    random_schedule,
+)
+from skinhil.trials import simulate_trials
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "EVENT_DTYPE",
+    "IzhikevichParams",
+    "NeuronPopulation",
+    "PSPFilterBank",
+    "PSPParams",
+    "Schedule",
+    "ScheduledStimulus",
+    "SkinModel",
+    "SkinParams",
+    "SkinStepper",
+    "Stimulus",
+    "direction_conditions",
+    "events_to_raster",
+    "load_schedule",
+    "make_events",
+    "paper_stimuli",
+    "psp_kernel",
+    "random_schedule",
+    "raster_to_events",
+    "simulate_spikes",
+    "simulate_trials",
+]

@@ -1,0 +1,168 @@
+"""The ``linear`` mechanics: the paper's stiffness-matrix form, stepped by exact ZOH.
+
+Equations (paper eq. 5-8): ``M q'' + C q' + K q = f`` on the free degrees of freedom, with
+
+- ``K = Σ_s k e_s e_sᵀ + T/L_s (I − e_s e_sᵀ)`` per spring ``s`` (axial stiffness plus the
+  geometric stiffness of the baseline tension ``T``), ``C = Σ_s c e_s e_sᵀ`` (axial dampers),
+  ``e_s`` the spring's rest unit vector and ``L_s`` its rest length, assembled into the 3x3
+  blocks of its two masses; fixed masses are removed;
+- state space ``x = [q; q']``, ``x' = A x + B u`` with ``A = [[0, I], [−M⁻¹K, −M⁻¹C]]`` and
+  ``B = [[0], [M⁻¹]]``;
+- exact zero-order-hold discretisation at step ``dt``:
+  ``expm([[A, B], [0, 0]]·dt) = [[Ad, Bd], [0, I]]``, so ``x[k+1] = Ad x[k] + Bd u[k]`` is exact
+  for an input held constant over each step, at any ``dt``.
+
+The sensor signal of spring ``s`` between masses ``i`` and ``j`` is ``k e_sᵀ (q_j − q_i)`` (N),
+positive in tension.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+from scipy.linalg import expm
+
+from skinhil.geometry import Mesh
+
+
+def spring_frames(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """Rest unit vectors ``e`` (338, 3), from the first mass to the second, and rest lengths (m)."""
+    d = mesh.positions[mesh.springs[:, 1]] - mesh.positions[mesh.springs[:, 0]]
+    length = np.linalg.norm(d, axis=1)
+    return d / length[:, None], length
+
+
+def assemble(mesh: Mesh, stiffness_n_per_m: float, damping_n_s_per_m: float,
+             tension_n: float) -> tuple[np.ndarray, np.ndarray]:
+    """Global K (N/m) and C (N·s/m), 3·77 square, before removing the fixed masses."""
+    e, length = spring_frames(mesh)
+    n = 3 * mesh.positions.shape[0]
+    k_glob = np.zeros((n, n))
+    c_glob = np.zeros((n, n))
+    eye = np.eye(3)
+    for s, (i, j) in enumerate(mesh.springs):
+        ee = np.outer(e[s], e[s])
+        kb = stiffness_n_per_m * ee + tension_n / length[s] * (eye - ee)
+        cb = damping_n_s_per_m * ee
+        for glob, blk in ((k_glob, kb), (c_glob, cb)):
+            for a, b, sign in ((i, i, 1.0), (j, j, 1.0), (i, j, -1.0), (j, i, -1.0)):
+                glob[3 * a:3 * a + 3, 3 * b:3 * b + 3] += sign * blk
+    return k_glob, c_glob
+
+
+def free_dofs(mesh: Mesh) -> np.ndarray:
+    """Indices into the 3·77 coordinate vector of the free masses' x, y, z."""
+    return (3 * mesh.free[:, None] + np.arange(3)[None, :]).ravel()
+
+
+def state_space(mesh: Mesh, mass_kg: float, stiffness_n_per_m: float,
+                damping_n_s_per_m: float, tension_n: float) -> tuple[np.ndarray, np.ndarray]:
+    """Continuous-time ``A`` (150x150) and ``B`` (150x75) on the free degrees of freedom."""
+    k_glob, c_glob = assemble(mesh, stiffness_n_per_m, damping_n_s_per_m, tension_n)
+    dofs = free_dofs(mesh)
+    k = k_glob[np.ix_(dofs, dofs)]
+    c = c_glob[np.ix_(dofs, dofs)]
+    n = dofs.size
+    a = np.zeros((2 * n, 2 * n))
+    a[:n, n:] = np.eye(n)
+    a[n:, :n] = -k / mass_kg
+    a[n:, n:] = -c / mass_kg
+    b = np.zeros((2 * n, n))
+    b[n:, :] = np.eye(n) / mass_kg
+    return a, b
+
+
+def zoh(a: np.ndarray, b: np.ndarray, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Exact zero-order-hold discretisation ``(Ad, Bd)`` of ``x' = A x + B u`` at ``dt_s``."""
+    n, m = b.shape
+    big = np.zeros((n + m, n + m))
+    big[:n, :n] = a
+    big[:n, n:] = b
+    phi = expm(big * dt_s)
+    return phi[:n, :n].copy(), phi[:n, n:].copy()
+
+
+def sensor_matrix(mesh: Mesh, stiffness_n_per_m: float) -> np.ndarray:
+    """Dense ``(338, 75)`` map from free displacements (m) to spring forces (N)."""
+    e, _ = spring_frames(mesh)
+    dofs = free_dofs(mesh)
+    pos_of = {int(d): p for p, d in enumerate(dofs)}
+    out = np.zeros((mesh.springs.shape[0], dofs.size))
+    for s, (i, j) in enumerate(mesh.springs):
+        for mass, sign in ((j, 1.0), (i, -1.0)):
+            for ax in range(3):
+                col = pos_of.get(3 * int(mass) + ax)
+                if col is not None:
+                    out[s, col] += sign * stiffness_n_per_m * e[s, ax]
+    return out
+
+
+def sparse_rows(dense: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Row-wise sparse form of ``dense``: column indices and values, padded with (0, 0.0)."""
+    width = max(1, int(np.max(np.count_nonzero(dense, axis=1))))
+    idx = np.zeros((dense.shape[0], width), dtype=np.int64)
+    val = np.zeros((dense.shape[0], width))
+    for r in range(dense.shape[0]):
+        cols = np.flatnonzero(dense[r])
+        idx[r, : cols.size] = cols
+        val[r, : cols.size] = dense[r, cols]
+    return idx, val
+
+
+@numba.njit(cache=True, fastmath=True)
+def _advance_kernel(ad: np.ndarray, bd: np.ndarray, cy_idx: np.ndarray, cy_val: np.ndarray,
+                    x: np.ndarray, u: np.ndarray, inputs: np.ndarray,
+                    out: np.ndarray) -> None:  # pragma: no cover - compiled
+    for k in range(u.shape[0]):
+        for s in range(cy_idx.shape[0]):
+            acc = 0.0
+            for w in range(cy_idx.shape[1]):
+                acc += cy_val[s, w] * x[cy_idx[s, w]]
+            out[k, s] = acc
+        xn = ad @ x
+        for j in inputs:
+            xn += bd[:, j] * u[k, j]
+        x[:] = xn
+
+
+class LinearMechanics:
+    """Exact-ZOH stepper of the linear mechanics at a fixed ``dt_s`` (see module docstring)."""
+
+    def __init__(self, mesh: Mesh, mass_kg: float, stiffness_n_per_m: float,
+                 damping_n_s_per_m: float, tension_n: float, dt_s: float) -> None:
+        a, b = state_space(mesh, mass_kg, stiffness_n_per_m, damping_n_s_per_m, tension_n)
+        self.a, self.b = a, b
+        self.ad, self.bd = zoh(a, b, dt_s)
+        self.cy = sensor_matrix(mesh, stiffness_n_per_m)
+        self.cy_idx, self.cy_val = sparse_rows(self.cy)
+        self.dofs = free_dofs(mesh)
+        self.dt_s = dt_s
+        self.x = np.zeros(a.shape[0])
+
+    def reset(self) -> None:
+        """Back to rest: zero displacement and velocity."""
+        self.x[:] = 0.0
+
+    def advance(self, forces_n: np.ndarray) -> np.ndarray:
+        """Step ``len(forces_n)`` steps; ``forces_n`` is (n, 77, 3) N; returns (n, 338) N.
+
+        Row ``j`` of the result is the spring forces at the start of step ``j``; input ``j`` is
+        then held over the step.
+        """
+        u = np.ascontiguousarray(forces_n.reshape(forces_n.shape[0], -1)[:, self.dofs])
+        out = np.empty((u.shape[0], self.cy.shape[0]))
+        inputs = np.flatnonzero(np.any(u != 0.0, axis=0))
+        _advance_kernel(self.ad, self.bd, self.cy_idx, self.cy_val, self.x, u, inputs, out)
+        return out
+
+    def simulate_batch(self, inputs: np.ndarray) -> np.ndarray:
+        """Offline: (n_stim, n_steps, 77, 3) N inputs from rest → (n_stim, n_steps, 338) N."""
+        n_stim, n_steps = inputs.shape[:2]
+        bu = inputs.reshape(n_stim, n_steps, -1)[:, :, self.dofs] @ self.bd.T
+        x = np.zeros((n_stim, self.ad.shape[0]))
+        disp = np.empty((n_stim, n_steps, self.dofs.size))
+        ad_t = self.ad.T.copy()
+        for k in range(n_steps):
+            disp[:, k] = x[:, : self.dofs.size]
+            x = x @ ad_t + bu[:, k]
+        return disp @ self.cy.T

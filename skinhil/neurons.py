@@ -1,0 +1,220 @@
+"""Noisy Izhikevich neurons, one per spring, vectorised over channels and trials.
+
+Model (Izhikevich 2003; time in ms, v and u in mV, as in the paper)::
+
+    v' = 0.04 v² + 5 v + 140 − u + K·I
+    u' = a (b v − u)
+    if v ≥ 30 mV: spike, v ← c, u ← u + d
+
+with a = 0.02, b = 0.2, c = −65 mV, d = 9, K = 500 and I the spring's force in newtons,
+signed: tension (I > 0) excites, compression (I < 0) inhibits. Initial state v = c, u = b·c.
+
+Noise: white Gaussian noise added to v and to u every step at a signal-to-noise ratio
+``snr_db``, with the signal power measured from the signal as MATLAB's
+``awgn(x, snr, 'measured')``: ``σ² = mean(x²) / 10^(snr_db/10)`` over the population vector
+``x`` (the 338 values of v, or of u, of one trial) at that step. ``snr_db = inf`` adds
+nothing and the model is deterministic.
+
+The per-step order, for every step k of length dt (ms), each trial independently:
+
+1. Euler: ``v ← v + dt·(0.04v² + 5v + 140 − u + K·I[k])``, ``u ← u + dt·a·(b·v_old − u)``;
+2. noise: ``v ← v + σ_v·N(0,1)``, ``u ← u + σ_u·N(0,1)``, σ measured from the updated v, u;
+3. threshold: where ``v ≥ 30``: a spike in step k, ``v ← c``, ``u ← u + d``.
+
+A spike in step k is stamped with the step's start time ``k·dt`` (see
+:func:`raster_to_events`). Noise comes from :mod:`skinhil.rng`, one seeded stream per trial.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from skinhil.errors import ConfigError
+from skinhil.events import EVENT_DTYPE
+from skinhil.rng import next_normal, seed_states
+
+
+@dataclass(frozen=True)
+class IzhikevichParams:
+    """Izhikevich parameters (paper values); ``gain`` is K, in mV/ms per newton."""
+
+    a: float = 0.02
+    b: float = 0.2
+    c_mv: float = -65.0
+    d: float = 9.0
+    gain: float = 500.0
+    v_peak_mv: float = 30.0
+
+    def __post_init__(self) -> None:
+        for name in ("a", "b", "c_mv", "d", "gain", "v_peak_mv"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and math.isfinite(value)):
+                raise ConfigError(f"IzhikevichParams.{name} must be a finite number, got {value!r}")
+        if self.c_mv >= self.v_peak_mv:
+            raise ConfigError("IzhikevichParams: reset c_mv must lie below the spike peak "
+                              f"v_peak_mv ({self.c_mv} >= {self.v_peak_mv})")
+
+
+def check_snr_db(snr_db: float) -> float:
+    """Validate an SNR in dB (any real number, or +inf for no noise) and return it as float."""
+    try:
+        value = float(snr_db)
+    except (TypeError, ValueError):
+        raise ConfigError(f"snr_db must be a number of dB or inf, got {snr_db!r}") from None
+    if math.isnan(value) or value == -math.inf:
+        raise ConfigError(f"snr_db must be a number of dB or inf, got {snr_db!r}")
+    return value
+
+
+def noise_power_ratio(snr_db: float) -> float:
+    """``10^(−snr_db/10)``: noise variance per unit of measured signal power (0 for inf)."""
+    value = check_snr_db(snr_db)
+    return 0.0 if value == math.inf else 10.0 ** (-value / 10.0)
+
+
+@numba.njit(cache=True, fastmath=False)
+def _izhikevich_kernel(v: np.ndarray, u: np.ndarray, current: np.ndarray, dt_ms: float,
+                       a: float, b: float, c: float, d: float, gain: float, v_peak: float,
+                       noise_ratio: float, rng: np.ndarray,
+                       spikes: np.ndarray) -> None:  # pragma: no cover - compiled
+    n_steps, n_batch, n = spikes.shape
+    shared_input = current.shape[1] == 1
+    for k in range(n_steps):
+        for bb in range(n_batch):
+            cb = 0 if shared_input else bb
+            pv = 0.0
+            pu = 0.0
+            for i in range(n):
+                vv = v[bb, i]
+                uu = u[bb, i]
+                vn = vv + dt_ms * (0.04 * vv * vv + 5.0 * vv + 140.0 - uu + gain * current[k, cb, i])
+                un = uu + dt_ms * a * (b * vv - uu)
+                v[bb, i] = vn
+                u[bb, i] = un
+                pv += vn * vn
+                pu += un * un
+            if noise_ratio > 0.0:
+                sv = math.sqrt(pv / n * noise_ratio)
+                su = math.sqrt(pu / n * noise_ratio)
+                state = rng[bb]
+                for i in range(n):
+                    v[bb, i] += sv * next_normal(state)
+                    u[bb, i] += su * next_normal(state)
+            for i in range(n):
+                fired = v[bb, i] >= v_peak
+                spikes[k, bb, i] = fired
+                if fired:
+                    v[bb, i] = c
+                    u[bb, i] += d
+
+
+class NeuronPopulation:
+    """A population of ``n_channels`` noisy Izhikevich neurons, optionally ``batch`` trials.
+
+    ``seed`` makes the noise reproducible (each trial draws from its own stream).
+    """
+
+    def __init__(self, n_channels: int, params: IzhikevichParams | None = None,
+                 snr_db: float = math.inf, seed: int | np.random.SeedSequence | None = None,
+                 batch: int | None = None) -> None:
+        if not (isinstance(n_channels, int | np.integer) and n_channels > 0):
+            raise ConfigError(f"n_channels must be a positive integer, got {n_channels!r}")
+        if batch is not None and not (isinstance(batch, int | np.integer) and batch > 0):
+            raise ConfigError(f"batch must be a positive integer or None, got {batch!r}")
+        self.params = params or IzhikevichParams()
+        self.n_channels = int(n_channels)
+        self.batch = batch
+        self._n_batch = 1 if batch is None else int(batch)
+        self.snr_db = check_snr_db(snr_db)
+        self._noise_ratio = noise_power_ratio(snr_db)
+        self._rng = seed_states(seed, self._n_batch)
+        self.v = np.empty((self._n_batch, self.n_channels))
+        self.u = np.empty_like(self.v)
+        self.reset()
+
+    def reset(self) -> None:
+        """Membranes back to rest (v = c, u = b·c); the noise streams continue."""
+        self.v[:] = self.params.c_mv
+        self.u[:] = self.params.b * self.params.c_mv
+
+    def set_snr(self, snr_db: float) -> None:
+        """Change the noise level (dB; inf for none) from the next step on."""
+        self._noise_ratio = noise_power_ratio(snr_db)
+        self.snr_db = check_snr_db(snr_db)
+
+    def step_block(self, current_n: np.ndarray, dt_s: float) -> np.ndarray:
+        """Advance ``n_steps`` steps of ``dt_s`` (s) with input forces ``current_n`` (N).
+
+        ``current_n`` is (n_steps, n) — shared by every trial — or (n_steps, batch, n);
+        returns bool spikes (n_steps, n) without a batch, else (n_steps, batch, n).
+        """
+        if not (math.isfinite(dt_s) and dt_s > 0):
+            raise ConfigError(f"dt_s must be a finite number of seconds > 0, got {dt_s!r}")
+        cur = np.asarray(current_n, dtype=np.float64)
+        if cur.ndim == 2:
+            cur = cur[:, None, :]
+        if cur.ndim != 3 or cur.shape[2] != self.n_channels or cur.shape[1] not in (
+                1, self._n_batch):
+            raise ConfigError(f"current has shape {np.shape(current_n)}; expected "
+                              f"(n_steps, {self.n_channels}) or "
+                              f"(n_steps, {self._n_batch}, {self.n_channels})")
+        spikes = np.empty((cur.shape[0], self._n_batch, self.n_channels), dtype=np.bool_)
+        p = self.params
+        _izhikevich_kernel(self.v, self.u, np.ascontiguousarray(cur), dt_s * 1e3, p.a, p.b,
+                           p.c_mv, p.d, p.gain, p.v_peak_mv, self._noise_ratio, self._rng,
+                           spikes)
+        return spikes[:, 0, :] if self.batch is None else spikes
+
+
+def simulate_spikes(forces_n: np.ndarray, dt_s: float, snr_db: float = math.inf,
+                    seed: int | np.random.SeedSequence | None = None,
+                    params: IzhikevichParams | None = None) -> np.ndarray:
+    """Spikes for spring forces (N) of shape (n_steps, n) or (batch, n_steps, n), from rest.
+
+    Returns a bool raster of the same shape.
+    """
+    f = np.asarray(forces_n, dtype=np.float64)
+    if f.ndim == 2:
+        pop = NeuronPopulation(f.shape[1], params, snr_db, seed)
+        return pop.step_block(f, dt_s)
+    if f.ndim != 3:
+        raise ConfigError(f"forces must be (n_steps, n) or (batch, n_steps, n), got {f.shape}")
+    pop = NeuronPopulation(f.shape[2], params, snr_db, seed, batch=f.shape[0])
+    return np.ascontiguousarray(pop.step_block(f.transpose(1, 0, 2), dt_s).transpose(1, 0, 2))
+
+
+def raster_to_events(raster: np.ndarray, dt_s: float, t0_us: int = 0) -> np.ndarray:
+    """Event array from a bool raster (n_steps, n): spike in step k → ``t = t0 + k·dt`` (µs).
+
+    Events are sorted by time, then address. ``dt_s`` must be a whole number of µs.
+    """
+    dt_us = _dt_us(dt_s)
+    steps, addr = np.nonzero(np.asarray(raster))
+    ev = np.empty(steps.size, dtype=EVENT_DTYPE)
+    ev["t"] = t0_us + steps.astype(np.int64) * dt_us
+    ev["addr"] = addr
+    ev["p"] = 1
+    return ev
+
+
+def events_to_raster(events: np.ndarray, n_steps: int, n_channels: int, dt_s: float,
+                     t0_us: int = 0) -> np.ndarray:
+    """Spike counts (n_steps, n_channels) int from events; events outside are ignored."""
+    dt_us = _dt_us(dt_s)
+    k = (events["t"] - t0_us) // dt_us
+    a = events["addr"].astype(np.int64)
+    keep = (k >= 0) & (k < n_steps) & (a < n_channels)
+    out = np.zeros((n_steps, n_channels), dtype=np.int64)
+    np.add.at(out, (k[keep], a[keep]), 1)
+    return out
+
+
+def _dt_us(dt_s: float) -> int:
+    dt_us = int(round(dt_s * 1e6))
+    if dt_us <= 0 or abs(dt_us - dt_s * 1e6) > 1e-6:
+        raise ConfigError(f"dt_s={dt_s!r} must be a positive whole number of microseconds")
+    return dt_us

@@ -1,0 +1,282 @@
+"""Touch stimuli: per-mass force vectors with the paper's time profile, and schedules of them.
+
+Time profile (paper Figure 1D): a stimulus with peak forces ``F_m`` (N, per paper mass number
+``m``) applies ``F_m · exp(−(t − onset)/τ)`` for ``onset ≤ t < onset + indentation`` and zero
+otherwise: abrupt onset, exponential decay during the indentation phase, nothing after.
+
+Built-in stimuli (documented choices; the paper gives the directions, not every value):
+
+- :func:`paper_stimuli` — Figure 3 A-E, 0.5 N in total each:
+  A normal press on M15 (0, 0, −0.5); B tangential +x on M15 (0.5, 0, 0); C tangential +y on
+  M15 (0, 0.5, 0); D oblique on M15 (0.3536, 0, −0.3536); E normal press spread over the
+  2x2 group M15, M16, M21, M22, (0, 0, −0.125) each.
+- :func:`direction_conditions` — Figure 4's 9 indentation conditions: a force in the x-y plane
+  on M15 at angles 0°, 120°, 240° (from +x towards +y) and magnitudes 0.1, 0.3, 0.5 N,
+  condition index ``3·i_angle + i_magnitude``; these are the classes the decoder learns.
+
+All use ``onset_s = 0``, ``indentation_s = 0.25`` and ``decay_tau_s = 0.1`` by default.
+
+Schedules place stimuli on a timeline (``start_s`` of each), from code, from
+:func:`random_schedule` or from a TOML file (:func:`load_schedule`, format in its docstring).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+
+import numpy as np
+
+from skinhil.errors import ConfigError
+from skinhil.geometry import N_MASSES
+
+DIRECTION_ANGLES_DEG: tuple[float, ...] = (0.0, 120.0, 240.0)
+DIRECTION_MAGNITUDES_N: tuple[float, ...] = (0.1, 0.3, 0.5)
+PAPER_STIMULUS_ID_BASE = 10
+"""Stimulus ids: direction conditions are 0..8, paper stimuli A-E are 10..14."""
+USER_STIMULUS_ID_BASE = 100
+"""Stimuli defined in a schedule file get ids from 100 on, in file order."""
+
+
+@dataclass(frozen=True)
+class Stimulus:
+    """A touch: peak force vectors (N) on paper-numbered masses and the Figure 1D profile.
+
+    ``forces`` maps the paper's 1-based mass number to ``(fx, fy, fz)`` in newtons.
+    ``onset_s`` is when the force starts, ``indentation_s`` how long it lasts and
+    ``decay_tau_s`` its exponential decay constant during the indentation.
+    """
+
+    name: str
+    forces: Mapping[int, tuple[float, float, float]]
+    onset_s: float = 0.0
+    indentation_s: float = 0.25
+    decay_tau_s: float = 0.1
+    _peak: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        peak = np.zeros((N_MASSES, 3))
+        clean: dict[int, tuple[float, float, float]] = {}
+        for mass, vec in self.forces.items():
+            try:
+                number = int(mass)
+            except (TypeError, ValueError):
+                raise ConfigError(f"stimulus {self.name!r}: mass {mass!r} is not a number; "
+                                  f"use the paper's mass numbers 1..{N_MASSES}") from None
+            if not 1 <= number <= N_MASSES:
+                raise ConfigError(f"stimulus {self.name!r}: unknown mass number {number}; "
+                                  f"use the paper's mass numbers 1..{N_MASSES}")
+            arr = np.asarray(vec, dtype=float)
+            if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+                raise ConfigError(f"stimulus {self.name!r}: force on M{number} must be three "
+                                  f"finite numbers (fx, fy, fz) in newtons, got {vec!r}")
+            peak[number - 1] += arr
+            clean[number] = (float(arr[0]), float(arr[1]), float(arr[2]))
+        for label, value, minimum in (("onset_s", self.onset_s, 0.0),
+                                      ("indentation_s", self.indentation_s, 0.0)):
+            if not (math.isfinite(value) and value >= minimum):
+                raise ConfigError(f"stimulus {self.name!r}: {label} must be a finite number "
+                                  f">= {minimum}, got {value!r}")
+        if not (self.decay_tau_s > 0):
+            raise ConfigError(f"stimulus {self.name!r}: decay_tau_s must be > 0 "
+                              f"(use inf for a constant force), got {self.decay_tau_s!r}")
+        object.__setattr__(self, "forces", MappingProxyType(clean))
+        object.__setattr__(self, "_peak", peak)
+
+    @property
+    def peak_forces_n(self) -> np.ndarray:
+        """(77, 3) peak force per mass (N), 0-based mass index."""
+        return self._peak.copy()
+
+    @property
+    def end_s(self) -> float:
+        """Time (s) at which the force returns to zero."""
+        return self.onset_s + self.indentation_s
+
+    def profile(self, t_s: np.ndarray | float) -> np.ndarray:
+        """The unitless Figure 1D time profile at times ``t_s`` (s)."""
+        t = np.asarray(t_s, dtype=float)
+        active = (t >= self.onset_s) & (t < self.end_s)
+        with np.errstate(over="ignore"):
+            decay = np.exp(-(np.where(active, t, self.onset_s) - self.onset_s) / self.decay_tau_s)
+        return np.where(active, decay, 0.0)
+
+    def force_at(self, t_s: np.ndarray) -> np.ndarray:
+        """Force on every mass at times ``t_s`` (s): (len(t_s), 77, 3) N."""
+        return self.profile(t_s)[:, None, None] * self._peak[None, :, :]
+
+
+def paper_stimuli() -> list[Stimulus]:
+    """The 5 stimuli of the paper's Figure 3 A-E (see module docstring)."""
+    s = 0.5 / math.sqrt(2.0)
+    return [
+        Stimulus("A", {15: (0.0, 0.0, -0.5)}),
+        Stimulus("B", {15: (0.5, 0.0, 0.0)}),
+        Stimulus("C", {15: (0.0, 0.5, 0.0)}),
+        Stimulus("D", {15: (s, 0.0, -s)}),
+        Stimulus("E", {m: (0.0, 0.0, -0.125) for m in (15, 16, 21, 22)}),
+    ]
+
+
+def direction_conditions() -> list[Stimulus]:
+    """The 9 indentation conditions of the paper's Figure 4 (see module docstring)."""
+    out = []
+    for angle in DIRECTION_ANGLES_DEG:
+        rad = math.radians(angle)
+        for mag in DIRECTION_MAGNITUDES_N:
+            vec = (mag * math.cos(rad), mag * math.sin(rad), 0.0)
+            out.append(Stimulus(f"{angle:g}deg_{mag:g}N", {15: vec}))
+    return out
+
+
+def builtin_catalog() -> dict[str, tuple[int, Stimulus]]:
+    """Every built-in stimulus by name, with its stimulus id (0..8 and 10..14)."""
+    cat = {s.name: (i, s) for i, s in enumerate(direction_conditions())}
+    for i, s in enumerate(paper_stimuli()):
+        cat[s.name] = (PAPER_STIMULUS_ID_BASE + i, s)
+    return cat
+
+
+@dataclass(frozen=True)
+class ScheduledStimulus:
+    """One stimulus on a timeline: it starts ``start_s`` (s) after the schedule's start."""
+
+    start_s: float
+    stimulus: Stimulus
+    stimulus_id: int
+
+    @property
+    def onset_s(self) -> float:
+        """Absolute onset time (s) of the force."""
+        return self.start_s + self.stimulus.onset_s
+
+    @property
+    def end_s(self) -> float:
+        """Absolute time (s) at which the force returns to zero."""
+        return self.start_s + self.stimulus.end_s
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """A timeline of stimuli (sorted by start); forces of overlapping stimuli add."""
+
+    entries: tuple[ScheduledStimulus, ...]
+
+    def __post_init__(self) -> None:
+        ordered = tuple(sorted(self.entries, key=lambda e: e.start_s))
+        for e in ordered:
+            if not (math.isfinite(e.start_s) and e.start_s >= 0):
+                raise ConfigError(f"schedule: start_s must be a finite number >= 0, "
+                                  f"got {e.start_s!r} for {e.stimulus.name!r}")
+        object.__setattr__(self, "entries", ordered)
+
+    @property
+    def duration_s(self) -> float:
+        """Time (s) at which the last stimulus ends."""
+        return max((e.end_s for e in self.entries), default=0.0)
+
+    def force_at(self, t_s: np.ndarray) -> np.ndarray:
+        """Total force on every mass at absolute times ``t_s`` (s): (len, 77, 3) N."""
+        t = np.asarray(t_s, dtype=float)
+        out = np.zeros((t.shape[0], N_MASSES, 3))
+        if t.size == 0:
+            return out
+        lo, hi = float(t.min()), float(t.max())
+        for e in self.entries:
+            if e.onset_s <= hi and e.end_s > lo:
+                out += e.stimulus.force_at(t - e.start_s)
+        return out
+
+
+def random_schedule(stimuli: Sequence[Stimulus], n: int, rest_s: float = 0.25,
+                    seed: int | None = 0, ids: Sequence[int] | None = None,
+                    lead_s: float = 0.1) -> Schedule:
+    """``n`` stimuli drawn uniformly at random (seeded), each followed by ``rest_s`` (s) of rest.
+
+    The first starts at ``lead_s`` (s); ``ids`` gives each stimulus's id (default: its index).
+    """
+    if not stimuli:
+        raise ConfigError("random schedule: no stimuli to choose from")
+    if n < 0 or rest_s < 0 or lead_s < 0:
+        raise ConfigError("random schedule: n, rest_s and lead_s must be >= 0")
+    ids = list(range(len(stimuli))) if ids is None else list(ids)
+    rng = np.random.default_rng(seed)
+    picks = rng.integers(0, len(stimuli), size=n)
+    entries, t = [], lead_s
+    for p in picks:
+        stim = stimuli[int(p)]
+        entries.append(ScheduledStimulus(t, stim, ids[int(p)]))
+        t += stim.end_s + rest_s
+    return Schedule(tuple(entries))
+
+
+def _stimulus_from_table(table: Mapping[str, object], where: str) -> Stimulus:
+    known = {"name", "forces", "onset_s", "indentation_s", "decay_tau_s", "id"}
+    unknown = set(table) - known
+    if unknown:
+        raise ConfigError(f"{where}: unknown key(s) {sorted(unknown)}; allowed: {sorted(known)}")
+    name = table.get("name")
+    forces = table.get("forces")
+    if not isinstance(name, str) or not isinstance(forces, Mapping) or not forces:
+        raise ConfigError(f"{where}: needs name = \"...\" and forces = {{ 15 = [fx, fy, fz] }}")
+    kwargs = {k: float(table[k]) for k in ("onset_s", "indentation_s", "decay_tau_s")  # type: ignore[arg-type]
+              if k in table}
+    return Stimulus(name, forces, **kwargs)  # type: ignore[arg-type]
+
+
+def load_schedule(path: str | Path) -> Schedule:
+    """Read a schedule from a TOML file.
+
+    Format::
+
+        [[stimulus]]                 # optional user stimuli (ids 100, 101, ... in file order)
+        name = "poke"
+        forces = { 15 = [0.0, 0.0, -0.4], 16 = [0.0, 0.0, -0.1] }   # N, paper mass numbers
+        indentation_s = 0.2          # optional: onset_s, indentation_s, decay_tau_s
+        decay_tau_s = 0.05
+
+        [[event]]                    # the timeline
+        start_s = 0.5
+        stimulus = "poke"            # a user stimulus or a built-in ("A".."E", "0deg_0.1N", ...)
+
+    Raises :class:`ConfigError` naming the problem for a missing, unreadable or malformed file.
+    """
+    p = Path(path)
+    try:
+        doc = tomllib.loads(p.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ConfigError(f"schedule file {str(p)!r} not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"schedule file {str(p)!r} cannot be read: {exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"schedule file {str(p)!r} is not valid TOML: {exc}") from None
+    unknown = set(doc) - {"stimulus", "event"}
+    if unknown:
+        raise ConfigError(f"schedule file {str(p)!r}: unknown section(s) {sorted(unknown)}; "
+                          "use [[stimulus]] and [[event]]")
+    catalog = builtin_catalog()
+    for i, table in enumerate(doc.get("stimulus", [])):
+        stim = _stimulus_from_table(table, f"{p.name}: [[stimulus]] #{i + 1}")
+        catalog[stim.name] = (USER_STIMULUS_ID_BASE + i, stim)
+    events = doc.get("event", [])
+    if not isinstance(events, list) or not events:
+        raise ConfigError(f"schedule file {str(p)!r} has no [[event]] entries")
+    entries = []
+    for i, ev in enumerate(events):
+        where = f"{p.name}: [[event]] #{i + 1}"
+        if not isinstance(ev, Mapping) or set(ev) - {"start_s", "stimulus"}:
+            raise ConfigError(f"{where}: needs exactly start_s = <seconds> and stimulus = \"name\"")
+        name = ev.get("stimulus")
+        if name not in catalog:
+            raise ConfigError(f"{where}: unknown stimulus {name!r}; known: {sorted(catalog)}")
+        try:
+            start = float(ev["start_s"])
+        except (KeyError, TypeError, ValueError):
+            raise ConfigError(f"{where}: start_s must be a number of seconds") from None
+        sid, stim = catalog[str(name)]
+        entries.append(ScheduledStimulus(start, stim, sid))
+    return Schedule(tuple(entries))
