@@ -74,7 +74,8 @@ def build_mesh(spacing_m: float, layer_gap_m: float) -> Mesh:
         for r in range(n):
             for c in range(n):
                 i = mass_index(layer, r, c)
-                positions[i] = ((c - half) * spacing_m, (half - r) * spacing_m, -layer * layer_gap_m)
+                positions[i] = ((c - half) * spacing_m, (half - r) * spacing_m,
+                                -layer * layer_gap_m)
                 fixed[i] = layer == 2 or r in (0, n - 1) or c in (0, n - 1)
 
     springs: list[tuple[int, int]] = []

@@ -91,7 +91,8 @@ def _izhikevich_kernel(v: np.ndarray, u: np.ndarray, current: np.ndarray, dt_ms:
             for i in range(n):
                 vv = v[bb, i]
                 uu = u[bb, i]
-                vn = vv + dt_ms * (0.04 * vv * vv + 5.0 * vv + 140.0 - uu + gain * current[k, cb, i])
+                drive = gain * current[k, cb, i]
+                vn = vv + dt_ms * (0.04 * vv * vv + 5.0 * vv + 140.0 - uu + drive)
                 un = uu + dt_ms * a * (b * vv - uu)
                 v[bb, i] = vn
                 u[bb, i] = un
