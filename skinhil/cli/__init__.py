@@ -23,7 +23,6 @@ SUBCOMMANDS: tuple[str, ...] = (
     "train",
     "simulate",
     "reproduce",
-    "bench",
 )
 
 

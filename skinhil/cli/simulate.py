@@ -1,0 +1,83 @@
+"""``skinhil simulate``: run the skin and its neurons offline and save forces and spikes."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from skinhil.cli.options import add_model_options, model_from_args
+from skinhil.errors import ConfigError
+from skinhil.sensor import SkinSensor
+from skinhil.stimuli import Schedule, ScheduledStimulus, builtin_catalog, load_schedule
+
+BLOCK_S = 0.05
+"""Simulated seconds per progress-bar update."""
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser(
+        "simulate", help="simulate a stimulus or schedule offline and save forces and spikes",
+        description="Simulate the skin and its neurons offline and write an .npz file with "
+                    "spring forces (N, float32, n_steps x 338), spike events (t µs, addr, p) "
+                    "and the stimulus markers; numpy reads it with np.load(path).")
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--stimulus", default="A", metavar="NAME",
+                     help="built-in stimulus: A..E (Fig 3) or e.g. 0deg_0.5N (Fig 4) "
+                          "(default: A)")
+    src.add_argument("--schedule", type=Path, metavar="TOML", help="schedule file")
+    p.add_argument("--duration", dest="duration_s", type=float, metavar="SECONDS",
+                   help="simulated time (default: until 0.25 s after the last stimulus ends)")
+    p.add_argument("--out", type=Path, default=Path("run.npz"), help="output file (run.npz)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_model_options(p)
+
+
+def _schedule(args: argparse.Namespace) -> Schedule:
+    if args.schedule is not None:
+        return load_schedule(args.schedule)
+    catalog = builtin_catalog()
+    if args.stimulus not in catalog:
+        raise ConfigError(f"unknown stimulus {args.stimulus!r}; choose one of "
+                          f"{', '.join(catalog)} or give --schedule FILE")
+    sid, stim = catalog[args.stimulus]
+    return Schedule((ScheduledStimulus(0.0, stim, sid),))
+
+
+def run(args: argparse.Namespace) -> int:
+    schedule = _schedule(args)
+    duration = args.duration_s if args.duration_s is not None else schedule.duration_s + 0.25
+    if not (math.isfinite(duration) and duration > 0):
+        raise ConfigError(f"--duration must be a positive number of seconds, got {duration!r}")
+    model = model_from_args(args)
+    sensor = SkinSensor(model, args.dt_s, args.snr_db, args.seed)
+    n_steps = int(round(duration / args.dt_s))
+    block = max(1, int(round(BLOCK_S / args.dt_s)))
+    forces = np.empty((n_steps, model.n_springs), dtype=np.float32)
+    events = []
+    with tqdm(total=n_steps * args.dt_s, unit="sim-s", disable=args.no_progress,
+              bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} sim-s [{elapsed}<{remaining}]") as bar:
+        for start in range(0, n_steps, block):
+            n = min(block, n_steps - start)
+            f, spikes = sensor.advance_schedule(schedule, n)
+            forces[start:start + n] = f
+            events.append(sensor.events(spikes, start))
+            bar.update(n * args.dt_s)
+    ev = np.concatenate(events)
+    markers = np.array([(e.onset_s, e.end_s, e.stimulus_id) for e in schedule.entries],
+                       dtype=[("onset_s", "<f8"), ("end_s", "<f8"), ("stimulus_id", "<i4")])
+    meta = {"dt_s": args.dt_s, "snr_db": args.snr_db, "seed": args.seed,
+            "mechanics": args.mechanics, "duration_s": n_steps * args.dt_s,
+            "stimuli": [e.stimulus.name for e in schedule.entries],
+            "params": {k: v for k, v in vars(model.params).items()}}
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(args.out, forces_n=forces, events=ev, markers=markers,
+                        meta=np.array(json.dumps(meta)))
+    rate = len(ev) / (n_steps * args.dt_s) / model.n_springs
+    print(f"wrote {args.out}: {n_steps} steps of {args.dt_s * 1e3:g} ms, {len(ev)} spikes "
+          f"({rate:.1f} Hz per sensor), peak |force| {np.abs(forces).max():.3g} N")
+    return 0
