@@ -18,7 +18,7 @@ def _zoh_reference(rhs, x0: np.ndarray, stim: Stimulus, dt: float, n: int,
     for k in range(n):
         rows.append(out_fn(x))
         f = stim.force_at(np.array([k * dt]))[0]
-        sol = solve_ivp(lambda t, y: rhs(y, f), (0.0, dt), x, method="DOP853",
+        sol = solve_ivp(lambda t, y, f=f: rhs(y, f), (0.0, dt), x, method="DOP853",
                         rtol=1e-12, atol=1e-18)
         x = sol.y[:, -1]
     return np.array(rows)

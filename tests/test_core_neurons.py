@@ -16,7 +16,8 @@ def _euler_reference(current: float, n_steps: int, dt_ms: float) -> list[int]:
     v, u = c, b * c
     spikes = []
     for step in range(n_steps):
-        v, u = v + dt_ms * (0.04 * v * v + 5 * v + 140 - u + k * current), u + dt_ms * a * (b * v - u)
+        dv = 0.04 * v * v + 5 * v + 140 - u + k * current
+        v, u = v + dt_ms * dv, u + dt_ms * a * (b * v - u)
         if v >= 30.0:
             spikes.append(step)
             v, u = c, u + d
