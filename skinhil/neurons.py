@@ -83,6 +83,7 @@ def _izhikevich_kernel(v: np.ndarray, u: np.ndarray, current: np.ndarray, dt_ms:
                        spikes: np.ndarray) -> None:  # pragma: no cover - compiled
     n_steps, n_batch, n = spikes.shape
     shared_input = current.shape[1] == 1
+    state = np.empty(4, dtype=np.uint64)  # the trial's stream, local while in use
     for k in range(n_steps):
         for bb in range(n_batch):
             cb = 0 if shared_input else bb
@@ -101,10 +102,11 @@ def _izhikevich_kernel(v: np.ndarray, u: np.ndarray, current: np.ndarray, dt_ms:
             if noise_ratio > 0.0:
                 sv = math.sqrt(pv / n * noise_ratio)
                 su = math.sqrt(pu / n * noise_ratio)
-                state = rng[bb]
+                state[:] = rng[bb]
                 for i in range(n):
                     v[bb, i] += sv * next_normal(state)
                     u[bb, i] += su * next_normal(state)
+                rng[bb] = state
             for i in range(n):
                 fired = v[bb, i] >= v_peak
                 spikes[k, bb, i] = fired

@@ -165,6 +165,8 @@ class Schedule:
     """A timeline of stimuli (sorted by start); forces of overlapping stimuli add."""
 
     entries: tuple[ScheduledStimulus, ...]
+    _onsets: np.ndarray = field(init=False, repr=False, compare=False)
+    _ends: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         ordered = tuple(sorted(self.entries, key=lambda e: e.start_s))
@@ -173,6 +175,8 @@ class Schedule:
                 raise ConfigError(f"schedule: start_s must be a finite number >= 0, "
                                   f"got {e.start_s!r} for {e.stimulus.name!r}")
         object.__setattr__(self, "entries", ordered)
+        object.__setattr__(self, "_onsets", np.array([e.onset_s for e in ordered]))
+        object.__setattr__(self, "_ends", np.array([e.end_s for e in ordered]))
 
     @property
     def duration_s(self) -> float:
@@ -186,9 +190,9 @@ class Schedule:
         if t.size == 0:
             return out
         lo, hi = float(t.min()), float(t.max())
-        for e in self.entries:
-            if e.onset_s <= hi and e.end_s > lo:
-                out += e.stimulus.force_at(t - e.start_s)
+        for i in np.flatnonzero((self._onsets <= hi) & (self._ends > lo)):
+            e = self.entries[i]
+            out += e.stimulus.force_at(t - e.start_s)
         return out
 
 
