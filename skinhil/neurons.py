@@ -35,7 +35,7 @@ import numpy as np
 
 from skinhil.errors import ConfigError
 from skinhil.events import EVENT_DTYPE
-from skinhil.rng import next_normal, seed_states
+from skinhil.rng import next_normal_pair, seed_states
 
 
 @dataclass(frozen=True)
@@ -104,8 +104,9 @@ def _izhikevich_kernel(v: np.ndarray, u: np.ndarray, current: np.ndarray, dt_ms:
                 su = math.sqrt(pu / n * noise_ratio)
                 state[:] = rng[bb]
                 for i in range(n):
-                    v[bb, i] += sv * next_normal(state)
-                    u[bb, i] += su * next_normal(state)
+                    zv, zu = next_normal_pair(state)
+                    v[bb, i] += sv * zv
+                    u[bb, i] += su * zu
                 rng[bb] = state
             for i in range(n):
                 fired = v[bb, i] >= v_peak

@@ -7,8 +7,9 @@ real time, 1.5 G for the 450-trial benchmark), so the kernels draw their own:
 - uniform 64-bit words from xoshiro256+ (Blackman & Vigna), one independent stream per
   state row, seeded through :class:`numpy.random.SeedSequence`;
 - standard normals by Marsaglia & Tsang's 128-layer ziggurat (J. Stat. Softw. 5(8), 2000),
-  taking the layer from the low 7 bits and the signed value from the high 32 bits of the same
-  64-bit word, so layer and value are independent (Doornik 2005's fix).
+  taking the layer and the signed value from disjoint bits of the word, so they are
+  independent (Doornik 2005's fix): :func:`next_normal` uses 7 + 32 bits of a word,
+  :func:`next_normal_pair` 7 + 25 bits of each half, two normals per word.
 """
 
 from __future__ import annotations
@@ -45,6 +46,9 @@ def _tables() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 ZIG_KN, ZIG_WN, ZIG_FN = _tables()
+ZIG_KN25 = ZIG_KN >> 7
+"""Acceptance bounds for a 25-bit signed value (two normals per 64-bit word)."""
+ZIG_WN25 = ZIG_WN * 128.0
 
 
 def seed_states(seed: int | np.random.SeedSequence | None, n_streams: int) -> np.ndarray:
@@ -119,8 +123,29 @@ def next_normal(state: np.ndarray) -> float:  # pragma: no cover - compiled
     return _normal_slow(state, hz, iz)
 
 
+@numba.njit(inline="always")
+def normal_from_bits(bits: np.uint64, state: np.ndarray) -> float:  # pragma: no cover
+    """A standard normal from 32 random ``bits`` (7 for the layer, 25 for the signed value);
+    the rare rejections draw more words from ``state``."""
+    iz = np.int64(bits & np.uint64(127))
+    hz = np.int64((bits >> np.uint64(7)) & np.uint64(0x1FFFFFF)) - 16777216
+    if abs(hz) < ZIG_KN25[iz]:
+        return hz * ZIG_WN25[iz]
+    return _normal_slow(state, hz * 128, iz)
+
+
+@numba.njit(inline="always")
+def next_normal_pair(state: np.ndarray) -> tuple[float, float]:  # pragma: no cover
+    """Two independent standard normals from one 64-bit word of ``state`` (and rarely more)."""
+    w = next_u64(state)
+    first = normal_from_bits(w & np.uint64(0xFFFFFFFF), state)
+    return first, normal_from_bits(w >> np.uint64(32), state)
+
+
 @numba.njit(cache=True)
 def fill_normal(state: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover - compiled
     """Fill the 1-D ``out`` with standard normals from the stream ``state`` (for tests)."""
-    for i in range(out.shape[0]):
-        out[i] = next_normal(state)
+    for i in range(0, out.shape[0] - 1, 2):
+        out[i], out[i + 1] = next_normal_pair(state)
+    if out.shape[0] % 2:
+        out[-1] = next_normal(state)
