@@ -57,6 +57,7 @@ class Stimulus:
     indentation_s: float = 0.25
     decay_tau_s: float = 0.1
     _peak: np.ndarray = field(init=False, repr=False, compare=False)
+    _pushed: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         peak = np.zeros((N_MASSES, 3))
@@ -86,6 +87,7 @@ class Stimulus:
                               f"(use inf for a constant force), got {self.decay_tau_s!r}")
         object.__setattr__(self, "forces", MappingProxyType(clean))
         object.__setattr__(self, "_peak", peak)
+        object.__setattr__(self, "_pushed", np.flatnonzero(np.any(peak != 0.0, axis=1)))
 
     @property
     def peak_forces_n(self) -> np.ndarray:
@@ -100,14 +102,21 @@ class Stimulus:
     def profile(self, t_s: np.ndarray | float) -> np.ndarray:
         """The unitless Figure 1D time profile at times ``t_s`` (s)."""
         t = np.asarray(t_s, dtype=float)
-        active = (t >= self.onset_s) & (t < self.end_s)
-        with np.errstate(over="ignore"):
-            decay = np.exp(-(np.where(active, t, self.onset_s) - self.onset_s) / self.decay_tau_s)
-        return np.where(active, decay, 0.0)
+        rel = t - self.onset_s
+        out = np.exp(-np.maximum(rel, 0.0) / self.decay_tau_s)
+        out[(rel < 0.0) | (t >= self.end_s)] = 0.0
+        return out
 
     def force_at(self, t_s: np.ndarray) -> np.ndarray:
         """Force on every mass at times ``t_s`` (s): (len(t_s), 77, 3) N."""
-        return self.profile(t_s)[:, None, None] * self._peak[None, :, :]
+        out = np.zeros((np.shape(t_s)[0], N_MASSES, 3))
+        self.add_force(t_s, out)
+        return out
+
+    def add_force(self, t_s: np.ndarray, out: np.ndarray) -> None:
+        """Add the force at times ``t_s`` (s) into ``out`` (len(t_s), 77, 3) N, in place."""
+        idx = self._pushed
+        out[:, idx, :] += self.profile(t_s)[:, None, None] * self._peak[None, idx, :]
 
 
 def paper_stimuli() -> list[Stimulus]:
@@ -192,7 +201,7 @@ class Schedule:
         lo, hi = float(t.min()), float(t.max())
         for i in np.flatnonzero((self._onsets <= hi) & (self._ends > lo)):
             e = self.entries[i]
-            out += e.stimulus.force_at(t - e.start_s)
+            e.stimulus.add_force(t - e.start_s, out)
         return out
 
 
