@@ -99,21 +99,24 @@ def _izhikevich_kernel(v: np.ndarray, u: np.ndarray, current: np.ndarray, dt_ms:
                 u[bb, i] = un
                 pv += vn * vn
                 pu += un * un
+            sv = math.sqrt(pv / n * noise_ratio)
+            su = math.sqrt(pu / n * noise_ratio)
             if noise_ratio > 0.0:
-                sv = math.sqrt(pv / n * noise_ratio)
-                su = math.sqrt(pu / n * noise_ratio)
                 state[:] = rng[bb]
-                for i in range(n):
-                    zv, zu = next_normal_pair(state)
-                    v[bb, i] += sv * zv
-                    u[bb, i] += su * zu
-                rng[bb] = state
             for i in range(n):
-                fired = v[bb, i] >= v_peak
+                vv = v[bb, i]
+                if noise_ratio > 0.0:
+                    zv, zu = next_normal_pair(state)
+                    vv += sv * zv
+                    u[bb, i] += su * zu
+                fired = vv >= v_peak
                 spikes[k, bb, i] = fired
                 if fired:
-                    v[bb, i] = c
+                    vv = c
                     u[bb, i] += d
+                v[bb, i] = vv
+            if noise_ratio > 0.0:
+                rng[bb] = state
 
 
 class NeuronPopulation:
