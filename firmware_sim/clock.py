@@ -1,0 +1,111 @@
+"""The board's fixed-step scheduler: publish ticks on the monotonic clock, without drift.
+
+Tick ``k`` (k = 0, 1, ...) covers board time ``[k·tick_s, (k+1)·tick_s)``. Like firmware that
+publishes what happened during the last period, its work is due at monotonic time
+``t0 + (k+1)·tick_s``: deadlines are computed from ``t0`` and ``k``, never from the previous
+wake-up, so simulated time tracks wall time with no drift. A late tick runs at once, and the
+ticks behind it run back to back until the board has caught up.
+
+Measured per tick: ``lateness`` = (start of the tick's work) − (its due time), in seconds;
+a tick *misses its deadline* when its work ends after the next tick's due time
+(``due + tick_s``). Misses are counted, never hidden.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+import logging
+import time
+
+import numpy as np
+
+log = logging.getLogger(__name__)
+
+_PR_SET_TIMERSLACK = 29
+
+
+def tighten_timer_slack(slack_ns: int = 1000) -> bool:
+    """Ask Linux for ``slack_ns`` (ns) timer slack so sleeps end on time; False if unsupported."""
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+        return int(libc.prctl(_PR_SET_TIMERSLACK, int(slack_ns), 0, 0, 0)) == 0
+    except (OSError, AttributeError):
+        return False
+
+
+class TickClock:
+    """Fixed-period tick scheduler on ``time.monotonic`` with lateness statistics.
+
+    ``tick_s`` is the period (s). Call :meth:`start` once, then per tick
+    :meth:`wait` (sleeps until the tick is due and returns its index) and :meth:`done`
+    (after the tick's work). ``lateness_s`` keeps the last ``history`` latenesses (s).
+    """
+
+    def __init__(self, tick_s: float, history: int = 600_000) -> None:
+        if not tick_s > 0:
+            raise ValueError(f"tick_s must be > 0 s, got {tick_s!r}")
+        self.tick_s = float(tick_s)
+        self.t0: float | None = None
+        self.index = 0
+        """Index of the next tick to run."""
+        self.deadline_misses = 0
+        self.max_lateness_s = 0.0
+        self._lateness = np.zeros(history)
+        self._n = 0
+
+    def start(self, t0: float | None = None) -> None:
+        """Start the clock: tick 0 is due ``tick_s`` after ``t0`` (default now)."""
+        self.t0 = time.monotonic() if t0 is None else t0
+        self.index = 0
+
+    def due(self, k: int) -> float:
+        """Monotonic time (s) at which tick ``k``'s work is due."""
+        assert self.t0 is not None, "start() the clock first"
+        return self.t0 + (k + 1) * self.tick_s
+
+    def wait(self, stop_check_s: float = 0.05) -> int:
+        """Sleep until the next tick is due; return its index and record its lateness."""
+        due = self.due(self.index)
+        while True:
+            now = time.monotonic()
+            left = due - now
+            if left <= 0:
+                break
+            time.sleep(min(left, stop_check_s))
+        late = now - due
+        self._lateness[self._n % len(self._lateness)] = late
+        self._n += 1
+        if late > self.max_lateness_s:
+            self.max_lateness_s = late
+        return self.index
+
+    def done(self) -> None:
+        """Mark the current tick's work finished; count a miss if it ended too late."""
+        if time.monotonic() > self.due(self.index) + self.tick_s:
+            self.deadline_misses += 1
+        self.index += 1
+
+    def behind_s(self) -> float:
+        """How far (s) the next tick's due time lies in the past (0 if on time)."""
+        return max(0.0, time.monotonic() - self.due(self.index))
+
+    @property
+    def ticks(self) -> int:
+        """Ticks measured so far."""
+        return self._n
+
+    def lateness_s(self) -> np.ndarray:
+        """The recorded latenesses (s), oldest first (at most ``history`` of them)."""
+        n = min(self._n, len(self._lateness))
+        if self._n <= len(self._lateness):
+            return self._lateness[:n].copy()
+        i = self._n % len(self._lateness)
+        return np.concatenate([self._lateness[i:], self._lateness[:i]])
+
+    def lateness_percentiles_ms(self, qs: tuple[float, ...] = (50, 99)) -> dict[str, float]:
+        """Lateness percentiles and maximum, in ms (keys ``p50``, ``p99``, ``max``)."""
+        lat = self.lateness_s()
+        out = {f"p{q:g}": float(np.percentile(lat, q)) * 1e3 if lat.size else 0.0 for q in qs}
+        out["max"] = self.max_lateness_s * 1e3
+        return out
