@@ -51,6 +51,15 @@ class EventFifo:
         """Timestamp (µs) of the oldest queued event, or None if empty."""
         return int(self._buf["t"][self._head]) if self._len else None
 
+    def count_before(self, t_us: int) -> int:
+        """How many queued events have ``t < t_us`` (queued events are in time order)."""
+        first = min(self._len, self.capacity - self._head)
+        seg = self._buf["t"][self._head:self._head + first]
+        n = int(np.searchsorted(seg, t_us, side="left"))
+        if n < first or self._len == first:
+            return n
+        return n + int(np.searchsorted(self._buf["t"][:self._len - first], t_us, side="left"))
+
     def pop(self, n: int) -> np.ndarray:
         """Remove and return up to ``n`` oldest events (a new array)."""
         n = min(int(n), self._len)

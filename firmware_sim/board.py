@@ -1,0 +1,424 @@
+"""The emulated sensor board: skin, neurons and link running together in real time.
+
+Per publish tick ``k`` (default 1 ms = 10 steps of 0.1 ms), due at ``t0 + (k+1)·tick``
+(:class:`firmware_sim.clock.TickClock`), in this order:
+
+1. stimulus: the external forces of the timeline at each step's start time
+   (:class:`firmware_sim.timeline.Timeline`), a block (steps, 77, 3) N;
+2. model: ``SkinStepper.advance`` then ``NeuronPopulation.step_block``
+   (:class:`skinhil.sensor.SkinSensor`): spikes (steps, 338);
+3. events: spikes → events stamped with board time in µs (step resolution) → counted as
+   generated → the event FIFO (or dropped by reason, :mod:`firmware_sim.counters`);
+4. host commands received since the last tick are executed and answered (ACK/NACK);
+5. ground-truth markers due in this tick, then events from the FIFO, are encoded into the
+   transmit queue while it holds less than ``tx_target_s`` of wire time; a status record
+   every ``status_period_s``;
+6. the transmit queue goes to the transport within the wire budget
+   (:class:`firmware_sim.link.BoardLink`).
+
+A bad command never stops the board: it gets a NACK with a reason. When the link goes away
+the board says so (``on_link`` callback) and either stops with
+:class:`skinhil.errors.TransportError` or, with ``reconnect``, keeps its clock running,
+drops events as ``link_down`` and reopens the link every ``reconnect_period_s``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import gc
+import logging
+import math
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+import protocols
+from firmware_sim.clock import TickClock, tighten_timer_slack
+from firmware_sim.counters import BoardCounters
+from firmware_sim.fifo import EventFifo
+from firmware_sim.link import BoardLink
+from firmware_sim.timeline import MarkerEvent, Timeline
+from firmware_sim.transport import Transport
+from skinhil.errors import ConfigError, TransportError
+from skinhil.sensor import SkinSensor
+from skinhil.skin import SkinModel, SkinParams
+from skinhil.stimuli import Schedule, ScheduledStimulus
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class BoardConfig:
+    """Board parameters (times in s, rates in events or bits per s)."""
+
+    dt_s: float = 1e-4
+    """Simulation step (s); also the timestamp resolution."""
+    tick_s: float = 1e-3
+    """Publish tick (s): a whole number of steps."""
+    fifo_events: int = 16384
+    """Event FIFO capacity (events)."""
+    status_period_s: float = 0.1
+    """Status/heartbeat period (s)."""
+    tx_target_s: float = 2e-3
+    """Encoded data kept ready in the transmit queue (s of wire time)."""
+    snr_db: float = math.inf
+    """Neuron noise SNR (dB; inf: none)."""
+    seed: int = 0
+    """Seed of the noise and of the default random schedule."""
+    board_id: int = 0
+    """Board id on a CAN bus (in the arbitration ids)."""
+    mechanics: str = "linear"
+    schedule_mode: int = Timeline.SCHEDULE_RANDOM
+    """0: host-driven only, 1: default random schedule, 2: schedule file."""
+    rest_s: float = 0.25
+    """Rest (s) after each stimulus of the default random schedule."""
+    start_running: bool = True
+    """Stream from the start (False: wait for a START command)."""
+    reconnect: bool = False
+    reconnect_period_s: float = 0.5
+    drain_timeout_s: float = 5.0
+    """At the end, how long (s) the FIFO may take to drain onto the wire."""
+
+    @property
+    def steps_per_tick(self) -> int:
+        return int(round(self.tick_s / self.dt_s))
+
+    def check(self) -> BoardConfig:
+        """Return self if consistent, else raise :class:`ConfigError`."""
+        if not (math.isfinite(self.dt_s) and self.dt_s > 0):
+            raise ConfigError(f"step must be a positive number of seconds, got {self.dt_s!r}")
+        us = self.dt_s * 1e6
+        if abs(us - round(us)) > 1e-6 or round(us) < 1:
+            raise ConfigError(f"step {self.dt_s!r} s is not a whole number of microseconds")
+        n = self.tick_s / self.dt_s
+        if not (math.isfinite(n) and n >= 1 and abs(n - round(n)) < 1e-6):
+            raise ConfigError(f"tick {self.tick_s!r} s must be a whole number (>= 1) of "
+                              f"steps of {self.dt_s!r} s")
+        if self.fifo_events < 1:
+            raise ConfigError(f"FIFO capacity must be >= 1 event, got {self.fifo_events!r}")
+        if not self.status_period_s > 0:
+            raise ConfigError("status period must be > 0 s")
+        return self
+
+
+@dataclass(frozen=True)
+class BoardSummary:
+    """What a run did: counters, timing and link use."""
+
+    board_time_s: float
+    wall_s: float
+    cpu_s: float
+    generated: int
+    sent: int
+    dropped: int
+    dropped_by: dict[str, int]
+    queued: int
+    ticks: int
+    deadline_misses: int
+    lateness_ms: dict[str, float]
+    commands: int
+    nacks: int
+    rx_errors: int
+    link_losses: int
+    units_sent: int
+    """Bytes (serial) or frames (CAN) handed to the link."""
+    wire_busy_s: float
+    """Wire time (s) used."""
+
+    def as_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+def _member(enum: Any, *names: str) -> Any:
+    for name in names:
+        if hasattr(enum, name):
+            return getattr(enum, name)
+    return list(enum)[0]
+
+
+class Board:
+    """The emulated board over a link opened by ``open_link()``.
+
+    ``open_link`` is called at start and again on every reconnection attempt; it returns a
+    :class:`~firmware_sim.transport.Transport` or raises :class:`TransportError`.
+    ``file_schedule`` is the schedule file's content (schedule mode 2).
+    """
+
+    def __init__(self, config: BoardConfig, open_link: Callable[[], Transport[Any]],
+                 file_schedule: Schedule | None = None,
+                 on_link: Callable[[str], None] | None = None) -> None:
+        self.config = config.check()
+        self._open_link = open_link
+        self.on_link = on_link or (lambda msg: log.warning("%s", msg))
+        model = SkinModel(SkinParams(mechanics=config.mechanics))
+        self.sensor = SkinSensor(model, config.dt_s, config.snr_db, config.seed)
+        self.timeline = Timeline(config.dt_s, file_schedule, config.seed, config.rest_s,
+                                 config.schedule_mode)
+        self.fifo = EventFifo(config.fifo_events)
+        self.counters = BoardCounters()
+        self.clock = TickClock(config.tick_s)
+        self.running = config.start_running
+        self.link: BoardLink | None = None
+        self.link_losses = 0
+        self._next_link_try = 0.0
+        self._dt_us = int(round(config.dt_s * 1e6))
+        self._markers: list[MarkerEvent] = []
+        self._next_status_us = 0
+        self._status_every_us = int(round(config.status_period_s * 1e6))
+        self._wire_per_event_s = 0.0
+        self._wire_busy_s = 0.0
+        self._units_sent = 0
+        self.link = self._make_link(open_link())
+
+    # -- link ---------------------------------------------------------------------------
+    def _make_link(self, transport: Transport[Any]) -> BoardLink:
+        link = BoardLink(transport, self.config.board_id,
+                         fd=bool(getattr(transport, "fd", False)),
+                         allowance_s=self.config.tick_s)
+        self._wire_per_event_s = 0.0
+        return link
+
+    def _lose_link(self, exc: Exception) -> None:
+        self.link_losses += 1
+        if self.link is not None:
+            self._wire_busy_s += self.link.pacer.busy_s
+            self._units_sent += self.link.units_sent
+            self.link.shutdown()
+        self.link = None
+        self.counters.drop("link_down", self.fifo.clear())
+        self._markers.clear()
+        if not self.config.reconnect:
+            raise TransportError(f"{exc}; start again, or use --reconnect to wait for the "
+                                 "link to return") from None
+        self.on_link(f"link lost ({exc}); reconnecting every "
+                     f"{self.config.reconnect_period_s:g} s")
+        self._next_link_try = time.monotonic() + self.config.reconnect_period_s
+
+    def _try_reconnect(self) -> None:
+        now = time.monotonic()
+        if now < self._next_link_try:
+            return
+        self._next_link_try = now + self.config.reconnect_period_s
+        try:
+            transport = self._open_link()
+        except TransportError as exc:
+            log.debug("reconnect: %s", exc)
+            return
+        self.link = self._make_link(transport)
+        self._next_status_us = 0
+        self.on_link(f"link back: {transport.name}")
+
+    # -- records ------------------------------------------------------------------------
+    def board_time_us(self) -> int:
+        """Board time (µs) at the end of the last completed tick."""
+        return self.sensor.step_index * self._dt_us
+
+    def status(self) -> Any:
+        """The current counters as a :class:`protocols.Status` record."""
+        c = self.counters
+        values: dict[str, Any] = {
+            "t_us": self.board_time_us(), "events_generated": c.generated,
+            "events_sent": c.sent, "events_dropped": c.dropped,
+            "events_queued": len(self.fifo), "late_ticks": self.clock.deadline_misses,
+            "rx_errors": c.rx_errors, "running": self.running,
+        }
+        for reason, n in c.dropped_by.items():
+            values[f"dropped_{reason}"] = n
+        fields = {f.name for f in dataclasses.fields(protocols.Status)}
+        return protocols.Status(**{k: v for k, v in values.items() if k in fields})
+
+    def _marker(self, m: MarkerEvent) -> Any:
+        phase_enum = getattr(protocols, "MarkerPhase", None)
+        phase: Any = m.phase
+        if phase_enum is not None:
+            phase = _member(phase_enum, m.phase.upper(),
+                            "ONSET" if m.phase == "onset" else "INDENTATION_END")
+        return protocols.Marker(t_us=m.t_us, stimulus_id=m.stimulus_id, phase=phase)
+
+    # -- commands -----------------------------------------------------------------------
+    def handle(self, cmd: Any) -> Any:
+        """Execute a host command; return its :class:`protocols.Ack` (never raises)."""
+        codes, reasons = protocols.CommandCode, protocols.NackReason
+        ok_reason = _member(reasons, "NONE", "OK")
+        now_s = self.board_time_us() * 1e-6
+        self.counters.commands += 1
+        op = cmd.opcode
+        ok, reason = True, ok_reason
+        try:
+            if op == codes.START:
+                self.running = True
+            elif op == codes.STOP:
+                self.running = False
+            elif op == codes.SET_STIMULUS:
+                ok = self.timeline.start_stimulus(int(cmd.arg), now_s)
+                reason = ok_reason if ok else _member(reasons, "UNKNOWN_STIMULUS", "BAD_ARGUMENT")
+            elif op == codes.SET_SCHEDULE:
+                ok = self.timeline.start_schedule(int(cmd.arg), now_s)
+                reason = ok_reason if ok else _member(reasons, "UNKNOWN_SCHEDULE", "BAD_ARGUMENT")
+            elif op == codes.SET_SNR:
+                snr = float(cmd.arg)
+                if math.isnan(snr) or snr == -math.inf:
+                    ok, reason = False, _member(reasons, "BAD_ARGUMENT", "INVALID_ARGUMENT")
+                else:
+                    self.sensor.set_snr(snr)
+            elif op == codes.QUERY_STATUS:
+                pass  # the status follows the ACK
+            else:
+                ok, reason = False, _member(reasons, "UNKNOWN_COMMAND", "UNSUPPORTED")
+        except (ValueError, TypeError, OverflowError) as exc:
+            log.info("command %r rejected: %s", cmd, exc)
+            ok, reason = False, _member(reasons, "BAD_ARGUMENT", "INVALID_ARGUMENT")
+        if not ok:
+            self.counters.nacks += 1
+        return protocols.Ack(token=cmd.token, opcode=op, ok=ok, reason=reason)
+
+    # -- one tick -----------------------------------------------------------------------
+    def tick(self) -> None:
+        """Run one publish tick (see module docstring for the order)."""
+        cfg = self.config
+        n = cfg.steps_per_tick
+        first = self.sensor.step_index
+        t_s = (first + np.arange(n)) * cfg.dt_s
+        _, spikes = self.sensor.advance(self.timeline.forces(t_s))
+        t_end_us = self.board_time_us()
+        events = self.sensor.events(spikes, first)
+        c = self.counters
+        c.generated += len(events)
+        if self.link is None:
+            c.drop("link_down", len(events))
+        elif not self.running:
+            c.drop("stopped", len(events))
+        else:
+            c.drop("fifo_full", self.fifo.push(events))
+        markers = self.timeline.markers_before(t_end_us)
+        if self.link is None:
+            self._try_reconnect()
+            return
+        if self.running:
+            self._markers.extend(markers)
+        try:
+            self._serve_link(t_end_us)
+        except TransportError as exc:
+            self._lose_link(exc)
+
+    def _serve_link(self, t_end_us: int) -> None:
+        link = self.link
+        assert link is not None
+        for cmd in link.poll_commands():
+            ack = self.handle(cmd)
+            link.queue_record(ack)
+            if cmd.opcode == protocols.CommandCode.QUERY_STATUS:
+                self._fill(link, t_end_us)
+                link.queue_record(self.status())
+        self._fill(link, t_end_us)
+        if t_end_us >= self._next_status_us:
+            link.queue_record(self.status())
+            self._next_status_us = t_end_us + self._status_every_us
+        link.pump()
+
+    def _fill(self, link: BoardLink, t_end_us: int) -> None:
+        """Encode markers and FIFO events, in time order, while the queue is short."""
+        target = self.config.tx_target_s
+        while True:
+            room = target - link.backlog_s()
+            head = self.fifo.peek_time_us()
+            while self._markers and (head is None or self._markers[0].t_us <= head):
+                link.queue_record(self._marker(self._markers.pop(0)))
+            if head is None or room <= 0:
+                return
+            per = self._wire_per_event_s or 1e-9
+            n = max(1, int(room / per))
+            if self._markers:
+                n = min(n, self.fifo.count_before(self._markers[0].t_us) or 1)
+            batch = self.fifo.pop(n)
+            wire = link.queue_events(batch, t_end_us)
+            self.counters.sent += len(batch)
+            if len(batch):
+                est = wire / len(batch)
+                self._wire_per_event_s = est if not self._wire_per_event_s else \
+                    0.8 * self._wire_per_event_s + 0.2 * est
+
+    # -- run ----------------------------------------------------------------------------
+    def run(self, duration_s: float | None = None, stop: threading.Event | None = None,
+            on_second: Callable[[Board], None] | None = None,
+            report_period_s: float = 0.5) -> BoardSummary:
+        """Run in real time until ``duration_s`` of board time or ``stop`` is set.
+
+        ``on_second(board)`` is called every ``report_period_s`` of wall time (for live
+        status). At the end the FIFO drains onto the wire (at most ``drain_timeout_s``), a
+        final status is sent and the link is closed. Raises :class:`TransportError` when the
+        link goes away without ``reconnect``.
+        """
+        stop = stop or threading.Event()
+        self.warm_up()
+        tighten_timer_slack()
+        gc.collect()
+        gc.freeze()
+        cpu0, wall0 = time.process_time(), time.monotonic()
+        n_ticks = None if duration_s is None else int(round(duration_s / self.config.tick_s))
+        next_report = wall0 + report_period_s
+        self.clock.start()
+        try:
+            while not stop.is_set() and (n_ticks is None or self.clock.index < n_ticks):
+                self.clock.wait()
+                self.tick()
+                self.clock.done()
+                if on_second is not None and time.monotonic() >= next_report:
+                    next_report += report_period_s
+                    on_second(self)
+            self._finish()
+        finally:
+            if self.link is not None:
+                self._wire_busy_s += self.link.pacer.busy_s
+                self._units_sent += self.link.units_sent
+                self.link.shutdown()
+                self.link = None
+        return self.summary(time.monotonic() - wall0, time.process_time() - cpu0)
+
+    def warm_up(self) -> None:
+        """Run the model once off the clock (compiles kernels), then reset it to rest."""
+        if self.sensor.step_index:
+            return
+        n = self.config.steps_per_tick
+        t_s = np.arange(n) * self.config.dt_s
+        self.sensor.advance(self.timeline.forces(t_s))
+        for entry in self.timeline.schedule.entries[:1]:  # a stimulus while it is active
+            Schedule((ScheduledStimulus(0.0, entry.stimulus, 0),)).force_at(t_s)
+        self.sensor.events(np.zeros((n, self.sensor.model.n_springs), dtype=bool), 0)
+        self.sensor.reset()
+
+    def _finish(self) -> None:
+        link = self.link
+        if link is None:
+            return
+        end = time.monotonic() + self.config.drain_timeout_s
+        t_end_us = self.board_time_us()
+        try:
+            while (len(self.fifo) or self._markers) and time.monotonic() < end:
+                self._fill(link, t_end_us)
+                link.pump()
+                time.sleep(self.config.tick_s / 4)
+            self.counters.drop("shutdown", self.fifo.clear())
+            self._markers.clear()
+            link.queue_record(self.status())
+            link.drain(max(0.5, end - time.monotonic()))
+            link.wait_wire_idle(1.0)
+        except TransportError as exc:
+            log.warning("link lost while finishing: %s", exc)
+
+    def summary(self, wall_s: float = 0.0, cpu_s: float = 0.0) -> BoardSummary:
+        c = self.counters
+        link = self.link
+        return BoardSummary(
+            board_time_s=self.board_time_us() * 1e-6, wall_s=wall_s, cpu_s=cpu_s,
+            generated=c.generated, sent=c.sent, dropped=c.dropped,
+            dropped_by=dict(c.dropped_by), queued=len(self.fifo), ticks=self.clock.ticks,
+            deadline_misses=self.clock.deadline_misses,
+            lateness_ms=self.clock.lateness_percentiles_ms(), commands=c.commands,
+            nacks=c.nacks, rx_errors=c.rx_errors, link_losses=self.link_losses,
+            units_sent=self._units_sent + (link.units_sent if link else 0),
+            wire_busy_s=self._wire_busy_s + (link.pacer.busy_s if link else 0.0))

@@ -1,0 +1,44 @@
+"""The board's event accounting: every generated event is sent, dropped (by reason) or queued.
+
+Invariant at any instant: ``generated = sent + dropped + queued`` with
+``dropped = fifo_full + stopped + link_down + shutdown``. An event counts as *sent* when it
+is encoded into the transmit queue (whose data always reaches the transport unless the link
+goes away); *queued* is what waits in the event FIFO.
+
+Drop reasons:
+
+- ``fifo_full``: the FIFO had no room for a new event (tail drop, see
+  :mod:`firmware_sim.fifo`), i.e. the spike rate exceeded the wire budget for too long;
+- ``stopped``: the board was stopped (STOP command): the skin and neurons keep running, their
+  events are not streamed;
+- ``link_down``: the link was gone (waiting to reconnect), including events that were
+  queued when it went away;
+- ``shutdown``: still queued when the board stopped and the final drain timed out.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+DROP_REASONS = ("fifo_full", "stopped", "link_down", "shutdown")
+
+
+@dataclass
+class BoardCounters:
+    """Cumulative event counts since the board started."""
+
+    generated: int = 0
+    sent: int = 0
+    dropped_by: dict[str, int] = field(default_factory=lambda: dict.fromkeys(DROP_REASONS, 0))
+    rx_errors: int = 0
+    """Host bytes or frames the board could not decode."""
+    commands: int = 0
+    nacks: int = 0
+
+    @property
+    def dropped(self) -> int:
+        return sum(self.dropped_by.values())
+
+    def drop(self, reason: str, n: int) -> None:
+        """Count ``n`` events dropped for ``reason`` (one of :data:`DROP_REASONS`)."""
+        self.dropped_by[reason] += int(n)

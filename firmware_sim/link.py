@@ -1,0 +1,163 @@
+"""The board's side of the link: encode records and events, pace them, read host commands.
+
+One :class:`BoardLink` owns a transport, the protocol encoder and decoder that fit it
+(serial framing for a serial port, the CAN layout for a CAN bus), and a small transmit queue
+of encoded data. :meth:`BoardLink.pump` hands the queue to the transport no faster than the
+wire allows (:class:`firmware_sim.pacing.WirePacer`), without ever blocking: what the OS does
+not take stays queued, like bytes in a UART's transmit buffer.
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import time
+from typing import Any
+
+import numpy as np
+
+import protocols
+from firmware_sim.pacing import WirePacer
+from firmware_sim.transport import Transport
+
+log = logging.getLogger(__name__)
+
+
+class BoardLink:
+    """Encoder + transmit queue + pacer + command decoder over one transport.
+
+    ``allowance_s`` is the transmit buffer in seconds of wire time (see
+    :class:`~firmware_sim.pacing.WirePacer`); ``board_id`` and ``fd`` select the CAN layout.
+    """
+
+    def __init__(self, transport: Transport[Any], board_id: int = 0, fd: bool = False,
+                 allowance_s: float = 1e-3) -> None:
+        self.transport = transport
+        self.is_can = transport.kind == "can"
+        if self.is_can:
+            self.encoder: Any = protocols.CanEncoder(board_id=board_id, fd=fd)
+            self.decoder: Any = protocols.CanDecoder(board_id=board_id, fd=fd)
+            self._frames: collections.deque[Any] = collections.deque()
+            self._frame_s: collections.deque[float] = collections.deque()
+        else:
+            self.encoder = protocols.SerialEncoder()
+            self.decoder = protocols.SerialDecoder()
+            self._bytes = bytearray()
+            self._byte_s = transport.wire_seconds(b"x")
+        self.pacer = WirePacer(allowance_s)
+        self._backlog_s = 0.0
+        self.units_sent = 0
+        """Bytes (serial) or frames (CAN) handed to the transport."""
+        self.rx_errors = 0
+        """Host data the decoder rejected by raising (a correct decoder never does)."""
+
+    # -- transmit queue ---------------------------------------------------------------
+    def _queue(self, payload: Any) -> None:
+        if self.is_can:
+            for frame in payload:
+                s = self.transport.wire_seconds([frame])
+                self._frames.append(frame)
+                self._frame_s.append(s)
+                self._backlog_s += s
+        elif payload:
+            self._bytes += payload
+            self._backlog_s += len(payload) * self._byte_s
+
+    def backlog_s(self) -> float:
+        """Wire time (s) of the encoded data still queued."""
+        return max(0.0, self._backlog_s)
+
+    def queued_units(self) -> int:
+        """Bytes or frames still queued."""
+        return len(self._frames) if self.is_can else len(self._bytes)
+
+    def queue_events(self, events: np.ndarray, t_end_us: int) -> float:
+        """Encode ``events`` (all with ``t < t_end_us``) and queue them; return their wire s."""
+        before = self._backlog_s
+        self._queue(self.encoder.events(events, t_end_us))
+        return self._backlog_s - before
+
+    def queue_record(self, record: Any) -> None:
+        """Encode and queue a Status, Marker or Ack record."""
+        if isinstance(record, protocols.Status):
+            self._queue(self.encoder.status(record))
+        elif isinstance(record, protocols.Marker):
+            self._queue(self.encoder.marker(record))
+        elif isinstance(record, protocols.Ack):
+            self._queue(self.encoder.ack(record))
+        else:
+            raise TypeError(f"cannot send a {type(record).__name__}")
+
+    def pump(self, now: float | None = None) -> int:
+        """Hand queued data to the transport within the wire budget; never blocks.
+
+        Returns the bytes or frames sent. Raises :class:`skinhil.errors.TransportError` if
+        the link has gone away.
+        """
+        now = time.monotonic() if now is None else now
+        room = self.pacer.room_s(now)
+        if room <= 0:
+            return 0
+        if self.is_can:
+            batch, wire = [], 0.0
+            while self._frames and wire + self._frame_s[0] <= room + 1e-12:
+                wire += self._frame_s[0]
+                batch.append(self._frames.popleft())
+                self._frame_s.popleft()
+            if not batch and self._frames and self.pacer.free_at <= now:
+                # a frame longer than the allowance may start once the wire is idle
+                wire = self._frame_s.popleft()
+                batch.append(self._frames.popleft())
+            if not batch:
+                return 0
+            n = self.transport.send(batch, timeout=0)
+            for frame in reversed(batch[n:]):  # not taken by the OS: keep them first
+                self._frames.appendleft(frame)
+                self._frame_s.appendleft(self.transport.wire_seconds([frame]))
+            used = sum(self.transport.wire_seconds([f]) for f in batch[:n]) if n < len(batch) \
+                else wire
+        else:
+            n_bytes = int(room / self._byte_s)
+            if n_bytes <= 0 or not self._bytes:
+                return 0
+            chunk = bytes(self._bytes[:n_bytes])
+            n = self.transport.send(chunk, timeout=0)
+            del self._bytes[:n]
+            used = n * self._byte_s
+        self.pacer.used(used, now)
+        self._backlog_s -= used
+        self.units_sent += n
+        return n
+
+    def drain(self, timeout_s: float) -> bool:
+        """Pump until the queue is empty (True) or ``timeout_s`` (s) passed (False)."""
+        end = time.monotonic() + timeout_s
+        while self.queued_units():
+            if time.monotonic() > end:
+                return False
+            self.pump()
+            time.sleep(0.0005)
+        return True
+
+    def wait_wire_idle(self, timeout_s: float) -> None:
+        """Sleep until the emulated wire has sent everything (at most ``timeout_s`` s)."""
+        left = min(timeout_s, self.pacer.idle_at() - time.monotonic())
+        if left > 0:
+            time.sleep(left)
+
+    # -- receive ------------------------------------------------------------------------
+    def poll_commands(self) -> list[Any]:
+        """Host commands received since the last call (never blocks)."""
+        data = self.transport.recv(timeout=0)
+        if not data:
+            return []
+        try:
+            res = self.decoder.feed(data)
+        except (ValueError, TypeError, KeyError) as exc:  # a decoder must not raise; be safe
+            log.warning("undecodable host data dropped: %s", exc)
+            self.rx_errors += 1
+            return []
+        return [r for r in res.records if isinstance(r, protocols.Command)]
+
+    def shutdown(self) -> None:
+        self.transport.shutdown()

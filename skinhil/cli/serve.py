@@ -1,0 +1,157 @@
+"""``skinhil serve``: run the emulated sensor board in real time over a serial port or CAN."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import signal
+import sys
+import threading
+from pathlib import Path
+from typing import Any
+
+from firmware_sim.board import Board, BoardConfig, BoardSummary
+from firmware_sim.timeline import Timeline
+from skinhil.cli.options import add_model_options
+from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
+from skinhil.errors import ConfigError
+from skinhil.stimuli import load_schedule
+
+MAX_BOARD_ID = 15
+"""Largest board id (the CAN layout reserves 4 bits for it)."""
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser(
+        "serve", help="run the emulated sensor board in real time over serial or CAN",
+        description="Run the emulated e-skin board in real time: the skin, its 338 neurons "
+                    "and the AER link, paced to the baud rate or CAN bitrate. By default it "
+                    "plays a seeded random sequence of the 9 direction conditions with rests, "
+                    "each announced by a ground-truth marker. Ctrl-C stops it cleanly.")
+    add_transport_args(p)
+    src = p.add_mutually_exclusive_group()
+    src.add_argument("--schedule", type=Path, metavar="TOML",
+                     help="play this schedule file (format: skinhil simulate --help)")
+    src.add_argument("--host-driven", action="store_true",
+                     help="no schedule: stimuli only on host commands")
+    p.add_argument("--rest", dest="rest_s", type=float, default=0.25, metavar="SECONDS",
+                   help="rest after each stimulus of the random schedule (default: 0.25)")
+    p.add_argument("--duration", dest="duration_s", type=float, metavar="SECONDS",
+                   help="stop after this much board time (default: run until Ctrl-C)")
+    p.add_argument("--board-id", type=int, default=0, metavar="N",
+                   help=f"board id on the CAN bus, 0..{MAX_BOARD_ID} (default: 0)")
+    p.add_argument("--tick", dest="tick_s", type=float, default=1e-3, metavar="SECONDS",
+                   help="publish tick, a whole number of steps (default: 0.001)")
+    p.add_argument("--fifo", dest="fifo_events", type=int, default=16384, metavar="EVENTS",
+                   help="event FIFO capacity (default: 16384)")
+    p.add_argument("--status-period", dest="status_period_s", type=float, default=0.1,
+                   metavar="SECONDS", help="status/heartbeat period (default: 0.1)")
+    p.add_argument("--stopped", action="store_true",
+                   help="start stopped: stream only after a START command")
+    p.add_argument("--reconnect", action="store_true",
+                   help="when the link goes away, keep running and reopen it when it returns")
+    out = p.add_mutually_exclusive_group()
+    out.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    out.add_argument("--json", action="store_true",
+                     help="machine-readable output: one JSON object per line on stdout")
+    add_model_options(p)
+
+
+def _config(args: argparse.Namespace) -> BoardConfig:
+    if args.duration_s is not None and not (math.isfinite(args.duration_s)
+                                            and args.duration_s > 0):
+        raise ConfigError(f"--duration must be a positive number of seconds, "
+                          f"got {args.duration_s!r}")
+    if not 0 <= args.board_id <= MAX_BOARD_ID:
+        raise ConfigError(f"--board-id must be 0..{MAX_BOARD_ID}, got {args.board_id}")
+    if not (math.isfinite(args.rest_s) and args.rest_s >= 0):
+        raise ConfigError(f"--rest must be >= 0 seconds, got {args.rest_s!r}")
+    if not (math.isfinite(args.tick_s) and args.tick_s > 0):
+        raise ConfigError(f"--tick must be a positive number of seconds, got {args.tick_s!r}")
+    if args.schedule is not None:
+        mode = Timeline.SCHEDULE_FILE
+    elif args.host_driven:
+        mode = Timeline.SCHEDULE_NONE
+    else:
+        mode = Timeline.SCHEDULE_RANDOM
+    return BoardConfig(dt_s=args.dt_s, tick_s=args.tick_s, fifo_events=args.fifo_events,
+                       status_period_s=args.status_period_s, snr_db=args.snr_db,
+                       seed=args.seed, board_id=args.board_id, mechanics=args.mechanics,
+                       schedule_mode=mode, rest_s=args.rest_s,
+                       start_running=not args.stopped, reconnect=args.reconnect).check()
+
+
+def _live(board: Board) -> dict[str, Any]:
+    c = board.counters
+    lat = board.clock.lateness_percentiles_ms()
+    return {"type": "status", "board_time_s": round(board.board_time_us() * 1e-6, 4),
+            "generated": c.generated, "sent": c.sent, "dropped": c.dropped,
+            "dropped_by": dict(c.dropped_by), "queued": len(board.fifo),
+            "deadline_misses": board.clock.deadline_misses,
+            "lateness_p99_ms": round(lat["p99"], 4), "lateness_max_ms": round(lat["max"], 4),
+            "running": board.running, "link_up": board.link is not None}
+
+
+def _summary_text(s: BoardSummary) -> str:
+    rate = s.sent / s.board_time_s if s.board_time_s else 0.0
+    drops = ", ".join(f"{k} {v}" for k, v in s.dropped_by.items() if v) or "none"
+    return (f"served {s.board_time_s:.3f} s of board time in {s.wall_s:.3f} s: "
+            f"{s.generated} events generated, {s.sent} sent ({rate:.0f}/s), "
+            f"{s.dropped} dropped ({drops}), {s.queued} queued; {s.ticks} ticks, "
+            f"{s.deadline_misses} deadline misses, lateness p50 {s.lateness_ms['p50']:.3f} ms "
+            f"p99 {s.lateness_ms['p99']:.3f} ms max {s.lateness_ms['max']:.3f} ms; "
+            f"CPU {100 * s.cpu_s / max(s.wall_s, 1e-9):.1f}% of one core; "
+            f"{s.commands} commands ({s.nacks} NACK), {s.link_losses} link losses")
+
+
+def run(args: argparse.Namespace) -> int:
+    config = _config(args)
+    schedule = load_schedule(args.schedule) if args.schedule is not None else None
+    tty = sys.stderr.isatty() and not args.quiet and not args.json
+    where = describe_transport(args)
+
+    def on_link(msg: str) -> None:
+        if args.json:
+            print(json.dumps({"type": "link", "message": msg}), flush=True)
+        elif not args.quiet:
+            print(("\n" if tty else "") + f"skinhil serve: {msg}", file=sys.stderr, flush=True)
+
+    board = Board(config, lambda: open_transport(args), schedule, on_link)
+
+    def on_second(b: Board) -> None:
+        info = _live(b)
+        if args.json:
+            print(json.dumps(info), flush=True)
+        elif tty:
+            rate = info["sent"] / max(info["board_time_s"], 1e-9)
+            sys.stderr.write(
+                f"\r{info['board_time_s']:9.1f} s  {rate:8.0f} ev/s  sent {info['sent']}  "
+                f"dropped {info['dropped']}  queued {info['queued']}  late p99 "
+                f"{info['lateness_p99_ms']:.2f} ms max {info['lateness_max_ms']:.2f} ms  "
+                f"misses {info['deadline_misses']}"
+                f"{'' if info['link_up'] else '  LINK DOWN'}\x1b[K")
+            sys.stderr.flush()
+
+    stop = threading.Event()
+
+    def on_signal(signum: int, frame: object) -> None:
+        stop.set()
+
+    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    if not args.quiet and not args.json:
+        print(f"skinhil serve: board {args.board_id} on {where}; Ctrl-C stops",
+              file=sys.stderr, flush=True)
+    try:
+        summary = board.run(args.duration_s, stop,
+                            on_second if (args.json or tty) else None)
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+        if tty:
+            sys.stderr.write("\n")
+    if args.json:
+        print(json.dumps({"type": "summary", **summary.as_dict()}), flush=True)
+    elif not args.quiet:
+        print(_summary_text(summary), flush=True)
+    return 0
