@@ -1,0 +1,185 @@
+"""``skinhil listen``: the reference receiver and online classifier on a serial port or CAN."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import signal
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
+from skinhil.errors import ConfigError
+from skinhil.receiver import Receiver, ReceiverListener, ScoredDecision, SessionRecorder
+from skinhil.receiver.model_file import load_window_decoder
+
+STATUS_PERIOD_S = 1.0
+"""Seconds between link-counter lines."""
+
+
+def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    p = subparsers.add_parser(
+        "listen", help="receive a board's stream and classify force direction online",
+        description="Decode a board's AER stream, PSP-filter it on board time, detect each "
+                    "stimulus onset from the activity and classify its direction with a "
+                    "trained model (skinhil train). Markers in the stream, when present, "
+                    "score the decisions: running accuracy, confusion matrix, latency.")
+    add_transport_args(p)
+    p.add_argument("--model", type=Path, required=True, metavar="NPZ",
+                   help="decoder file written by skinhil train")
+    p.add_argument("--board-id", type=int, default=0, metavar="N",
+                   help="board id on the CAN bus (default: 0)")
+    p.add_argument("--duration", dest="duration_s", type=float, metavar="SECONDS",
+                   help="stop after this many seconds (default: until Ctrl-C)")
+    p.add_argument("--json", action="store_true",
+                   help="one JSON object per line: decisions, link counters, summary")
+    p.add_argument("--record", type=Path, metavar="FILE",
+                   help="save events (tonic-compatible) and decisions to this .npz")
+
+
+class LivePrinter(ReceiverListener):
+    """Prints each decision (text or JSON lines) and link problems as they happen."""
+
+    def __init__(self, receiver: Receiver, as_json: bool, names: dict[int, str]) -> None:
+        self.receiver = receiver
+        self.as_json = as_json
+        self.names = names
+
+    def _name(self, label: int | None) -> str:
+        return "-" if label is None else self.names.get(label, str(label))
+
+    def on_decision(self, decision: ScoredDecision) -> None:
+        p = decision.prediction
+        sb = self.receiver.scoreboard
+        if self.as_json:
+            print(json.dumps({
+                "type": "decision", "t_s": p.detect_t_us * 1e-6, "label": p.label,
+                "name": self._name(p.label), "true_label": decision.true_label,
+                "correct": decision.correct, "latency_board_ms": _ms(decision.latency_board_s),
+                "latency_host_ms": _ms(decision.latency_host_s),
+                "running_accuracy": None if sb.scored == 0 else sb.accuracy}), flush=True)
+            return
+        mark = {True: "ok", False: "WRONG", None: "(no marker)"}[decision.correct]
+        lat = "" if decision.latency_host_s is None else \
+            f"  latency {1e3 * decision.latency_host_s:5.1f} ms"
+        truth = "" if decision.true_label is None else f"  true {self._name(decision.true_label)}"
+        acc = "" if sb.scored == 0 else f"  running {100 * sb.accuracy:5.1f}% ({sb.scored})"
+        print(f"{p.detect_t_us * 1e-6:9.3f} s  {self._name(p.label):>13}{truth:>19}  "
+              f"{mark:<5}{lat}{acc}", flush=True)
+
+    def on_link_error(self, message: str) -> None:
+        if self.as_json:
+            print(json.dumps({"type": "link_error", "message": message}), flush=True)
+        else:
+            print(f"skinhil listen: link error: {message}", file=sys.stderr, flush=True)
+
+
+def _ms(value: float | None) -> float | None:
+    return None if value is None or math.isnan(value) else round(1e3 * value, 3)
+
+
+def summary(receiver: Receiver, wall_s: float) -> dict[str, Any]:
+    """Final figures of a session: accuracy, confusion, latencies, link and loss counters."""
+    sb = receiver.scoreboard
+    lat_b, lat_h = sb.latencies_s(), sb.latencies_s(host=True)
+
+    def pct(a: np.ndarray, q: float) -> float | None:
+        return None if a.size == 0 else round(1e3 * float(np.percentile(a, q)), 3)
+
+    return {"type": "summary", "wall_s": round(wall_s, 3),
+            "board_time_s": receiver.classifier.board_time_us * 1e-6,
+            "stimuli_scored": sb.scored, "correct": sb.correct, "misses": sb.misses,
+            "false_alarms": sb.false_alarms,
+            "accuracy": None if sb.scored == 0 else sb.accuracy,
+            "classes": list(sb.classes), "confusion": sb.confusion.tolist(),
+            "decision_latency_board_ms": {"p50": pct(lat_b, 50), "p99": pct(lat_b, 99)},
+            "decision_latency_host_ms": {"p50": pct(lat_h, 50), "p99": pct(lat_h, 99)},
+            "link": receiver.link_report().as_dict()}
+
+
+def print_summary(info: dict[str, Any], names: dict[int, str]) -> None:
+    """The summary as text."""
+    if info["accuracy"] is None:
+        print("no ground-truth markers scored (the stream had none, or no stimulus yet)")
+    else:
+        print(f"accuracy {100 * info['accuracy']:.1f}% ({info['correct']}/"
+              f"{info['stimuli_scored']} stimuli; {info['misses']} onsets missed, "
+              f"{info['false_alarms']} false alarms)")
+        classes = info["classes"]
+        width = max(6, *(len(names.get(c, str(c))) for c in classes))
+        print("confusion (rows: true, columns: predicted):")
+        print(" " * width + " " + " ".join(f"{c:>4}" for c in classes))
+        for c, row in zip(classes, info["confusion"], strict=True):
+            print(f"{names.get(c, str(c)):>{width}} " + " ".join(f"{v:>4}" for v in row))
+    for key, label in (("decision_latency_board_ms", "decision latency from onset, board time"),
+                       ("decision_latency_host_ms", "decision latency from onset, host")):
+        d = info[key]
+        if d["p50"] is not None:
+            print(f"{label}: p50 {d['p50']:.1f} ms, p99 {d['p99']:.1f} ms")
+    link = info["link"]
+    print(f"link: {link['events_decoded']} events decoded, {link['frames_ok']} frames ok, "
+          f"{link['crc_errors']} CRC errors, {link['seq_gaps']} sequence gaps "
+          f"({link['frames_lost']} frames lost), {link['duplicates']} duplicates, "
+          f"{link['late_events']} late events; board: {link['board_generated']} generated, "
+          f"{link['board_sent']} sent, {link['board_dropped']} dropped; "
+          f"{link['lost_on_link']} lost on the link")
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.duration_s is not None and not (math.isfinite(args.duration_s)
+                                            and args.duration_s > 0):
+        raise ConfigError(f"--duration must be a positive number of seconds, "
+                          f"got {args.duration_s!r}")
+    decoder = load_window_decoder(args.model)
+    transport = open_transport(args)
+    names = class_names()
+    receiver = Receiver(transport, decoder, board_id=args.board_id,
+                        reopen=lambda: open_transport(args))
+    recorder = SessionRecorder() if args.record is not None else None
+    receiver.add_listener(LivePrinter(receiver, args.json, names))
+    if recorder is not None:
+        receiver.add_listener(recorder)
+    stop = threading.Event()
+    old = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
+    if not args.json:
+        print(f"skinhil listen: {describe_transport(args)}, model {args.model}; Ctrl-C stops",
+              file=sys.stderr, flush=True)
+    t0 = time.monotonic()
+    next_line = t0 + STATUS_PERIOD_S
+    try:
+        while not stop.is_set():
+            now = time.monotonic()
+            if args.duration_s is not None and now - t0 >= args.duration_s:
+                break
+            receiver.poll(0.02)
+            if args.json and now >= next_line:
+                next_line += STATUS_PERIOD_S
+                print(json.dumps({"type": "link", **receiver.link_report().as_dict()}),
+                      flush=True)
+        receiver.flush()
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+        transport.shutdown()
+    info = summary(receiver, time.monotonic() - t0)
+    if recorder is not None:
+        recorder.save(args.record, {"model": str(args.model), "link": describe_transport(args),
+                                    "summary": info})
+    if args.json:
+        print(json.dumps(info), flush=True)
+    else:
+        print_summary(info, names)
+    return 0
+
+
+def class_names() -> dict[int, str]:
+    """Display names of the direction classes (stimulus id → name)."""
+    from skinhil.stimuli import direction_conditions
+
+    return {i: s.name for i, s in enumerate(direction_conditions())}

@@ -1,0 +1,166 @@
+"""A fault-injecting wrapper around any :class:`firmware_sim.transport.Transport`.
+
+Wrap the receiving (or sending) end of a link to see how a decoder copes with a bad link::
+
+    link = FaultyTransport(SerialTransport("/dev/pts/3"), FaultParams(corrupt_byte_p=1e-4))
+
+Faults are applied to what passes through :meth:`recv` and :meth:`send`, seeded, and counted
+in :attr:`FaultyTransport.injected`:
+
+- a CAN link (payloads are lists of frames): each frame is dropped with probability
+  ``drop_p``, else duplicated with ``duplicate_p``; each data byte is bit-flipped with
+  ``corrupt_byte_p``; a frame is held back ``delay_s`` (s) with ``delay_p``;
+- a serial link (payloads are bytes): each received chunk is dropped whole with ``drop_p``
+  (a burst loss, as when a UART overruns), else duplicated with ``duplicate_p``; each byte is
+  bit-flipped (one random non-zero XOR mask) with ``corrupt_byte_p``; a chunk is held back
+  ``delay_s`` with ``delay_p``.
+
+Delayed items come out in order behind the items already due, so delays never reorder the
+stream (as on a real link); they only add latency.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import deque
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from firmware_sim.transport import Transport
+from skinhil.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class FaultParams:
+    """Probabilities (0..1) per frame/chunk (drop, duplicate, delay) and per byte (corrupt)."""
+
+    drop_p: float = 0.0
+    corrupt_byte_p: float = 0.0
+    duplicate_p: float = 0.0
+    delay_p: float = 0.0
+    delay_s: float = 0.0
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("drop_p", "corrupt_byte_p", "duplicate_p", "delay_p"):
+            v = getattr(self, name)
+            if not (isinstance(v, int | float) and 0.0 <= v <= 1.0):
+                raise ConfigError(f"FaultParams.{name} must be a probability 0..1, got {v!r}")
+        if not (math.isfinite(self.delay_s) and self.delay_s >= 0):
+            raise ConfigError(f"FaultParams.delay_s must be >= 0 seconds, got {self.delay_s!r}")
+
+
+@dataclass
+class InjectedFaults:
+    """What the wrapper did: units seen, dropped, duplicated, delayed; bytes corrupted."""
+
+    units_seen: int = 0
+    units_dropped: int = 0
+    units_duplicated: int = 0
+    units_delayed: int = 0
+    bytes_corrupted: int = 0
+    corrupted_units: int = 0
+    """Frames (CAN) or chunks (serial) with at least one corrupted byte."""
+    dropped_frames: list[Any] = field(default_factory=list)
+    """CAN only: the frames dropped (so a test can count what they carried)."""
+
+
+class FaultyTransport(Transport[Any]):
+    """``inner`` with seeded faults injected on :meth:`recv` (and :meth:`send` if asked)."""
+
+    def __init__(self, inner: Transport[Any], params: FaultParams,
+                 on_send: bool = False, on_recv: bool = True) -> None:
+        self.inner = inner
+        self.params = params
+        self.kind = inner.kind
+        self.on_send = on_send
+        self.on_recv = on_recv
+        self.injected = InjectedFaults()
+        self._rng = np.random.default_rng(params.seed)
+        self._held: deque[tuple[float, Any]] = deque()
+
+    @property
+    def name(self) -> str:
+        return f"faulty({self.inner.name})"
+
+    @property
+    def fd(self) -> bool:
+        return bool(getattr(self.inner, "fd", False))
+
+    # -- faults -------------------------------------------------------------------------
+    def _corrupt(self, data: bytes) -> bytes:
+        p = self.params.corrupt_byte_p
+        if p <= 0 or not data:
+            return data
+        hit = self._rng.random(len(data)) < p
+        if not hit.any():
+            return data
+        arr = np.frombuffer(data, dtype=np.uint8).copy()
+        masks = self._rng.integers(1, 256, size=int(hit.sum()), dtype=np.uint8)
+        arr[hit] ^= masks
+        self.injected.bytes_corrupted += int(hit.sum())
+        self.injected.corrupted_units += 1
+        return arr.tobytes()
+
+    def _units(self, payload: Any) -> list[Any]:
+        return list(payload) if self.kind == "can" else ([payload] if payload else [])
+
+    def _join(self, units: list[Any]) -> Any:
+        return units if self.kind == "can" else b"".join(units)
+
+    def _apply(self, payload: Any) -> Any:
+        p = self.params
+        now = time.monotonic()
+        out: list[Any] = []
+        for unit in self._units(payload):
+            self.injected.units_seen += 1
+            if self._rng.random() < p.drop_p:
+                self.injected.units_dropped += 1
+                if self.kind == "can":
+                    self.injected.dropped_frames.append(unit)
+                continue
+            if self.kind == "can":
+                data = self._corrupt(bytes(unit.data))
+                if data != bytes(unit.data):
+                    unit = replace(unit, data=data)
+            else:
+                unit = self._corrupt(bytes(unit))
+            copies = 1
+            if self._rng.random() < p.duplicate_p:
+                self.injected.units_duplicated += 1
+                copies = 2
+            due = now
+            if p.delay_p > 0 and self._rng.random() < p.delay_p:
+                self.injected.units_delayed += 1
+                due = now + p.delay_s
+            for _ in range(copies):
+                self._held.append((max(due, self._held[-1][0]) if self._held else due, unit))
+        while self._held and self._held[0][0] <= now:
+            out.append(self._held.popleft()[1])
+        return self._join(out)
+
+    # -- Transport ----------------------------------------------------------------------
+    def send(self, payload: Any, timeout: float | None = None) -> int:
+        if not self.on_send:
+            return self.inner.send(payload, timeout)
+        n = len(payload)
+        self.inner.send(self._apply(payload), timeout)
+        return n
+
+    def recv(self, timeout: float | None = None) -> Any:
+        payload = self.inner.recv(timeout)
+        if not self.on_recv:
+            return payload
+        return self._apply(payload)
+
+    def wire_seconds(self, payload: Any) -> float:
+        return self.inner.wire_seconds(payload)
+
+    def empty(self) -> Any:
+        return self.inner.empty()
+
+    def shutdown(self) -> None:
+        self.inner.shutdown()

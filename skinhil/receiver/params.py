@@ -1,0 +1,67 @@
+"""Parameters of the online receiver: onset detection, decision window, board-time guard."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from skinhil.errors import ConfigError
+
+
+def _positive(obj: object, name: str) -> None:
+    value = getattr(obj, name)
+    if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+        raise ConfigError(f"{type(obj).__name__}.{name} must be a finite number > 0, "
+                          f"got {value!r}")
+
+
+@dataclass(frozen=True)
+class OnsetParams:
+    """The activity-only stimulus-onset rule (see :mod:`skinhil.receiver.onset`).
+
+    ``window_s`` (s): length of the sliding window in which the population's spikes are
+    counted. ``z``: how many baseline standard deviations above the baseline mean the count
+    must rise, and ``min_excess_spikes`` the least excess (spikes) in any case, so a silent
+    (noise-free) baseline still needs that many spikes. ``baseline_tau_s`` (s): time constant
+    of the running baseline; ``warmup_s`` (s): baseline-only time after the stream starts.
+    ``refractory_s`` (s): no new onset this soon after one (stimuli are further apart).
+    ``lookback_s`` (s): the decision window starts this long before the detection step, to
+    cover the first spikes the window count needed (median detection delay without noise).
+    """
+
+    window_s: float = 0.005
+    z: float = 4.0
+    min_excess_spikes: float = 3.0
+    baseline_tau_s: float = 0.5
+    warmup_s: float = 0.05
+    refractory_s: float = 0.2
+    lookback_s: float = 0.003
+
+    def __post_init__(self) -> None:
+        for name in ("window_s", "baseline_tau_s", "refractory_s"):
+            _positive(self, name)
+        for name in ("z", "min_excess_spikes", "warmup_s", "lookback_s"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
+                raise ConfigError(f"OnsetParams.{name} must be a finite number >= 0, "
+                                  f"got {value!r}")
+
+
+@dataclass(frozen=True)
+class ReceiverParams:
+    """How the receiver follows board time and scores its decisions.
+
+    ``guard_s`` (s): the receiver steps its filters only up to the board time it knows is
+    complete: the newest event's time, else the newest record's or the host clock's estimate
+    of board time minus this guard (events that still arrive for earlier steps are counted
+    as late and applied at the current step). ``match_window_s`` (s): a decision is scored
+    against the ground-truth marker whose onset precedes its detection by at most this.
+    """
+
+    onset: OnsetParams = field(default_factory=OnsetParams)
+    guard_s: float = 0.02
+    match_window_s: float = 0.1
+
+    def __post_init__(self) -> None:
+        _positive(self, "guard_s")
+        _positive(self, "match_window_s")

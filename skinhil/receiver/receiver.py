@@ -1,0 +1,272 @@
+"""The reference receiver: transport → protocols decoder → online classifier → listeners.
+
+A :class:`Receiver` reads a :class:`firmware_sim.transport.Transport` (a pyserial port or a
+python-can bus), feeds what arrives to the protocols decoder of that link (serial or CAN),
+and passes the events to the :class:`~skinhil.receiver.online.OnlineClassifier` on board
+time. Ground-truth markers go only to the :class:`~skinhil.receiver.scoring.Scoreboard`.
+Listeners (python-can Notifier style) hear about events, decisions, markers, status
+records, acknowledgements and link errors. Corrupted or lost data never stop it: the decoder
+counts them, and a link that goes away is reported and, with ``reopen``, reopened.
+
+Board time is followed as the newest event's time (the stream is in time order), else the
+newest status/marker time or the host clock's estimate of board time, minus ``guard_s``.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+import protocols
+from firmware_sim.transport import Transport
+from skinhil.errors import TransportError
+from skinhil.receiver.clock import BoardClock
+from skinhil.receiver.decoder_adapter import WindowDecoder
+from skinhil.receiver.online import OnlineClassifier
+from skinhil.receiver.params import ReceiverParams
+from skinhil.receiver.scoring import Scoreboard, ScoredDecision
+
+log = logging.getLogger(__name__)
+
+
+class ReceiverListener:
+    """Override the callbacks you need; each is called on the receiving thread."""
+
+    def on_events(self, events: np.ndarray, host_time_s: float) -> None:
+        """Events (EVENT_DTYPE) just decoded, received at host monotonic time (s)."""
+
+    def on_decision(self, decision: ScoredDecision) -> None:
+        """A decision of the online classifier, scored when a marker matches it."""
+
+    def on_marker(self, marker: Any) -> None:
+        """A ground-truth marker (``protocols.Marker``)."""
+
+    def on_status(self, status: Any) -> None:
+        """A board status record (``protocols.Status``)."""
+
+    def on_ack(self, ack: Any) -> None:
+        """A command acknowledgement (``protocols.Ack``)."""
+
+    def on_link_error(self, message: str) -> None:
+        """The link failed (message says how); the receiver goes on if it can."""
+
+
+@dataclass(frozen=True)
+class LinkReport:
+    """Link and board loss figures at one moment (counts since the receiver started)."""
+
+    events_decoded: int
+    frames_ok: int
+    crc_errors: int
+    resyncs: int
+    bytes_discarded: int
+    seq_gaps: int
+    frames_lost: int
+    duplicates: int
+    board_generated: int
+    board_sent: int
+    board_dropped: int
+    lost_on_link: int
+    """Events the board's last status says it sent minus those decoded before that status."""
+    late_events: int
+    link_errors: int
+
+    def as_dict(self) -> dict[str, int]:
+        return dict(self.__dict__)
+
+
+def make_codec(transport: Transport[Any], board_id: int = 0) -> Any:
+    """The protocols decoder for ``transport``'s kind of link."""
+    if transport.kind == "can":
+        return protocols.CanDecoder(board_id=board_id, fd=bool(getattr(transport, "fd", False)))
+    return protocols.SerialDecoder()
+
+
+def _is_onset(marker: Any) -> bool:
+    phase = getattr(marker, "phase", None)
+    name = str(getattr(phase, "name", phase)).lower()
+    return name.startswith("onset") or name == "0"
+
+
+class Receiver:
+    """Decode, filter and classify the stream of one board, listener style."""
+
+    def __init__(self, transport: Transport[Any], decoder: WindowDecoder,
+                 params: ReceiverParams | None = None, board_id: int = 0,
+                 listeners: Iterable[ReceiverListener] = (),
+                 reopen: Callable[[], Transport[Any]] | None = None) -> None:
+        self.params = params or ReceiverParams()
+        self.transport = transport
+        self.board_id = board_id
+        self.codec = make_codec(transport, board_id)
+        self.classifier = OnlineClassifier(decoder, self.params.onset)
+        self.scoreboard = Scoreboard(tuple(int(c) for c in decoder.classes),
+                                     int(round(self.params.match_window_s * 1e6)))
+        self.clock = BoardClock()
+        self.listeners: list[ReceiverListener] = list(listeners)
+        self.reopen = reopen
+        self.last_status: Any = None
+        self._decoded_at_status = 0
+        self.link_errors = 0
+        self._last_event_us = -1
+        self._last_record_us = -1
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.link_down = False
+
+    def add_listener(self, listener: ReceiverListener) -> None:
+        self.listeners.append(listener)
+
+    # -- processing ---------------------------------------------------------------------
+    def feed(self, payload: Any, host_s: float | None = None) -> list[ScoredDecision]:
+        """Process one received payload (bytes or CAN frames); return the new decisions."""
+        h = time.monotonic() if host_s is None else host_s
+        result = self.codec.feed(payload) if payload else None
+        if result is not None:
+            ev = result.events
+            if ev.shape[0]:
+                self.classifier.push(ev)
+                self._last_event_us = max(self._last_event_us, int(ev["t"][-1]))
+                self.clock.observe(int(ev["t"][-1]), h)
+                for listener in self.listeners:
+                    listener.on_events(ev, h)
+            for rec in result.records:
+                self._record(rec, h)
+        return self._advance(h)
+
+    def _record(self, rec: Any, host_s: float) -> None:
+        t = getattr(rec, "t_us", None)
+        if t is not None:
+            self._last_record_us = max(self._last_record_us, int(t))
+            self.clock.observe(int(t), host_s)
+        if isinstance(rec, protocols.Marker):
+            if _is_onset(rec):
+                self.scoreboard.add_marker(int(rec.t_us), int(rec.stimulus_id))
+            for listener in self.listeners:
+                listener.on_marker(rec)
+        elif isinstance(rec, protocols.Status):
+            self.last_status = rec
+            self._decoded_at_status = int(self.codec.counters.events_decoded)
+            for listener in self.listeners:
+                listener.on_status(rec)
+        elif isinstance(rec, protocols.Ack):
+            for listener in self.listeners:
+                listener.on_ack(rec)
+
+    def known_board_time_us(self, host_s: float | None = None) -> int:
+        """Board time (µs) before which the stream is taken as complete."""
+        guard = int(round(self.params.guard_s * 1e6))
+        known = self._last_event_us
+        if self._last_record_us >= 0:
+            known = max(known, self._last_record_us - guard)
+        now = self.clock.board_now_us(host_s)
+        if now is not None:
+            known = max(known, now - guard)
+        return known
+
+    def _advance(self, host_s: float) -> list[ScoredDecision]:
+        known = self.known_board_time_us(host_s)
+        if known <= self.classifier.board_time_us:
+            return []
+        out = []
+        for pred in self.classifier.advance(known):
+            scored = self.scoreboard.add_prediction(pred, self.clock.host_time_s)
+            out.append(scored)
+            for listener in self.listeners:
+                listener.on_decision(scored)
+        self.scoreboard.resolve(self.classifier.board_time_us)
+        return out
+
+    def flush(self) -> list[ScoredDecision]:
+        """Process everything received up to the newest board time seen (end of a stream)."""
+        end = max(self._last_event_us + 1, self._last_record_us)
+        out = []
+        for pred in self.classifier.advance(end):
+            scored = self.scoreboard.add_prediction(pred, self.clock.host_time_s)
+            out.append(scored)
+            for listener in self.listeners:
+                listener.on_decision(scored)
+        self.scoreboard.resolve(self.classifier.board_time_us)
+        return out
+
+    # -- the link -----------------------------------------------------------------------
+    def poll(self, timeout: float | None = 0.02) -> list[ScoredDecision]:
+        """Receive once (``timeout`` s, uniform semantics) and process; survive link errors."""
+        if self.link_down:
+            self._try_reopen()
+            return self._advance(time.monotonic())
+        try:
+            payload = self.transport.recv(timeout)
+        except TransportError as exc:
+            self._link_error(str(exc))
+            return []
+        return self.feed(payload, time.monotonic())
+
+    def _link_error(self, message: str) -> None:
+        self.link_errors += 1
+        self.link_down = True
+        log.warning("link error: %s", message)
+        for listener in self.listeners:
+            listener.on_link_error(message)
+        if self.reopen is None:
+            self._stop.set()
+
+    def _try_reopen(self) -> None:
+        if self.reopen is None:
+            return
+        time.sleep(0.2)
+        try:
+            self.transport = self.reopen()
+        except TransportError as exc:
+            log.debug("reopen failed: %s", exc)
+            return
+        self.link_down = False
+
+    def run(self, duration_s: float | None = None, stop: threading.Event | None = None,
+            until: Callable[[Receiver], bool] | None = None) -> None:
+        """Poll until ``duration_s`` (s of wall time), ``stop`` is set or ``until(self)``."""
+        end = None if duration_s is None else time.monotonic() + duration_s
+        while not self._stop.is_set() and not (stop is not None and stop.is_set()):
+            if end is not None and time.monotonic() >= end:
+                break
+            if until is not None and until(self):
+                break
+            self.poll(0.02)
+
+    def start(self) -> None:
+        """Run :meth:`run` on a background thread until :meth:`stop`."""
+        self._stop.clear()
+        self._thread = threading.Thread(target=self.run, name="skinhil-receiver", daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        """Stop the background thread (if any); the transport stays open."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
+            self._thread = None
+
+    # -- figures ------------------------------------------------------------------------
+    def link_report(self) -> LinkReport:
+        """Current link counters, board drops and events lost on the link."""
+        c = self.codec.counters
+        st = self.last_status
+
+        def g(obj: Any, name: str) -> int:
+            return int(getattr(obj, name, 0) or 0)
+
+        return LinkReport(
+            events_decoded=g(c, "events_decoded"), frames_ok=g(c, "frames_ok"),
+            crc_errors=g(c, "crc_errors"), resyncs=g(c, "resyncs"),
+            bytes_discarded=g(c, "bytes_discarded"), seq_gaps=g(c, "seq_gaps"),
+            frames_lost=g(c, "frames_lost"), duplicates=g(c, "duplicates"),
+            board_generated=g(st, "events_generated"), board_sent=g(st, "events_sent"),
+            board_dropped=g(st, "events_dropped"),
+            lost_on_link=max(0, g(st, "events_sent") - self._decoded_at_status) if st else 0,
+            late_events=self.classifier.late_events, link_errors=self.link_errors)
