@@ -1,0 +1,68 @@
+"""The activity-only onset rule on simulated streams (no ground truth used by the rule)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+import skinhil
+from skinhil.receiver import OnsetDetector, OnsetParams
+from skinhil.sensor import SkinSensor
+
+DT_S = 1e-4
+
+
+@pytest.fixture(scope="module")
+def noise_free_stream() -> tuple[np.ndarray, list[int]]:
+    """Population counts of 12 random direction stimuli without noise, and the onset steps."""
+    schedule = skinhil.random_schedule(skinhil.direction_conditions(), 12, rest_s=0.05,
+                                       seed=4, lead_s=0.1)
+    sensor = SkinSensor(dt_s=DT_S, snr_db=math.inf)
+    n = int(round((schedule.duration_s + 0.05) / DT_S))
+    _, spikes = sensor.advance_schedule(schedule, n)
+    onsets = [int(math.ceil(e.onset_s / DT_S - 1e-9)) for e in schedule.entries]
+    return spikes.sum(axis=1), onsets
+
+
+def test_every_noise_free_onset_is_found_within_15_ms(noise_free_stream):
+    counts, onsets = noise_free_stream
+    found = np.array(OnsetDetector(DT_S).process(counts))
+    assert len(found) == len(onsets)
+    delay = found - np.array(onsets)
+    assert np.all(delay >= 0) and np.all(delay * DT_S <= 0.015)
+
+
+def test_result_does_not_depend_on_chunking():
+    stims = [dataclasses.replace(s, onset_s=0.1) for s in skinhil.direction_conditions()[1::3]]
+    raster = skinhil.simulate_trials(stims, 2, duration_s=0.4, snr_db=40.0, seed=3)
+    rng = np.random.default_rng(0)
+    for trial in raster.reshape(-1, *raster.shape[2:]):
+        counts = trial.sum(axis=1)
+        whole = OnsetDetector(DT_S).process(counts)
+        det = OnsetDetector(DT_S)
+        pieces: list[int] = []
+        edges = np.sort(rng.choice(np.arange(1, len(counts)), 40, replace=False))
+        for chunk in np.split(counts, edges):
+            pieces += det.process(chunk)
+        assert pieces == whole
+
+
+def test_threshold_follows_the_noise_baseline():
+    quiet, noisy = OnsetDetector(DT_S), OnsetDetector(DT_S)
+    quiet.process(np.zeros(5000))
+    noisy.process(np.random.default_rng(1).poisson(4.0, 5000))  # 4 spikes per step
+    p = OnsetParams()
+    assert quiet.threshold == pytest.approx(p.min_excess_spikes)
+    window = round(p.window_s / DT_S)
+    # mean window count 4·W, Poisson sd sqrt(4·W): threshold ≈ mean + z·sd
+    assert noisy.threshold == pytest.approx(4 * window + p.z * math.sqrt(4 * window), rel=0.1)
+
+
+def test_no_onset_in_a_silent_or_stationary_stream():
+    assert OnsetDetector(DT_S).process(np.zeros(20000)) == []
+    rng = np.random.default_rng(2)
+    found = OnsetDetector(DT_S, OnsetParams(z=6.0)).process(rng.poisson(4.0, 20000))
+    assert found == []
