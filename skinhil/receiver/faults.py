@@ -59,6 +59,8 @@ class InjectedFaults:
 
     units_seen: int = 0
     units_dropped: int = 0
+    bytes_dropped: int = 0
+    """Payload bytes in the dropped units (serial: chunk bytes; CAN: frame data bytes)."""
     units_duplicated: int = 0
     units_delayed: int = 0
     bytes_corrupted: int = 0
@@ -119,6 +121,7 @@ class FaultyTransport(Transport[Any]):
             self.injected.units_seen += 1
             if self._rng.random() < p.drop_p:
                 self.injected.units_dropped += 1
+                self.injected.bytes_dropped += len(unit.data if self.kind == "can" else unit)
                 if self.kind == "can":
                     self.injected.dropped_frames.append(unit)
                 continue
