@@ -15,18 +15,17 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import subprocess
-import sys
 import time
 from pathlib import Path
 
 from skinhil.cli.listen import LivePrinter, class_names, print_summary, summary
 from skinhil.cli.options import snr_value
 from skinhil.cli.train import print_report
-from skinhil.errors import ConfigError, TransportError
+from skinhil.errors import ConfigError
 from skinhil.receiver import Receiver
 from skinhil.receiver.model_file import load_window_decoder
 from skinhil.receiver.pty_link import PtyMasterTransport
+from skinhil.receiver.session import run_against_board, serve_command
 from skinhil.receiver.training import train_decoder
 
 DEFAULT_SNR_DB = 40.0
@@ -89,42 +88,21 @@ def run(args: argparse.Namespace) -> int:
     model_path = args.model if args.model is not None else cached_model(args.snr_db, args.quiet)
     decoder = load_window_decoder(model_path)
     link, slave_fd = PtyMasterTransport.open_pair(args.baud)
-    cmd = [sys.executable, "-m", "skinhil", "serve", "--port", link.slave_path,
-           "--baud", str(args.baud), "--duration", str(args.duration_s),
-           "--snr-db", str(args.snr_db), "--seed", str(args.seed), "--quiet"]
+    cmd = serve_command(["--port", link.slave_path, "--baud", str(args.baud)],
+                        args.duration_s, args.snr_db, args.seed)
     names = class_names()
     receiver = Receiver(link, decoder)
     if not args.quiet:
         receiver.add_listener(LivePrinter(receiver, False, names))
     print(f"board: {' '.join(cmd[1:])}\nreceiver: {link.name}, model {model_path}", flush=True)
-    board = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, text=True)
     t_link = time.monotonic()
     try:
-        idle_since = None
-        while True:
-            try:
-                payload = link.recv(0.02)
-            except TransportError:
-                payload = b""
-            receiver.feed(payload, time.monotonic())
-            if board.poll() is not None:
-                if payload:
-                    idle_since = None
-                elif idle_since is None:
-                    idle_since = time.monotonic()
-                elif time.monotonic() - idle_since > 0.3:
-                    break
-        receiver.flush()
-        out, err = board.communicate(timeout=5)
+        status, out, err = run_against_board(receiver, cmd)
     finally:
-        if board.poll() is None:
-            board.terminate()
-            board.wait(timeout=5)
         link.shutdown()
         os.close(slave_fd)
-    if board.returncode != 0:
-        raise ConfigError(f"the board stopped with status {board.returncode}: "
+    if status != 0:
+        raise ConfigError(f"the board stopped with status {status}: "
                           f"{err.strip().splitlines()[-1] if err.strip() else 'no message'}")
     info = summary(receiver, time.monotonic() - t_link)
     print()

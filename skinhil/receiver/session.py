@@ -1,0 +1,54 @@
+"""Run a board subprocess (``skinhil serve``) against a :class:`Receiver` until it ends.
+
+Used by ``skinhil demo``, the end-to-end tests and the latency benchmark, so each does not
+re-implement the loop: poll the link, stop once the board has exited and the link has been
+quiet for ``idle_s``, then flush the last windows.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+from collections.abc import Sequence
+
+from skinhil.errors import TransportError
+from skinhil.receiver.receiver import Receiver
+
+
+def serve_command(link_args: Sequence[str], duration_s: float, snr_db: float, seed: int,
+                  rest_s: float = 0.25) -> list[str]:
+    """The ``skinhil serve`` command line for a board on ``link_args`` (e.g. --port P)."""
+    return [sys.executable, "-m", "skinhil", "serve", *link_args, "--duration", str(duration_s),
+            "--snr-db", str(snr_db), "--seed", str(seed), "--rest", str(rest_s), "--quiet"]
+
+
+def run_against_board(receiver: Receiver, command: Sequence[str], idle_s: float = 0.3,
+                      timeout_s: float = 600.0) -> tuple[int, str, str]:
+    """Start ``command`` and feed ``receiver`` until the board ends; (status, stdout, stderr)."""
+    board = subprocess.Popen(list(command), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True)
+    end = time.monotonic() + timeout_s
+    try:
+        idle_since = None
+        while time.monotonic() < end:
+            try:
+                payload = receiver.transport.recv(0.02)
+            except TransportError:
+                payload = receiver.transport.empty()
+            receiver.feed(payload, time.monotonic())
+            if board.poll() is None:
+                continue
+            if payload:
+                idle_since = None
+            elif idle_since is None:
+                idle_since = time.monotonic()
+            elif time.monotonic() - idle_since > idle_s:
+                break
+        receiver.flush()
+        out, err = board.communicate(timeout=10)
+    finally:
+        if board.poll() is None:
+            board.terminate()
+            board.wait(timeout=5)
+    return int(board.returncode), out, err
