@@ -1,0 +1,42 @@
+"""Wire protocols of skinhil: pure codecs (no I/O) shared by the board and the receiver.
+
+- Serial: :class:`SerialEncoder` / :class:`SerialDecoder` (COBS-framed packets, CRC-16).
+- CAN and CAN FD: :class:`CanEncoder` / :class:`CanDecoder` over :class:`CanFrame`.
+- Records: :class:`Status`, :class:`Marker`, :class:`Command`, :class:`Ack`.
+- Wire time: :func:`serial_seconds`, :func:`can_frame_seconds`.
+
+The normative layout is ``protocols/SPEC.md``; the CAN database is ``protocols/skinhil.dbc``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from protocols.budget import can_frame_seconds, serial_seconds
+from protocols.can_codec import CanDecoder, CanEncoder
+from protocols.records import (
+    Ack,
+    CanFrame,
+    Command,
+    CommandCode,
+    DecodeResult,
+    LinkCounters,
+    Marker,
+    MarkerPhase,
+    NackReason,
+    Record,
+    Status,
+)
+from protocols.serial_codec import SerialDecoder, SerialEncoder
+
+DBC_PATH = Path(__file__).with_name("skinhil.dbc")
+"""The CAN database (DBC) of the classic and FD layouts, for board id 0."""
+
+SPEC_PATH = Path(__file__).with_name("SPEC.md")
+"""The normative protocol specification."""
+
+__all__ = [
+    "DBC_PATH", "SPEC_PATH", "Ack", "CanDecoder", "CanEncoder", "CanFrame", "Command",
+    "CommandCode", "DecodeResult", "LinkCounters", "Marker", "MarkerPhase", "NackReason",
+    "Record", "SerialDecoder", "SerialEncoder", "Status", "can_frame_seconds", "serial_seconds",
+]

@@ -1,0 +1,181 @@
+"""The non-event records the wire protocols carry, and the link counters a decoder keeps.
+
+Times are board time in microseconds (``t_us``, int); counters are cumulative since the
+board started. Every record is a frozen dataclass so it can be compared and hashed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+
+import numpy as np
+
+from skinhil.events import EVENT_DTYPE
+
+
+class CommandCode(enum.IntEnum):
+    """Host→board command opcodes (one byte on the wire)."""
+
+    START = 1
+    """Start publishing events (``arg`` ignored)."""
+    STOP = 2
+    """Stop publishing events; the board keeps its time and counters (``arg`` ignored)."""
+    SET_STIMULUS = 3
+    """Apply stimulus number ``arg`` (int) now."""
+    SET_SCHEDULE = 4
+    """Run schedule number ``arg`` (int) from now."""
+    SET_SNR = 5
+    """Set the neuron noise to ``arg`` dB (float; ``inf`` means no noise)."""
+    QUERY_STATUS = 6
+    """Ask for a status packet now (sent right after the ACK)."""
+    PING = 7
+    """Do nothing but acknowledge (link check)."""
+
+
+class NackReason(enum.IntEnum):
+    """Why a command was refused (``NONE`` in a positive ACK). One byte on the wire."""
+
+    NONE = 0
+    UNKNOWN_COMMAND = 1
+    BAD_ARGUMENT = 2
+    UNKNOWN_STIMULUS = 3
+    UNKNOWN_SCHEDULE = 4
+    BUSY = 5
+    NOT_RUNNING = 6
+    INTERNAL_ERROR = 7
+
+
+class MarkerPhase(enum.IntEnum):
+    """Which moment of a stimulus a ground-truth marker stamps."""
+
+    ONSET = 0
+    """The stimulus starts pressing."""
+    END = 1
+    """The indentation phase ends (the force starts decaying)."""
+    INDENTATION_END = 1
+
+
+@dataclasses.dataclass(frozen=True)
+class Status:
+    """Board status / heartbeat: cumulative counters at board time ``t_us`` (µs).
+
+    Invariant kept by the board: ``events_generated == events_sent + events_dropped +
+    events_queued``; ``events_dropped`` is split by reason into the ``dropped_*`` fields.
+    On the wire each counter is sent modulo 2**32 and a decoder unwraps it (see SPEC.md).
+    """
+
+    t_us: int
+    events_generated: int
+    events_sent: int
+    events_dropped: int
+    events_queued: int
+    late_ticks: int
+    rx_errors: int
+    running: bool
+    dropped_fifo_full: int = 0
+    """Events dropped because the transmit FIFO was full (link too slow)."""
+    dropped_stopped: int = 0
+    """Events generated while publishing was stopped."""
+    dropped_link_down: int = 0
+    """Events generated while the transport was gone."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Marker:
+    """Ground truth: stimulus ``stimulus_id`` reached ``phase`` at board time ``t_us`` (µs)."""
+
+    t_us: int
+    stimulus_id: int
+    phase: MarkerPhase
+
+
+@dataclasses.dataclass(frozen=True)
+class Command:
+    """A host→board command; ``token`` (0..65535) is echoed in the ACK.
+
+    ``arg`` is an int (stimulus/schedule number, 0..2**32-1) or, for ``SET_SNR``, a float in
+    dB (sent as IEEE-754 binary32; ``inf`` allowed).
+    """
+
+    token: int
+    opcode: CommandCode
+    arg: int | float = 0
+
+
+@dataclasses.dataclass(frozen=True)
+class Ack:
+    """The board's answer to the command with ``token``: ``ok`` or refused for ``reason``."""
+
+    token: int
+    opcode: CommandCode
+    ok: bool
+    reason: NackReason = NackReason.NONE
+
+
+Record = Status | Marker | Command | Ack
+"""Any non-event record a decoder returns."""
+
+
+@dataclasses.dataclass
+class LinkCounters:
+    """What a decoder saw on the link, cumulative since it was created (see SPEC.md §7).
+
+    Exact (by the protocol): ``frames_ok``, ``crc_errors``, ``malformed``,
+    ``bytes_discarded``, ``events_decoded``, ``events_untimed``, and ``events_lost`` as of the
+    last received SYNC. ``frames_lost`` is exact while fewer than one sequence period
+    (serial 256, CAN 16 / 256 frames) is lost in a row; ``duplicates`` counts back-to-back
+    repeats only.
+    """
+
+    frames_ok: int = 0
+    """Frames (packets) that passed every check and were decoded."""
+    crc_errors: int = 0
+    """Serial: delimited candidate frames whose CRC failed (or too short to hold one)."""
+    malformed: int = 0
+    """Frames with a good CRC (serial) or a known ID (CAN) but an invalid layout."""
+    resyncs: int = 0
+    """Times the decoder had to skip data to find the next frame start."""
+    bytes_discarded: int = 0
+    """Serial bytes that belonged to no good frame (corrupted frames, noise, overflow)."""
+    seq_gaps: int = 0
+    """Times the sequence number jumped (one gap may hide many frames)."""
+    frames_lost: int = 0
+    """Frames missing according to the sequence numbers."""
+    duplicates: int = 0
+    """Frames that repeated the previous sequence number (ignored)."""
+    foreign_frames: int = 0
+    """CAN frames with an ID that is not this board's (ignored)."""
+    events_decoded: int = 0
+    """Events returned to the caller."""
+    events_untimed: int = 0
+    """Events received in frames whose time base (SYNC) was lost: not returned."""
+    events_lost: int = 0
+    """Events the board put on the wire that never came out of this decoder, exact as of
+    the last SYNC received (board count minus decoded count since the first SYNC)."""
+    events_lost_reported: int = 0
+    """The board's own ``events_dropped`` from the last status received."""
+    syncs: int = 0
+    """SYNC (time base) frames received."""
+
+
+@dataclasses.dataclass(frozen=True)
+class DecodeResult:
+    """What one ``feed`` call produced: events (``EVENT_DTYPE``, time order) and records."""
+
+    events: np.ndarray
+    records: list[Record]
+
+    @staticmethod
+    def empty() -> DecodeResult:
+        """A result with no events and no records."""
+        return DecodeResult(np.empty(0, dtype=EVENT_DTYPE), [])
+
+
+@dataclasses.dataclass(frozen=True)
+class CanFrame:
+    """One CAN or CAN FD frame: 11-bit ``arbitration_id`` and ``data`` (0..8 or 0..64 bytes)."""
+
+    arbitration_id: int
+    data: bytes
+    is_fd: bool = False
