@@ -23,6 +23,14 @@ The per-step order, for every step k of length dt (ms), each trial independently
 
 A spike in step k is stamped with the step's start time ``k·dt`` (see
 :func:`raster_to_events`). Noise comes from :mod:`skinhil.rng`, one seeded stream per trial.
+
+Run-away noise: because σ is measured from the state it is added to, the noise on u feeds
+itself. u relaxes by ``(1 − a·dt)`` per step, so its mean square grows without bound when
+``10^(−SNR/10) > 1 − (1 − a·dt)²``: below about 24 dB at dt = 0.1 ms (14 dB at 1 ms). Left
+alone it overflows to NaN and the population falls silent for good. So, before the noise of a
+step, a trial whose population RMS of u exceeds ``BLOWUP_RMS_MV`` (10⁴ mV, a thousand times
+any physiological value) or whose v is not finite is put back at rest (v = c, u = b·c) and
+counted in ``NeuronPopulation.blowups``; at such SNRs the spikes are noise-driven bursts.
 """
 
 from __future__ import annotations
@@ -36,6 +44,9 @@ import numpy as np
 from skinhil.errors import ConfigError
 from skinhil.events import EVENT_DTYPE
 from skinhil.rng import next_normal_pair, seed_states
+
+BLOWUP_RMS_MV = 1e4
+"""Population RMS of u (mV) beyond which a trial counts as run away (see module docstring)."""
 
 
 @dataclass(frozen=True)
@@ -79,7 +90,7 @@ def noise_power_ratio(snr_db: float) -> float:
 @numba.njit(cache=True, fastmath=False)
 def _izhikevich_kernel(v: np.ndarray, u: np.ndarray, current: np.ndarray, dt_ms: float,
                        a: float, b: float, c: float, d: float, gain: float, v_peak: float,
-                       noise_ratio: float, rng: np.ndarray,
+                       noise_ratio: float, rng: np.ndarray, blowups: np.ndarray,
                        spikes: np.ndarray) -> None:  # pragma: no cover - compiled
     n_steps, n_batch, n = spikes.shape
     shared_input = current.shape[1] == 1
@@ -99,6 +110,14 @@ def _izhikevich_kernel(v: np.ndarray, u: np.ndarray, current: np.ndarray, dt_ms:
                 u[bb, i] = un
                 pv += vn * vn
                 pu += un * un
+            if not (pu <= n * BLOWUP_RMS_MV * BLOWUP_RMS_MV and pv < math.inf):
+                # the measured-power noise has run away: this trial starts again from rest
+                blowups[bb] += 1
+                for i in range(n):
+                    v[bb, i] = c
+                    u[bb, i] = b * c
+                pv = n * c * c
+                pu = n * (b * c) * (b * c)
             sv = math.sqrt(pv / n * noise_ratio)
             su = math.sqrt(pu / n * noise_ratio)
             if noise_ratio > 0.0:
@@ -139,6 +158,8 @@ class NeuronPopulation:
         self.snr_db = check_snr_db(snr_db)
         self._noise_ratio = noise_power_ratio(snr_db)
         self._rng = seed_states(seed, self._n_batch)
+        self.blowups = np.zeros(self._n_batch, dtype=np.int64)
+        """Per trial: how often the noise ran away and the trial was put back at rest."""
         self.v = np.empty((self._n_batch, self.n_channels))
         self.u = np.empty_like(self.v)
         self.reset()
@@ -173,7 +194,7 @@ class NeuronPopulation:
         p = self.params
         _izhikevich_kernel(self.v, self.u, np.ascontiguousarray(cur), dt_s * 1e3, p.a, p.b,
                            p.c_mv, p.d, p.gain, p.v_peak_mv, self._noise_ratio, self._rng,
-                           spikes)
+                           self.blowups, spikes)
         return spikes[:, 0, :] if self.batch is None else spikes
 
 

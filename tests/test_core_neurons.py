@@ -116,3 +116,15 @@ def test_bad_input() -> None:
     with pytest.raises(ConfigError, match="whole number of microseconds"):
         raster_to_events(np.zeros((2, 2), bool), 1.5e-7)
     assert math.isinf(NeuronPopulation(1).snr_db)
+
+
+def test_runaway_noise_is_reset_and_counted() -> None:
+    """Below ~24 dB the measured-power noise on u feeds itself; trials restart, never NaN."""
+    low = NeuronPopulation(338, snr_db=10, seed=1)
+    spikes = low.step_block(np.zeros((5000, 338)), 1e-4)
+    assert np.isfinite(low.v).all() and np.isfinite(low.u).all()
+    assert low.blowups[0] > 0
+    assert spikes[-1000:].any()  # still firing at the end: never silent for good
+    high = NeuronPopulation(338, snr_db=30, seed=1)
+    high.step_block(np.zeros((5000, 338)), 1e-4)
+    assert high.blowups[0] == 0
