@@ -133,13 +133,6 @@ class BoardSummary:
         return dataclasses.asdict(self)
 
 
-def _member(enum: Any, *names: str) -> Any:
-    for name in names:
-        if hasattr(enum, name):
-            return getattr(enum, name)
-    return list(enum)[0]
-
-
 class Board:
     """The emulated board over a link opened by ``open_link()``.
 
@@ -232,46 +225,50 @@ class Board:
         return protocols.Status(**{k: v for k, v in values.items() if k in fields})
 
     def _marker(self, m: MarkerEvent) -> Any:
-        phase_enum = getattr(protocols, "MarkerPhase", None)
-        phase: Any = m.phase
-        if phase_enum is not None:
-            phase = _member(phase_enum, m.phase.upper(),
-                            "ONSET" if m.phase == "onset" else "INDENTATION_END")
+        phase = protocols.MarkerPhase.ONSET if m.phase == "onset" else protocols.MarkerPhase.END
         return protocols.Marker(t_us=m.t_us, stimulus_id=m.stimulus_id, phase=phase)
 
     # -- commands -----------------------------------------------------------------------
     def handle(self, cmd: Any) -> Any:
-        """Execute a host command; return its :class:`protocols.Ack` (never raises)."""
-        codes, reasons = protocols.CommandCode, protocols.NackReason
-        ok_reason = _member(reasons, "NONE", "OK")
+        """Execute a host command; return its :class:`protocols.Ack` (never raises).
+
+        SET_SCHEDULE numbers: 0 none (host-driven), 1 the default random schedule,
+        2 the schedule file. SET_STIMULUS takes a stimulus id (0..8 direction conditions,
+        10..14 paper stimuli A-E, 100.. stimuli of the schedule file).
+        """
+        codes, why = protocols.CommandCode, protocols.NackReason
         now_s = self.board_time_us() * 1e-6
         self.counters.commands += 1
         op = cmd.opcode
-        ok, reason = True, ok_reason
+        reason = why.NONE
         try:
             if op == codes.START:
                 self.running = True
             elif op == codes.STOP:
                 self.running = False
             elif op == codes.SET_STIMULUS:
-                ok = self.timeline.start_stimulus(int(cmd.arg), now_s)
-                reason = ok_reason if ok else _member(reasons, "UNKNOWN_STIMULUS", "BAD_ARGUMENT")
+                if not self.timeline.start_stimulus(int(cmd.arg), now_s):
+                    reason = why.UNKNOWN_STIMULUS
             elif op == codes.SET_SCHEDULE:
-                ok = self.timeline.start_schedule(int(cmd.arg), now_s)
-                reason = ok_reason if ok else _member(reasons, "UNKNOWN_SCHEDULE", "BAD_ARGUMENT")
+                if not self.timeline.start_schedule(int(cmd.arg), now_s):
+                    reason = why.UNKNOWN_SCHEDULE
             elif op == codes.SET_SNR:
                 snr = float(cmd.arg)
                 if math.isnan(snr) or snr == -math.inf:
-                    ok, reason = False, _member(reasons, "BAD_ARGUMENT", "INVALID_ARGUMENT")
+                    reason = why.BAD_ARGUMENT
                 else:
                     self.sensor.set_snr(snr)
-            elif op == codes.QUERY_STATUS:
-                pass  # the status follows the ACK
+            elif op in (codes.QUERY_STATUS, codes.PING):
+                pass  # QUERY_STATUS: the status follows the ACK
             else:
-                ok, reason = False, _member(reasons, "UNKNOWN_COMMAND", "UNSUPPORTED")
+                reason = why.UNKNOWN_COMMAND
         except (ValueError, TypeError, OverflowError) as exc:
             log.info("command %r rejected: %s", cmd, exc)
-            ok, reason = False, _member(reasons, "BAD_ARGUMENT", "INVALID_ARGUMENT")
+            reason = why.BAD_ARGUMENT
+        except Exception as exc:  # a bad command never stops the board
+            log.warning("command %r failed: %s", cmd, exc)
+            reason = why.INTERNAL_ERROR
+        ok = reason == why.NONE
         if not ok:
             self.counters.nacks += 1
         return protocols.Ack(token=cmd.token, opcode=op, ok=ok, reason=reason)
@@ -314,10 +311,12 @@ class Board:
             if cmd.opcode == protocols.CommandCode.QUERY_STATUS:
                 self._fill(link, t_end_us)
                 link.queue_record(self.status())
-        self._fill(link, t_end_us)
-        if t_end_us >= self._next_status_us:
+        if t_end_us >= self._next_status_us and link.backlog_s() < self.config.tx_target_s:
+            # the heartbeat waits while the link is saturated: it never piles up
+            self._fill(link, t_end_us)
             link.queue_record(self.status())
             self._next_status_us = t_end_us + self._status_every_us
+        self._fill(link, t_end_us)
         link.pump()
 
     def _fill(self, link: BoardLink, t_end_us: int) -> None:

@@ -118,6 +118,8 @@ class BoardLink:
                 else wire
         else:
             n_bytes = int(room / self._byte_s)
+            if n_bytes <= 0 and self.pacer.free_at <= now:
+                n_bytes = 1  # a byte longer than the allowance may start once the wire is idle
             if n_bytes <= 0 or not self._bytes:
                 return 0
             chunk = bytes(self._bytes[:n_bytes])

@@ -163,7 +163,9 @@ class SerialTransport(Transport[bytes]):
         fd = getattr(self._ser, "fd", None)
         try:
             if not isinstance(fd, int):  # pyserial URL handlers (loop://, socket://, ...)
-                self._set_write_timeout(timeout)
+                # their write_timeout=0 means "fail unless instant" (loop:// sleeps, then
+                # raises), so a poll hands the data over as a blocking write would
+                self._set_write_timeout(None if timeout == 0 else timeout)
                 return int(self._ser.write(payload) or 0)
             return _write_fd(fd, payload, _Deadline(timeout))
         except serial.SerialTimeoutException:

@@ -1,0 +1,97 @@
+"""Run ``skinhil serve`` as a subprocess, as a user would, and collect its output."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+from pathlib import Path
+from typing import Any
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def serve_env() -> dict[str, str]:
+    """This environment with the repository under test on PYTHONPATH (after any others)."""
+    paths = [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p]
+    return {**os.environ, "PYTHONPATH": os.pathsep.join(paths + [str(REPO)]),
+            "PYTHONUNBUFFERED": "1"}
+
+
+RUN_DIR = tempfile.gettempdir()
+"""Working directory of the subprocesses (not the repository, so PYTHONPATH decides)."""
+
+
+def serve_argv(*args: str) -> list[str]:
+    """The command line of ``skinhil serve ARGS`` with this Python and this repository."""
+    return [sys.executable, "-m", "skinhil", "serve", *args]
+
+
+def run_serve(*args: str, timeout_s: float = 60.0) -> subprocess.CompletedProcess[str]:
+    """Run serve to completion; stdout/stderr captured as text."""
+    return subprocess.run(serve_argv(*args), cwd=RUN_DIR, env=serve_env(), text=True,
+                          capture_output=True, timeout=timeout_s, stdin=subprocess.DEVNULL)
+
+
+class ServeProcess:
+    """A running ``skinhil serve --json ...``; its JSON lines and stderr are collected."""
+
+    def __init__(self, *args: str) -> None:
+        self.proc = subprocess.Popen(serve_argv(*args), cwd=RUN_DIR, stdout=subprocess.PIPE,
+                                     stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
+                                     text=True, env=serve_env())
+        self.lines: list[dict[str, Any]] = []
+        self.stderr_lines: list[str] = []
+        self._threads = [threading.Thread(target=self._read_out, daemon=True),
+                         threading.Thread(target=self._read_err, daemon=True)]
+        for t in self._threads:
+            t.start()
+
+    def _read_out(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            try:
+                self.lines.append(json.loads(line))
+            except json.JSONDecodeError:
+                self.lines.append({"type": "text", "text": line})
+
+    def _read_err(self) -> None:
+        assert self.proc.stderr is not None
+        for line in self.proc.stderr:
+            self.stderr_lines.append(line)
+
+    @property
+    def exited(self) -> bool:
+        return self.proc.poll() is not None
+
+    def interrupt(self) -> None:
+        self.proc.send_signal(signal.SIGINT)
+
+    def wait(self, timeout_s: float = 30.0) -> int:
+        try:
+            rc = self.proc.wait(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+            raise
+        for t in self._threads:
+            t.join(timeout=2.0)
+        return rc
+
+    @property
+    def stderr(self) -> str:
+        return "".join(self.stderr_lines)
+
+    def summary(self) -> dict[str, Any]:
+        found = [x for x in self.lines if x.get("type") == "summary"]
+        assert found, f"no summary; stderr:\n{self.stderr}"
+        return found[-1]
+
+    def kill(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait()
