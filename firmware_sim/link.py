@@ -27,20 +27,21 @@ class BoardLink:
     """Encoder + transmit queue + pacer + command decoder over one transport.
 
     ``allowance_s`` is the transmit buffer in seconds of wire time (see
-    :class:`~firmware_sim.pacing.WirePacer`); ``board_id`` and ``fd`` select the CAN layout.
+    :class:`~firmware_sim.pacing.WirePacer`); ``board_id`` and ``fd`` select the CAN layout;
+    ``step_us`` is the timestamp resolution (µs).
     """
 
     def __init__(self, transport: Transport[Any], board_id: int = 0, fd: bool = False,
-                 allowance_s: float = 1e-3) -> None:
+                 allowance_s: float = 1e-3, step_us: int = 100) -> None:
         self.transport = transport
         self.is_can = transport.kind == "can"
         if self.is_can:
-            self.encoder: Any = protocols.CanEncoder(board_id=board_id, fd=fd)
+            self.encoder: Any = protocols.CanEncoder(board_id=board_id, fd=fd, step_us=step_us)
             self.decoder: Any = protocols.CanDecoder(board_id=board_id, fd=fd)
             self._frames: collections.deque[Any] = collections.deque()
             self._frame_s: collections.deque[float] = collections.deque()
         else:
-            self.encoder = protocols.SerialEncoder()
+            self.encoder = protocols.SerialEncoder(step_us=step_us)
             self.decoder = protocols.SerialDecoder()
             self._bytes = bytearray()
             self._byte_s = transport.wire_seconds(b"x")

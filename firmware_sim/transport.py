@@ -20,6 +20,7 @@ import collections
 import errno
 import logging
 import os
+import queue
 import select
 import socket
 import threading
@@ -129,6 +130,7 @@ class SerialTransport(Transport[bytes]):
         self._port_name = port
         self._timeout: float | None = -1.0
         self._write_timeout: float | None = -1.0
+        self._closed = False
         try:
             self._ser = serial.serial_for_url(port, baudrate=self.baud, timeout=0,
                                               write_timeout=0, exclusive=True)
@@ -158,6 +160,7 @@ class SerialTransport(Transport[bytes]):
     def send(self, payload: bytes, timeout: float | None = None) -> int:
         import serial
 
+        self._check_open()
         if not payload:
             return 0
         fd = getattr(self._ser, "fd", None)
@@ -168,7 +171,7 @@ class SerialTransport(Transport[bytes]):
                 self._set_write_timeout(None if timeout == 0 else timeout)
                 return int(self._ser.write(payload) or 0)
             return _write_fd(fd, payload, _Deadline(timeout))
-        except serial.SerialTimeoutException:
+        except (serial.SerialTimeoutException, queue.Full):  # URL handlers' write timeout
             return 0
         except (serial.SerialException, OSError) as exc:
             raise TransportError(f"serial port {self._port_name!r} went away: {exc}") from None
@@ -176,6 +179,7 @@ class SerialTransport(Transport[bytes]):
     def recv(self, timeout: float | None = None) -> bytes:
         import serial
 
+        self._check_open()
         try:
             self._set_timeout(timeout)
             first = self._ser.read(1)
@@ -197,7 +201,12 @@ class SerialTransport(Transport[bytes]):
     def empty(self) -> bytes:
         return b""
 
+    def _check_open(self) -> None:
+        if self._closed:
+            raise TransportError(f"serial port {self._port_name!r} is closed")
+
     def shutdown(self) -> None:
+        self._closed = True
         try:
             self._ser.close()
         except Exception as exc:  # closing a vanished device may fail; nothing to recover
@@ -341,6 +350,8 @@ class CanTransport(Transport[list[Any]]):
     def send(self, payload: list[Any], timeout: float | None = None) -> int:
         import can
 
+        if self._closed.is_set():
+            raise TransportError(f"CAN channel {self.channel!r} is closed")
         deadline = _Deadline(timeout)
         sent = 0
         for frame in payload:
@@ -366,6 +377,8 @@ class CanTransport(Transport[list[Any]]):
         return sent
 
     def recv(self, timeout: float | None = None) -> list[Any]:
+        if self._closed.is_set():
+            raise TransportError(f"CAN channel {self.channel!r} is closed")
         deadline = _Deadline(timeout)
         with self._rx_ready:
             while not self._rx:

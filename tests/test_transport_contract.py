@@ -1,0 +1,160 @@
+"""One contract, every transport: loopback URL, pty pair, python-can virtual bus, vcan0.
+
+Each case gives a sending and a receiving :class:`firmware_sim.transport.Transport` (the
+same object for ``loop://``). The pty case is a linked pair of real ptys made by socat, the
+vcan case two sockets on a real ``vcan0`` (inside user-mode Linux where the host has none).
+"""
+
+from __future__ import annotations
+
+import random
+import shutil
+import subprocess
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+import protocols
+from firmware_sim.transport import CanTransport, SerialTransport, Transport
+from skinhil.errors import TransportError
+
+CASES = ["loop", "pty", "virtual", pytest.param("vcan", marks=pytest.mark.vcan),
+         pytest.param("vcan-fd", marks=pytest.mark.vcan)]
+
+
+def _socat_pair(tmp: Path) -> tuple[subprocess.Popen[bytes], str, str]:
+    socat = shutil.which("socat")
+    if socat is None:
+        pytest.fail("socat is needed for the linked pty pair: apt-get install -y socat")
+    a, b = tmp / "ttyA", tmp / "ttyB"
+    proc = subprocess.Popen([socat, f"pty,raw,echo=0,link={a}",
+                             f"pty,raw,echo=0,link={b}"])
+    end = time.monotonic() + 5
+    while not (a.exists() and b.exists()):
+        if time.monotonic() > end:
+            proc.kill()
+            pytest.fail("socat did not create the pty pair")
+        time.sleep(0.01)
+    return proc, str(a), str(b)
+
+
+@pytest.fixture(params=CASES)
+def link(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[tuple[Any, Any, str]]:
+    kind = request.param
+    proc = None
+    if kind == "loop":
+        tx = SerialTransport("loop://", 115200)
+        rx = tx
+    elif kind == "pty":
+        proc, a, b = _socat_pair(tmp_path)
+        tx, rx = SerialTransport(a, 921600), SerialTransport(b, 921600)
+    elif kind == "virtual":
+        chan = f"contract-{random.getrandbits(32)}"
+        tx, rx = CanTransport(chan, "virtual"), CanTransport(chan, "virtual")
+    else:
+        fd = kind == "vcan-fd"
+        tx, rx = CanTransport("vcan0", fd=fd), CanTransport("vcan0", fd=fd)
+    yield tx, rx, kind
+    tx.shutdown()
+    rx.shutdown()
+    if proc is not None:
+        proc.kill()
+        proc.wait()
+
+
+def _payloads(tx: Transport[Any], n: int) -> list[Any]:
+    rng = random.Random(n)
+    if tx.kind == "serial":
+        return [bytes(rng.getrandbits(8) for _ in range(rng.randint(1, 300))) for _ in range(n)]
+    fd = getattr(tx, "fd", False)
+    sizes = protocols.budget.CAN_FD_LENGTHS if fd else range(9)
+    return [[protocols.CanFrame(rng.randrange(0x800), bytes(rng.getrandbits(8) for _ in
+                                                            range(rng.choice(sizes))), fd)]
+            for _ in range(n)]
+
+
+def _collect(rx: Transport[Any], want: int, timeout_s: float) -> Any:
+    got = rx.empty()
+    end = time.monotonic() + timeout_s
+    while len(got) < want and time.monotonic() < end:
+        got += rx.recv(timeout=0.1)
+    return got
+
+
+def test_round_trip_in_order(link) -> None:
+    tx, rx, kind = link
+    payloads = _payloads(tx, 40 if kind.startswith("vcan") else 200)
+    want = tx.empty()
+    for p in payloads:
+        want += p
+    got: list[Any] = []
+    reader = threading.Thread(target=lambda: got.append(_collect(rx, len(want), 10.0)))
+    reader.start()
+    for p in payloads:
+        assert tx.send(p, timeout=1.0) == len(p)
+    reader.join()
+    assert got[0] == want
+
+
+def test_burst_is_not_lost(link) -> None:
+    """A burst larger than a socket's default buffer arrives whole (reader thread, SO_RCVBUF)."""
+    tx, rx, kind = link
+    n = 1500 if kind.startswith("vcan") else 3000
+    if tx.kind == "serial":
+        frames = bytes(range(256)) * (n // 16)
+        done = threading.Event()
+        got: list[bytes] = []
+
+        def read() -> None:
+            got.append(_collect(rx, len(frames), 20.0))
+            done.set()
+
+        t = threading.Thread(target=read)
+        t.start()
+        assert tx.send(frames, timeout=20.0) == len(frames)
+        t.join()
+        assert got[0] == frames
+        return
+    batch = [protocols.CanFrame(0x100 + (i % 0x600), i.to_bytes(4, "little"), False)
+             for i in range(n)]
+    assert tx.send(batch, timeout=20.0) == n
+    time.sleep(0.2)  # nobody calls recv meanwhile: the reader thread must keep up
+    assert _collect(rx, n, 20.0) == batch
+
+
+def test_timeouts_poll_deadline_and_block(link) -> None:
+    tx, rx, kind = link
+    t0 = time.monotonic()
+    assert rx.recv(timeout=0) == rx.empty()
+    assert time.monotonic() - t0 < 0.05
+    t0 = time.monotonic()
+    assert rx.recv(timeout=0.2) == rx.empty()
+    assert 0.19 <= time.monotonic() - t0 < 0.6
+    payload = _payloads(tx, 1)[0]
+    threading.Timer(0.15, lambda: tx.send(payload, timeout=1.0)).start()
+    t0 = time.monotonic()
+    got = rx.recv(timeout=None)
+    assert time.monotonic() - t0 >= 0.1
+    got += _collect(rx, len(payload), 1.0) if len(got) < len(payload) else rx.empty()
+    assert got == payload
+
+
+def test_wire_time_and_shutdown(link) -> None:
+    tx, rx, kind = link
+    payload = _payloads(tx, 1)[0]
+    if tx.kind == "serial":
+        assert tx.wire_seconds(payload) == pytest.approx(len(payload) * 10 / tx.baud)
+    else:
+        assert tx.wire_seconds(payload * 3) == pytest.approx(
+            3 * protocols.can_frame_seconds(payload[0], tx.bitrate, tx.data_bitrate))
+    with tx:
+        pass
+    tx.shutdown()  # idempotent
+    with pytest.raises(TransportError, match="closed"):
+        tx.send(payload, timeout=0.5)
+    with pytest.raises(TransportError, match="closed"):
+        tx.recv(timeout=0)
