@@ -1,0 +1,176 @@
+"""The decoder file: plain data in one ``.npz`` (arrays) with a JSON header, never pickle.
+
+Entries (all plain numeric or Unicode arrays, read with ``allow_pickle=False``):
+
+- ``header``: a 0-d Unicode string holding JSON: ``format`` = ``"skinhil-direction-decoder"``,
+  ``format_version`` (:data:`FORMAT_VERSION`), ``feature_spec`` (FeatureSpec.to_dict: window,
+  bins, channels, ``dt_s``, ``n_channels``, PSP time constants), ``params`` (C, max_iter,
+  tol), ``n_features``, ``n_classes``, ``classes_kind`` (``int``/``str``) and ``sha256``, the
+  digest of the rest of the header and of the arrays below, so any change is detected;
+- ``coef`` (n_pairs, n_features) float64, ``intercept`` (n_pairs,) float64 (one-vs-one
+  hyperplanes, n_pairs = n_classes (n_classes − 1) / 2), ``mean`` and
+  ``scale`` (n_features,) float64 — the standardisation — and ``classes`` (n_classes,) int64
+  or Unicode.
+
+A file that is not a zip of arrays (e.g. a pickle), lacks an entry, fails the digest, has
+another format or version, or does not match the stream, raises :class:`ModelFileError`.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import zipfile
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from skinhil.decoding.features import FeatureSpec
+from skinhil.errors import ConfigError, ModelFileError
+
+if TYPE_CHECKING:
+    from skinhil.decoding.classifier import DirectionDecoder
+
+FORMAT = "skinhil-direction-decoder"
+FORMAT_VERSION = 1
+ARRAYS = ("coef", "intercept", "mean", "scale", "classes")
+
+
+def _digest(arrays: dict[str, np.ndarray], header: dict[str, Any]) -> str:
+    h = hashlib.sha256()
+    meta = {k: v for k, v in header.items() if k != "sha256"}
+    h.update(json.dumps(meta, sort_keys=True).encode())
+    for name in ARRAYS:
+        a = np.ascontiguousarray(arrays[name])
+        h.update(f"{name}:{a.dtype.str}:{a.shape}".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def save_decoder(decoder: DirectionDecoder, path: str | Path) -> None:
+    """Write a fitted decoder to ``path`` (conventionally ``*.npz``)."""
+    classes = np.asarray(decoder.classes_)
+    if classes.dtype.kind in "iub":
+        classes, kind = classes.astype(np.int64), "int"
+    elif classes.dtype.kind == "U":
+        kind = "str"
+    else:
+        raise ConfigError(f"class labels of dtype {classes.dtype} cannot be saved as plain "
+                          "data; use integer or string labels")
+    arrays = {"coef": decoder.coef_, "intercept": decoder.intercept_, "mean": decoder.mean_,
+              "scale": decoder.scale_, "classes": classes}
+    header = {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "feature_spec": decoder.spec_.to_dict(),
+        "params": {"C": float(decoder.C), "max_iter": int(decoder.max_iter),
+                   "tol": float(decoder.tol), "scheme": "ovo"},
+        "n_features": int(decoder.n_features_in_),
+        "n_classes": int(classes.size),
+        "classes_kind": kind,
+    }
+    header["sha256"] = _digest(arrays, header)
+    p = Path(path)
+    try:
+        with p.open("wb") as fh:
+            entries: dict[str, Any] = {"header": np.array(json.dumps(header, sort_keys=True)),
+                                       **arrays}
+            np.savez(fh, **entries)
+    except OSError as exc:
+        raise ModelFileError(f"cannot write decoder file {str(p)!r}: {exc.strerror or exc}") \
+            from None
+
+
+def _read(p: Path) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    where = f"decoder file {str(p)!r}"
+    if not p.is_file():
+        raise ModelFileError(f"{where} not found; train one with 'skinhil train'")
+    with p.open("rb") as fh:
+        magic = fh.read(4)
+    if magic[:1] == b"\x80":
+        raise ModelFileError(f"{where} is a pickle; pickled models are refused, save the "
+                             "decoder with DirectionDecoder.save")
+    if magic != b"PK\x03\x04":
+        raise ModelFileError(f"{where} is not a decoder .npz file (wrong magic bytes)")
+    try:
+        with np.load(p, allow_pickle=False) as data:
+            names = set(data.files)
+            missing = ({"header", *ARRAYS}) - names
+            if missing:
+                raise ModelFileError(f"{where} lacks entries {sorted(missing)}; it is not a "
+                                     "complete decoder file")
+            arrays = {name: np.asarray(data[name]) for name in ARRAYS}
+            header_arr = data["header"]
+    except ModelFileError:
+        raise
+    except ValueError as exc:
+        if "pickle" in str(exc).lower() or "object arrays" in str(exc).lower():
+            raise ModelFileError(f"{where} holds pickled objects; refused (plain data only)") \
+                from None
+        raise ModelFileError(f"{where} is corrupted: {exc}") from None
+    except (zipfile.BadZipFile, OSError, EOFError, KeyError) as exc:
+        raise ModelFileError(f"{where} is corrupted: {exc}") from None
+    if header_arr.dtype.kind != "U" or header_arr.ndim != 0:
+        raise ModelFileError(f"{where} has no readable JSON header")
+    try:
+        header = json.loads(str(header_arr))
+    except json.JSONDecodeError as exc:
+        raise ModelFileError(f"{where} has a corrupted JSON header: {exc}") from None
+    if not isinstance(header, dict):
+        raise ModelFileError(f"{where} has a JSON header that is not an object")
+    return header, arrays
+
+
+def load_decoder(cls: type[DirectionDecoder], path: str | Path, n_channels: int | None = None,
+                 dt_s: float | None = None) -> DirectionDecoder:
+    """Read and check a decoder file (see module docstring)."""
+    p = Path(path)
+    where = f"decoder file {str(p)!r}"
+    header, arrays = _read(p)
+    if header.get("format") != FORMAT:
+        raise ModelFileError(f"{where} has format {header.get('format')!r}, not {FORMAT!r}")
+    version = header.get("format_version")
+    if version != FORMAT_VERSION:
+        raise ModelFileError(f"{where} has format version {version!r}; this skinhil reads "
+                             f"version {FORMAT_VERSION}: retrain with 'skinhil train'")
+    if header.get("sha256") != _digest(arrays, header):
+        raise ModelFileError(f"{where} is corrupted: its content does not match the stored "
+                             "digest")
+    try:
+        spec = FeatureSpec.from_dict(header["feature_spec"])
+        params = header["params"]
+        if params.get("scheme") != "ovo":
+            raise ModelFileError(f"{where} uses decision scheme {params.get('scheme')!r}; "
+                                 "this skinhil reads 'ovo'")
+        n_features, n_classes = int(header["n_features"]), int(header["n_classes"])
+        decoder = cls(spec=spec, C=float(params["C"]), max_iter=int(params["max_iter"]),
+                      tol=float(params["tol"]))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise ModelFileError(f"{where} has an invalid header: {exc}") from None
+    if n_classes < 2:
+        raise ModelFileError(f"{where} holds {n_classes} class(es); a decoder needs two or more")
+    n_rows = n_classes * (n_classes - 1) // 2
+    shapes = {"coef": (n_rows, n_features), "intercept": (n_rows,), "mean": (n_features,),
+              "scale": (n_features,), "classes": (n_classes,)}
+    for name, shape in shapes.items():
+        if arrays[name].shape != shape:
+            raise ModelFileError(f"{where}: array {name!r} has shape {arrays[name].shape}, "
+                                 f"expected {shape}")
+    if n_features != spec.n_features:
+        raise ModelFileError(f"{where}: {n_features} features but its feature spec defines "
+                             f"{spec.n_features}")
+    for name in ("coef", "intercept", "mean", "scale"):
+        if arrays[name].dtype != np.float64 or not np.all(np.isfinite(arrays[name])):
+            raise ModelFileError(f"{where}: array {name!r} is not finite float64")
+    decoder.spec_ = spec
+    decoder.classes_ = arrays["classes"]
+    decoder.coef_ = arrays["coef"]
+    decoder.intercept_ = arrays["intercept"]
+    decoder.mean_ = arrays["mean"]
+    decoder.scale_ = arrays["scale"]
+    decoder.n_features_in_ = n_features
+    if n_channels is not None or dt_s is not None:
+        decoder.check_stream(spec.n_channels if n_channels is None else n_channels,
+                             spec.dt_s if dt_s is None else dt_s)
+    return decoder
