@@ -45,7 +45,8 @@ class DirectionDecoder(ClassifierMixin, BaseEstimator):  # type: ignore[misc]
 
     Parameters: ``spec`` the feature definition (default :class:`FeatureSpec`), ``C`` the SVM
     penalty, ``max_iter`` (−1: no limit) and ``tol`` the libsvm solver's limits.
-    Learned: ``spec_``, ``classes_``, ``coef_``, ``intercept_``, ``mean_``, ``scale_``, ``n_features_in_``.
+    Learned: ``spec_``, ``classes_``, ``coef_``, ``intercept_``, ``mean_``, ``scale_``,
+    ``n_features_in_``.
     """
 
     def __init__(self, spec: FeatureSpec | None = None, C: float = 1.0,
