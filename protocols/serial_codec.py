@@ -1,40 +1,223 @@
-"""Serial packet stream: encoder and incremental decoder (layout in SPEC.md)."""
+"""Serial packet stream (SPEC.md §2-§4): encoder and incremental decoder.
+
+Packets are COBS-framed, zero-delimited, CRC-16 protected; events are 16-bit words (9-bit
+address, 7-bit step delta) or a 338-bit bitmap for a crowded step, stamped against an
+explicit time base (SYNC). The compiled loops are in :mod:`protocols.serial_kernels`.
+"""
 
 from __future__ import annotations
 
+import logging
+import struct
+
 import numpy as np
 
-from protocols.records import Ack, Command, DecodeResult, LinkCounters, Marker, Status
+from protocols import serial_kernels as k
+from protocols.constants import DEFAULT_FLUSH_US, DEFAULT_STEP_US, DEFAULT_SYNC_US
+from protocols.counters import StatusTracker
+from protocols.event_input import check_step_us, event_steps
+from protocols.framing import frame_into
+from protocols.record_fields import arg_bits, arg_value, check_uint, enum_or_int
+from protocols.records import (
+    Ack,
+    Command,
+    CommandCode,
+    DecodeResult,
+    LinkCounters,
+    Marker,
+    MarkerPhase,
+    NackReason,
+    Record,
+    Status,
+)
+from skinhil.errors import ProtocolError
+from skinhil.events import EVENT_DTYPE
+
+log = logging.getLogger(__name__)
+
+_STATUS = struct.Struct("<BB6s10I")
+_MARKER = struct.Struct("<BB6sIB")
+_COMMAND = struct.Struct("<BBHBI")
+_ACK = struct.Struct("<BBHBB")
+_STATUS_WIDTHS = dict.fromkeys(
+    ("events_generated", "events_sent", "events_dropped", "late_ticks", "rx_errors",
+     "dropped_fifo_full", "dropped_stopped", "dropped_link_down", "link_events"), 32)
+
+
+def _u48(value: int) -> bytes:
+    return check_uint(value, 48, "time (µs)").to_bytes(6, "little")
 
 
 class SerialEncoder:
-    """Board→host (and host→board) serial packet encoder."""
+    """Encoder of one direction of the serial stream (board→host events and records, or
+    host→board commands). Keeps the sequence number, SYNC epoch and event count.
 
-    def __init__(self, step_us: int = 100, max_packet_span_us: int = 1000) -> None:
-        self.step_us = step_us
-        self.max_packet_span_us = max_packet_span_us
+    ``step_us`` is the event time step (µs); ``flush_us`` the longest time one events packet
+    spans (µs, a multiple of the step); ``sync_us`` the longest time between SYNCs (µs).
+    """
+
+    def __init__(self, step_us: int = DEFAULT_STEP_US, flush_us: int = DEFAULT_FLUSH_US,
+                 sync_us: int = DEFAULT_SYNC_US) -> None:
+        self.step_us = check_step_us(step_us)
+        if flush_us < step_us or flush_us % step_us:
+            raise ProtocolError(f"flush_us={flush_us} must be a positive multiple of the "
+                                f"{step_us} µs step")
+        if not step_us <= sync_us <= 0xFFFF * step_us:
+            raise ProtocolError(f"sync_us={sync_us} must lie in [{step_us}, "
+                                f"{0xFFFF * step_us}] µs")
+        self.flush_us = flush_us
+        self.sync_us = sync_us
+        self._st = np.zeros(k.E_SIZE, dtype=np.int64)
+        self._st[k.E_EPOCH] = k.EPOCH_MOD - 1
+        self._st[k.E_STEP_US] = self.step_us
+        self._t_min_us = 0
+        self._pkt = np.empty(k.MAX_BODY + 8, dtype=np.uint8)
+        self._out = np.empty(2 * k.MAX_WIRE, dtype=np.uint8)
+
+    @property
+    def events_encoded(self) -> int:
+        """Events put into packets so far (the count status packets carry)."""
+        return int(self._st[k.E_EVENTS])
 
     def events(self, events: np.ndarray, t_end_us: int) -> bytes:
-        raise NotImplementedError
+        """Packets carrying ``events`` (EVENT_DTYPE, times in [end of last call, t_end_us)).
+
+        An empty call returns a SYNC if the last one is ``sync_us`` old, else nothing.
+        """
+        steps, addr = event_steps(events, self.step_us, t_end_us, self._t_min_us)
+        self._t_min_us = max(self._t_min_us, int(t_end_us))
+        st = self._st
+        if steps.shape[0] == 0:
+            end_step = int(t_end_us) // self.step_us
+            if st[k.E_SYNC_VALID] and end_step - st[k.E_LAST_SYNC] >= self.sync_us // self.step_us:
+                n = k.encode_sync(st, end_step, self._pkt, self._out, 0)
+                return self._out[:n].tobytes()
+            return b""
+        out = np.empty(32 * steps.shape[0] + 64, dtype=np.uint8)
+        n = k.encode_events(steps, addr, st, self.flush_us // self.step_us,
+                            self.sync_us // self.step_us, out)
+        return out[:n].tobytes()
+
+    def _packet(self, body: bytes) -> bytes:
+        pkt = self._pkt
+        pkt[:len(body)] = np.frombuffer(body, dtype=np.uint8)
+        pkt[1] = self._st[k.E_SEQ]
+        self._st[k.E_SEQ] = (self._st[k.E_SEQ] + 1) & 0xFF
+        n = frame_into(pkt, len(body), self._out, 0)
+        return self._out[:n].tobytes()
 
     def status(self, status: Status) -> bytes:
-        raise NotImplementedError
+        """A STATUS packet; counters are sent modulo 2**32 with this encoder's event count."""
+        counts = [status.events_generated, status.events_sent, status.events_dropped,
+                  status.events_queued, status.late_ticks, status.rx_errors,
+                  status.dropped_fifo_full, status.dropped_stopped, status.dropped_link_down,
+                  self.events_encoded]
+        for name, v in zip(("counter",) * 10, counts, strict=True):
+            if v < 0:
+                raise ProtocolError(f"status {name} {v} is negative; counters count up from 0")
+        check_uint(status.events_queued, 32, "events_queued")
+        body = _STATUS.pack((k.T_STATUS << 5) | int(bool(status.running)), 0,
+                            _u48(status.t_us), *(v & 0xFFFFFFFF for v in counts))
+        return self._packet(body)
 
     def marker(self, marker: Marker) -> bytes:
-        raise NotImplementedError
+        """A MARKER packet (ground truth: stimulus id and phase at board time)."""
+        body = _MARKER.pack(k.T_MARKER << 5, 0, _u48(marker.t_us),
+                            check_uint(marker.stimulus_id, 32, "stimulus_id"),
+                            check_uint(int(marker.phase), 8, "marker phase"))
+        return self._packet(body)
 
     def command(self, command: Command) -> bytes:
-        raise NotImplementedError
+        """A COMMAND packet (host→board)."""
+        body = _COMMAND.pack(k.T_COMMAND << 5, 0, check_uint(command.token, 16, "token"),
+                             check_uint(int(command.opcode), 8, "opcode"),
+                             arg_bits(command.opcode, command.arg))
+        return self._packet(body)
 
     def ack(self, ack: Ack) -> bytes:
-        raise NotImplementedError
+        """An ACK packet (board→host answer to a command)."""
+        body = _ACK.pack((k.T_ACK << 5) | int(bool(ack.ok)), 0,
+                         check_uint(ack.token, 16, "token"),
+                         check_uint(int(ack.opcode), 8, "opcode"),
+                         check_uint(int(ack.reason), 8, "reason"))
+        return self._packet(body)
 
 
 class SerialDecoder:
-    """Incremental decoder of the serial packet stream."""
+    """Incremental decoder of a serial packet stream: feed bytes in any chunking.
+
+    Never raises on bad data: corrupted or foreign bytes are counted in :attr:`counters`
+    and skipped (SPEC.md §6).
+    """
 
     def __init__(self) -> None:
         self.counters = LinkCounters()
+        self._pending = bytearray()
+        self._st = np.zeros(k.D_SIZE, dtype=np.int64)
+        self._c = np.zeros(k.C_SIZE, dtype=np.int64)
+        self._status = StatusTracker()
 
     def feed(self, data: bytes) -> DecodeResult:
-        raise NotImplementedError
+        """Decode every complete packet in the bytes received so far."""
+        pending = self._pending
+        pending += data
+        end = pending.rfind(0)
+        if end < 0:
+            if len(pending) > 2 * k.MAX_WIRE:
+                cut = len(pending) - k.MAX_WIRE
+                del pending[:cut]
+                self._c[k.C_DISCARDED] += cut
+                self._sync_counters()
+            return DecodeResult.empty()
+        buf = np.frombuffer(bytes(pending[:end + 1]), dtype=np.uint8)
+        del pending[:end + 1]
+        t, a, ne, rec, rec_ix, nr = k.decode_stream(buf, self._st, self._c)
+        events = np.empty(ne, dtype=EVENT_DTYPE)
+        events["t"] = t[:ne]
+        events["addr"] = a[:ne]
+        events["p"] = 1
+        records: list[Record] = []
+        for r in range(nr):
+            off, m, decoded = (int(v) for v in rec_ix[r])
+            record = self._record(rec[off:off + m].tobytes(), decoded)
+            if record is not None:
+                records.append(record)
+        self._sync_counters()
+        return DecodeResult(events, records)
+
+    def _record(self, body: bytes, decoded: int) -> Record | None:
+        typ, low = body[0] >> 5, body[0] & 0x1F
+        if typ == k.T_STATUS:
+            _, _, t, *v = _STATUS.unpack(body)
+            raw = Status(int.from_bytes(t, "little"), v[0], v[1], v[2], v[3], v[4], v[5],
+                         bool(low & 1), v[6], v[7], v[8])
+            return self._status.update(raw, v[9], decoded, _STATUS_WIDTHS, self.counters)
+        if typ == k.T_MARKER:
+            _, _, t, sid, phase = _MARKER.unpack(body)
+            if phase not in MarkerPhase._value2member_map_:
+                self._c[k.C_MALFORMED] += 1
+                return None
+            return Marker(int.from_bytes(t, "little"), sid, MarkerPhase(phase))
+        if typ == k.T_COMMAND:
+            _, _, token, op, bits = _COMMAND.unpack(body)
+            return Command(token, enum_or_int(CommandCode, op), arg_value(op, bits))
+        _, _, token, op, reason = _ACK.unpack(body)
+        return Ack(token, enum_or_int(CommandCode, op), bool(low & 1),
+                   enum_or_int(NackReason, reason))
+
+    def _sync_counters(self) -> None:
+        c, lc = self._c, self.counters
+        lc.frames_ok = int(c[k.C_FRAMES_OK])
+        lc.crc_errors = int(c[k.C_CRC])
+        lc.malformed = int(c[k.C_MALFORMED])
+        lc.resyncs = int(c[k.C_RESYNCS])
+        lc.bytes_discarded = int(c[k.C_DISCARDED])
+        lc.seq_gaps = int(c[k.C_GAPS])
+        lc.frames_lost = int(c[k.C_LOST])
+        lc.duplicates = int(c[k.C_DUPS])
+        lc.events_decoded = int(c[k.C_EVENTS])
+        lc.events_untimed = int(c[k.C_UNTIMED])
+        lc.syncs = int(c[k.C_SYNCS])
+
+
+

@@ -1,0 +1,334 @@
+"""Compiled inner loops of the serial codec: events packets out, whole byte streams in.
+
+State and counters live in small int64 arrays so the loops run without Python objects; the
+index constants below name their slots. Layouts are those of SPEC.md §3-§4.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from protocols.constants import BITMAP_BYTES, N_CHANNELS, PROTOCOL_VERSION
+from protocols.framing import cobs_decode, crc16, frame_into
+
+T_EVENTS, T_SYNC, T_STATUS, T_MARKER, T_COMMAND, T_ACK = 0, 1, 2, 3, 4, 5
+"""Packet types (high three bits of byte 0)."""
+
+BITMAP_ADDR = 511
+"""Address field value of a bitmap word."""
+
+MIN_BITMAP_EVENTS = (2 + BITMAP_BYTES) // 2 + 1
+"""A step with at least this many distinct channels is sent as a bitmap (23)."""
+
+MAX_BODY = 1024
+"""Largest packet body (header + payload, CRC excluded) an encoder emits (bytes)."""
+
+MAX_WIRE = MAX_BODY + 2 + (MAX_BODY + 2) // 254 + 2
+"""Largest COBS-encoded packet (delimiter excluded); longer candidates hold garbage."""
+
+EPOCH_MOD = 32
+"""SYNC epochs count modulo this; a sequence gap this long invalidates the time base."""
+
+BODY_LEN = np.array([-1, 11, 48, 13, 9, 6, -1, -1], dtype=np.int64)
+"""Exact body length of each fixed-size packet type (-1: variable or invalid)."""
+
+# encoder state slots
+E_SEQ, E_EPOCH, E_SYNC_VALID, E_SYNC_BASE, E_EVENTS, E_STEP_US, E_LAST_SYNC = range(7)
+E_SIZE = 7
+# decoder state slots
+D_HAVE_SEQ, D_SEQ, D_SYNC_VALID, D_EPOCH, D_BASE, D_STEP_US = range(6)
+D_SIZE = 6
+# decoder counter slots (LinkCounters fields of the same names)
+(C_FRAMES_OK, C_CRC, C_MALFORMED, C_RESYNCS, C_DISCARDED, C_GAPS, C_LOST, C_DUPS,
+ C_EVENTS, C_UNTIMED, C_SYNCS) = range(11)
+C_SIZE = 11
+
+
+@numba.njit(cache=True, nogil=True)
+def put_le(buf: np.ndarray, pos: int, value: int, n: int) -> None:
+    """Write ``value`` as an ``n``-byte little-endian unsigned integer at ``buf[pos]``."""
+    for k in range(n):
+        buf[pos + k] = (value >> (8 * k)) & 0xFF
+
+
+@numba.njit(cache=True, nogil=True)
+def get_le(buf: np.ndarray, pos: int, n: int) -> int:
+    """Read an ``n``-byte little-endian unsigned integer at ``buf[pos]``."""
+    v = 0
+    for k in range(n):
+        v |= np.int64(buf[pos + k]) << (8 * k)
+    return v
+
+
+@numba.njit(cache=True, nogil=True)
+def encode_sync(st: np.ndarray, base: int, pkt: np.ndarray, out: np.ndarray, pos: int) -> int:
+    """Append a SYNC packet with time base ``base`` (steps); update ``st``; return the end."""
+    epoch = (st[E_EPOCH] + 1) % EPOCH_MOD
+    pkt[0] = (T_SYNC << 5) | epoch
+    pkt[1] = st[E_SEQ] & 0xFF
+    pkt[2] = PROTOCOL_VERSION
+    put_le(pkt, 3, st[E_STEP_US], 2)
+    put_le(pkt, 5, base, 6)
+    st[E_SEQ] = (st[E_SEQ] + 1) & 0xFF
+    st[E_EPOCH] = epoch
+    st[E_SYNC_VALID] = 1
+    st[E_SYNC_BASE] = base
+    st[E_LAST_SYNC] = base
+    return frame_into(pkt, 11, out, pos)
+
+
+@numba.njit(cache=True, nogil=True)
+def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int,
+                  sync_every: int, out: np.ndarray) -> int:
+    """Append EVENTS packets (and the SYNCs they need) for sorted events; return the end.
+
+    ``steps`` are event times in steps (sorted), ``addr`` their channels; a packet never
+    crosses a multiple of ``span`` steps; a SYNC is sent before a packet whose base is
+    ``sync_every`` steps or more after the last SYNC (or out of the 16-bit offset range).
+    """
+    n = steps.shape[0]
+    pkt = np.empty(MAX_BODY + 8, dtype=np.uint8)
+    seen = np.zeros(N_CHANNELS, dtype=np.bool_)
+    pos = 0
+    i = 0
+    while i < n:
+        base = steps[i]
+        if (st[E_SYNC_VALID] == 0 or base - st[E_SYNC_BASE] > 0xFFFF
+                or base - st[E_SYNC_BASE] >= sync_every):
+            pos = encode_sync(st, base, pkt, out, pos)
+        wend = (base // span + 1) * span
+        off = base - st[E_SYNC_BASE]
+        pkt[0] = (T_EVENTS << 5) | st[E_EPOCH]
+        pkt[1] = st[E_SEQ] & 0xFF
+        pkt[2] = off & 0xFF
+        pkt[3] = off >> 8
+        ln = 4
+        cur = base
+        count = 0
+        while i < n:
+            s = steps[i]
+            d = s - cur
+            if s >= wend or d > 127:
+                break
+            j = i + 1
+            while j < n and steps[j] == s:
+                j += 1
+            cnt = j - i
+            bitmap = False
+            if cnt >= MIN_BITMAP_EVENTS and ln + 2 + BITMAP_BYTES <= MAX_BODY:
+                bitmap = True
+                for k in range(i, j):
+                    if seen[addr[k]]:
+                        bitmap = False
+                    seen[addr[k]] = True
+                for k in range(i, j):
+                    seen[addr[k]] = False
+            if bitmap:
+                w = (BITMAP_ADDR << 7) | d
+                pkt[ln] = w & 0xFF
+                pkt[ln + 1] = w >> 8
+                for k in range(BITMAP_BYTES):
+                    pkt[ln + 2 + k] = 0
+                for k in range(i, j):
+                    a = addr[k]
+                    pkt[ln + 2 + (a >> 3)] |= 1 << (a & 7)
+                ln += 2 + BITMAP_BYTES
+                count += cnt
+                i = j
+            else:
+                room = (MAX_BODY - ln) // 2
+                if room <= 0:
+                    break
+                k = min(cnt, room)
+                w = (np.int64(addr[i]) << 7) | d
+                pkt[ln] = w & 0xFF
+                pkt[ln + 1] = w >> 8
+                for q in range(1, k):
+                    w = np.int64(addr[i + q]) << 7
+                    pkt[ln + 2 * q] = w & 0xFF
+                    pkt[ln + 2 * q + 1] = w >> 8
+                ln += 2 * k
+                count += k
+                i += k
+                if k < cnt:
+                    cur = s
+                    break
+            cur = s
+        pos = frame_into(pkt, ln, out, pos)
+        st[E_SEQ] = (st[E_SEQ] + 1) & 0xFF
+        st[E_EVENTS] += count
+    return pos
+
+
+@numba.njit(cache=True, nogil=True)
+def check_body(dec: np.ndarray, m: int) -> int:
+    """Number of events in a valid body ``dec[:m]`` (0 for record packets), -1 if invalid."""
+    if m < 2:
+        return -1
+    typ = dec[0] >> 5
+    if typ != T_EVENTS:
+        if BODY_LEN[typ] != m:
+            return -1
+        if typ == T_SYNC and (dec[2] != PROTOCOL_VERSION or get_le(dec, 3, 2) == 0):
+            return -1
+        return 0
+    if m < 4:
+        return -1
+    k = 4
+    count = 0
+    while k < m:
+        if k + 2 > m:
+            return -1
+        a = (np.int64(dec[k]) | (np.int64(dec[k + 1]) << 8)) >> 7
+        if a < N_CHANNELS:
+            count += 1
+            k += 2
+        elif a == BITMAP_ADDR:
+            if k + 2 + BITMAP_BYTES > m or dec[k + 1 + BITMAP_BYTES] & 0xFC:
+                return -1
+            for q in range(k + 2, k + 2 + BITMAP_BYTES):
+                v = dec[q]
+                while v:
+                    count += 1
+                    v &= v - 1
+            k += 2 + BITMAP_BYTES
+        else:
+            return -1
+    return count
+
+
+@numba.njit(cache=True, nogil=True)
+def try_frame(buf: np.ndarray, a: int, b: int, dec: np.ndarray) -> int:
+    """Decode candidate ``buf[a:b]``: body length, -1 (bad COBS/CRC) or -2 (bad layout)."""
+    n = cobs_decode(buf, a, b, dec)
+    if n < 4 or crc16(dec, 0, n) != 0:
+        return -1
+    if check_body(dec, n - 2) < 0:
+        return -2
+    return n - 2
+
+
+@numba.njit(cache=True, nogil=True)
+def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
+        np.ndarray, np.ndarray, int, np.ndarray, np.ndarray, int]:
+    """Decode every zero-terminated candidate in ``buf`` (which ends with a zero).
+
+    Returns ``(t_steps, addr, n_events, rec_bytes, rec_index, n_records)`` where event times
+    are in µs; ``rec_index[r] = (offset, length, events decoded before it)`` of record ``r``.
+    """
+    n = buf.shape[0]
+    cap = 8 * n + 16
+    out_t = np.empty(cap, dtype=np.int64)
+    out_a = np.empty(cap, dtype=np.uint16)
+    rec = np.empty(n + 8, dtype=np.uint8)
+    rec_ix = np.empty((n // 4 + 2, 3), dtype=np.int64)
+    dec = np.empty(n + 8, dtype=np.uint8)
+    valid = np.empty(MAX_WIRE + 8, dtype=np.bool_)
+    ne = 0
+    nr = 0
+    rpos = 0
+    start = 0
+    for i in range(n):
+        if buf[i] != 0:
+            continue
+        a = start
+        b = i
+        start = i + 1
+        if b == a:
+            continue
+        m = -1
+        first = a
+        if b - a > MAX_WIRE:
+            c[C_CRC] += 1
+            c[C_DISCARDED] += b - MAX_WIRE - a
+            first = b - MAX_WIRE
+            a = first - 1  # the window start itself is a suffix candidate
+        else:
+            m = try_frame(buf, a, b, dec)
+            if m < 0:
+                if m == -2:
+                    c[C_MALFORMED] += 1
+                else:
+                    c[C_CRC] += 1
+        if m < 0:
+            # resynchronise inside the candidate: the longest suffix that is a good frame
+            chain_ok = valid
+            w0 = first
+            for k in range(b - 1, w0 - 1, -1):
+                code = buf[k]
+                nxt = k + code
+                chain_ok[k - w0] = code != 0 and (nxt == b or (nxt < b and chain_ok[nxt - w0]))
+            tries = 0
+            for k in range(a + 1, b):
+                if not chain_ok[k - w0]:
+                    continue
+                tries += 1
+                if tries > 64:
+                    break
+                m = try_frame(buf, k, b, dec)
+                if m >= 0:
+                    c[C_RESYNCS] += 1
+                    c[C_DISCARDED] += k - first
+                    break
+            if m < 0:
+                c[C_DISCARDED] += b - first
+                continue
+        seq = dec[1]
+        if st[D_HAVE_SEQ]:
+            gap = (seq - st[D_SEQ] - 1) & 0xFF
+            if gap == 0xFF:
+                c[C_DUPS] += 1
+                continue
+            if gap:
+                c[C_GAPS] += 1
+                c[C_LOST] += gap
+                if gap >= EPOCH_MOD:
+                    st[D_SYNC_VALID] = 0
+        st[D_HAVE_SEQ] = 1
+        st[D_SEQ] = seq
+        c[C_FRAMES_OK] += 1
+        typ = dec[0] >> 5
+        if typ == T_EVENTS:
+            if st[D_SYNC_VALID] == 0 or (dec[0] & 0x1F) != st[D_EPOCH]:
+                c[C_UNTIMED] += check_body(dec, m)
+                continue
+            t = st[D_BASE] + dec[2] + (np.int64(dec[3]) << 8)
+            step = st[D_STEP_US]
+            k = 4
+            while k < m:
+                w = np.int64(dec[k]) | (np.int64(dec[k + 1]) << 8)
+                t += w & 0x7F
+                ad = w >> 7
+                if ad < N_CHANNELS:
+                    out_t[ne] = t * step
+                    out_a[ne] = ad
+                    ne += 1
+                    k += 2
+                else:
+                    for q in range(BITMAP_BYTES):
+                        v = dec[k + 2 + q]
+                        bit = 0
+                        while v:
+                            if v & 1:
+                                out_t[ne] = t * step
+                                out_a[ne] = 8 * q + bit
+                                ne += 1
+                            v >>= 1
+                            bit += 1
+                    k += 2 + BITMAP_BYTES
+        elif typ == T_SYNC:
+            st[D_SYNC_VALID] = 1
+            st[D_EPOCH] = dec[0] & 0x1F
+            st[D_STEP_US] = get_le(dec, 3, 2)
+            st[D_BASE] = get_le(dec, 5, 6)
+            c[C_SYNCS] += 1
+        else:
+            rec[rpos:rpos + m] = dec[:m]
+            rec_ix[nr, 0] = rpos
+            rec_ix[nr, 1] = m
+            rec_ix[nr, 2] = c[C_EVENTS] + ne
+            rpos += m
+            nr += 1
+    c[C_EVENTS] += ne
+    return out_t, out_a, ne, rec, rec_ix, nr
