@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from typing import Any
 
 from protocols.records import LinkCounters, Status
 
@@ -36,7 +37,7 @@ class StatusTracker:
     def update(self, raw: Status, link_events: int, decoded: int, widths: dict[str, int],
                counters: LinkCounters) -> Status:
         """Unwrap ``raw`` (fields modulo ``2**widths[name]``) and update ``counters``."""
-        values: dict[str, int] = {}
+        values: dict[str, Any] = {}
         for name in STATUS_COUNTERS:
             values[name] = unwrap(self._last.get(name), getattr(raw, name), widths[name])
         link = unwrap(self._last.get("link_events"), link_events, widths["link_events"])

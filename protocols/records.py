@@ -99,7 +99,8 @@ class Command:
     """
 
     token: int
-    opcode: CommandCode
+    opcode: CommandCode | int
+    """A :class:`CommandCode`; an unknown code decodes as a plain int (to be NACKed)."""
     arg: int | float = 0
 
 
@@ -108,9 +109,10 @@ class Ack:
     """The board's answer to the command with ``token``: ``ok`` or refused for ``reason``."""
 
     token: int
-    opcode: CommandCode
+    opcode: CommandCode | int
     ok: bool
-    reason: NackReason = NackReason.NONE
+    reason: NackReason | int = NackReason.NONE
+    """A :class:`NackReason`; an unknown code decodes as a plain int."""
 
 
 Record = Status | Marker | Command | Ack

@@ -57,7 +57,7 @@ def get_le(buf: np.ndarray, pos: int, n: int) -> int:
     """Read an ``n``-byte little-endian unsigned integer at ``buf[pos]``."""
     v = 0
     for k in range(n):
-        v |= np.int64(buf[pos + k]) << (8 * k)
+        v |= int(buf[pos + k]) << (8 * k)
     return v
 
 
