@@ -320,21 +320,34 @@ class Board:
         link.pump()
 
     def _fill(self, link: BoardLink, t_end_us: int) -> None:
-        """Encode markers and FIFO events, in time order, while the queue is short."""
+        """Encode markers and FIFO events, in time order, while the queue is short.
+
+        Each encoder call covers board time ``[end of the last call, t_end)``: a batch that
+        leaves events queued ends at the next queued event's time (a batch never splits a
+        step), an emptied FIFO at the tick's end (which also lets the encoder keep its time
+        base alive with SYNCs while there are no events).
+        """
         target = self.config.tx_target_s
         while True:
             room = target - link.backlog_s()
             head = self.fifo.peek_time_us()
             while self._markers and (head is None or self._markers[0].t_us <= head):
                 link.queue_record(self._marker(self._markers.pop(0)))
-            if head is None or room <= 0:
+            if head is None:
+                if self.running:
+                    link.queue_events(self.fifo.pop(0), t_end_us)
+                return
+            if room <= 0:
                 return
             per = self._wire_per_event_s or 1e-9
             n = max(1, int(room / per))
             if self._markers:
                 n = min(n, self.fifo.count_before(self._markers[0].t_us) or 1)
+            if n < len(self.fifo):
+                n = self.fifo.count_before(self.fifo.time_at(n - 1) + self._dt_us)
             batch = self.fifo.pop(n)
-            wire = link.queue_events(batch, t_end_us)
+            end = self.fifo.peek_time_us()
+            wire = link.queue_events(batch, t_end_us if end is None else end)
             self.counters.sent += len(batch)
             if len(batch):
                 est = wire / len(batch)

@@ -51,6 +51,12 @@ class EventFifo:
         """Timestamp (µs) of the oldest queued event, or None if empty."""
         return int(self._buf["t"][self._head]) if self._len else None
 
+    def time_at(self, i: int) -> int:
+        """Timestamp (µs) of the ``i``-th oldest queued event (0-based)."""
+        if not 0 <= i < self._len:
+            raise IndexError(f"FIFO index {i} outside 0..{self._len - 1}")
+        return int(self._buf["t"][(self._head + i) % self.capacity])
+
     def count_before(self, t_us: int) -> int:
         """How many queued events have ``t < t_us`` (queued events are in time order)."""
         first = min(self._len, self.capacity - self._head)

@@ -29,7 +29,9 @@ class Peer:
         self._events: list[np.ndarray] = []
         self._records: list[Any] = []
         self.events_before: list[int] = []
-        """For each record, the number of events decoded before it."""
+        """For each record, the events decoded in earlier reads (before its read)."""
+        self.events_after: list[int] = []
+        """For each record, the events decoded up to and including its read."""
         self._n_events = 0
         self.raw_units = 0
         self.arrivals: list[tuple[float, int]] = []
@@ -45,6 +47,7 @@ class Peer:
             for rec in res.records:
                 self._records.append(rec)
                 self.events_before.append(self._n_events)
+                self.events_after.append(self._n_events + len(res.events))
             if len(res.events):
                 self._events.append(res.events)
                 self._n_events += len(res.events)
