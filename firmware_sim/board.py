@@ -147,7 +147,10 @@ class Board:
         self.config = config.check()
         self._open_link = open_link
         self.on_link = on_link or (lambda msg: log.warning("%s", msg))
-        model = SkinModel(SkinParams(mechanics=config.mechanics))
+        if config.mechanics not in ("linear", "geometric"):
+            raise ConfigError(f"mechanics must be 'linear' or 'geometric', "
+                              f"got {config.mechanics!r}")
+        model = SkinModel(SkinParams(mechanics=config.mechanics))  # type: ignore[arg-type]
         self.sensor = SkinSensor(model, config.dt_s, config.snr_db, config.seed)
         self.timeline = Timeline(config.dt_s, file_schedule, config.seed, config.rest_s,
                                  config.schedule_mode)
