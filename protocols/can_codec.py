@@ -1,45 +1,311 @@
-"""CAN and CAN FD frame layout: encoder and incremental decoder (layout in SPEC.md)."""
+"""CAN and CAN FD frame layout (SPEC.md §5): encoder and incremental decoder.
+
+11-bit IDs ``class << 4 | board_id``; every board→host frame starts with a frame sequence
+counter (4 bits classic, 8 bits FD); events are 12-bit words (9-bit address, 3-bit step
+delta), 4 per classic frame and 40 per 64-byte FD frame, stamped against SYNC frames. The
+compiled loops are in :mod:`protocols.can_kernels`.
+"""
 
 from __future__ import annotations
 
+import logging
+import struct
 from collections.abc import Iterable
 
 import numpy as np
 
-from protocols.records import Ack, CanFrame, Command, DecodeResult, LinkCounters, Marker, Status
+from protocols import can_kernels as k
+from protocols.constants import DEFAULT_FLUSH_US, DEFAULT_STEP_US, DEFAULT_SYNC_US, PROTOCOL_VERSION
+from protocols.counters import StatusTracker, unwrap
+from protocols.event_input import check_step_us, event_steps
+from protocols.record_fields import arg_bits, arg_value, check_uint, enum_or_int
+from protocols.records import (
+    Ack,
+    CanFrame,
+    Command,
+    CommandCode,
+    DecodeResult,
+    LinkCounters,
+    Marker,
+    MarkerPhase,
+    NackReason,
+    Record,
+    Status,
+)
+from skinhil.errors import ProtocolError
+from skinhil.events import EVENT_DTYPE
+
+log = logging.getLogger(__name__)
+
+_MUX0 = struct.Struct("<B6sB")
+_MUX_WIDE = struct.Struct("<BI3s")
+_MUX_ONE = struct.Struct("<BI")
+_MARKER_CLASSIC = struct.Struct("<B5sH")
+_STATUS_FD = struct.Struct("<BB6s10I")
+_MARKER_FD = struct.Struct("<BB6sI")
+_ACK = struct.Struct("<BBBBH")
+_COMMAND = struct.Struct("<BBHI")
+
+STATUS_FRAMES_CLASSIC = 8
+"""A classic status is this many multiplexed frames (mux 0..7)."""
+
+_CLASSIC_WIDTHS = dict.fromkeys(
+    ("events_generated", "events_sent", "events_dropped", "dropped_fifo_full",
+     "dropped_stopped", "dropped_link_down", "link_events"), 32) | {
+    "late_ticks": 24, "rx_errors": 24}
+_FD_WIDTHS = dict.fromkeys(_CLASSIC_WIDTHS, 32)
+
+
+def can_id(frame_class: int, board_id: int) -> int:
+    """The 11-bit arbitration ID of ``frame_class`` (1..6) for board ``board_id`` (0..15)."""
+    return (frame_class << 4) | board_id
+
+
+def _board(board_id: int) -> int:
+    if not 0 <= int(board_id) <= 15:
+        raise ProtocolError(f"CAN board id {board_id} is outside 0..15")
+    return int(board_id)
+
+
+def _flags(running: bool) -> int:
+    return int(bool(running)) | (PROTOCOL_VERSION << 4)
 
 
 class CanEncoder:
-    """Board→host (and host→board) CAN frame encoder."""
+    """Encoder of one board's CAN frames (classic 8-byte or, with ``fd``, CAN FD 64-byte).
 
-    def __init__(self, board_id: int = 0, fd: bool = False, step_us: int = 100,
-                 max_frame_span_us: int = 1000) -> None:
-        self.board_id = board_id
-        self.fd = fd
+    ``step_us`` is the event time step (µs); ``flush_us`` the longest time one events frame
+    spans (µs); ``sync_us`` the longest time between SYNC frames (µs).
+    """
+
+    def __init__(self, board_id: int = 0, fd: bool = False, step_us: int = DEFAULT_STEP_US,
+                 flush_us: int = DEFAULT_FLUSH_US, sync_us: int = DEFAULT_SYNC_US) -> None:
+        self.board_id = _board(board_id)
+        self.fd = bool(fd)
+        self.step_us = check_step_us(step_us)
+        if flush_us < step_us or flush_us % step_us:
+            raise ProtocolError(f"flush_us={flush_us} must be a positive multiple of the "
+                                f"{step_us} µs step")
+        max_off = k.FD_MAX_OFFSET if self.fd else k.CLASSIC_MAX_OFFSET
+        if not step_us <= sync_us <= (max_off + 1) * step_us:
+            raise ProtocolError(f"sync_us={sync_us} must lie in [{step_us}, "
+                                f"{(max_off + 1) * step_us}] µs for this CAN layout")
+        self.flush_us = flush_us
+        self.sync_us = sync_us
+        self._seq_mod = k.FD_SEQ_MOD if self.fd else k.CLASSIC_SEQ_MOD
+        self._st = np.zeros(k.E_SIZE, dtype=np.int64)
+        self._st[k.E_EPOCH] = k.EPOCH_MOD - 1
+        self._st[k.E_STEP_US] = self.step_us
+        self._cmd_seq = 0
+        self._t_min_us = 0
+        self._ids = [can_id(c, self.board_id) for c in range(7)]
+
+    @property
+    def events_encoded(self) -> int:
+        """Events put into frames so far (the count status frames carry)."""
+        return int(self._st[k.E_EVENTS])
 
     def events(self, events: np.ndarray, t_end_us: int) -> list[CanFrame]:
-        raise NotImplementedError
+        """SYNC and EVENTS frames carrying ``events`` (times in [end of last call, t_end_us)).
+
+        An empty call returns a SYNC if the last one is ``sync_us`` old, else nothing.
+        """
+        steps, addr = event_steps(events, self.step_us, t_end_us, self._t_min_us)
+        self._t_min_us = max(self._t_min_us, int(t_end_us))
+        st, fd = self._st, self.fd
+        if steps.shape[0] == 0:
+            end_step = int(t_end_us) // self.step_us
+            if st[k.E_SYNC_VALID] and end_step - st[k.E_LAST_SYNC] >= self.sync_us // self.step_us:
+                out = np.zeros(16, dtype=np.uint8)
+                n = k.encode_sync(st, end_step, fd, out, 0)
+                return [CanFrame(self._ids[k.CLS_SYNC], out[:n].tobytes(), fd)]
+            return []
+        n_ev = steps.shape[0]
+        out = np.zeros(20 * n_ev + 64, dtype=np.uint8)
+        lens = np.empty(2 * n_ev + 2, dtype=np.int64)
+        kinds = np.empty(2 * n_ev + 2, dtype=np.int64)
+        nf = k.encode_events(steps, addr, st, self.flush_us // self.step_us,
+                             self.sync_us // self.step_us, fd, out, lens, kinds)
+        ends = np.cumsum(lens[:nf]).tolist()
+        data = out[:ends[-1]].tobytes()
+        ids = self._ids
+        frames = []
+        start = 0
+        for end, kind in zip(ends, kinds[:nf].tolist(), strict=True):
+            frames.append(CanFrame(ids[kind], data[start:end], fd))
+            start = end
+        return frames
+
+    def _next_seq(self) -> int:
+        seq = int(self._st[k.E_SEQ])
+        self._st[k.E_SEQ] = (seq + 1) % self._seq_mod
+        return seq
 
     def status(self, status: Status) -> list[CanFrame]:
-        raise NotImplementedError
+        """STATUS frame(s): one FD frame, or eight multiplexed classic frames."""
+        link = self.events_encoded & 0xFFFFFFFF
+        t = check_uint(status.t_us, 48, "status time (µs)").to_bytes(6, "little")
+        wide = [status.events_generated, status.events_sent, status.events_dropped,
+                status.dropped_fifo_full, status.dropped_stopped, status.dropped_link_down]
+        for v in wide + [status.late_ticks, status.rx_errors]:
+            if v < 0:
+                raise ProtocolError(f"status counter {v} is negative; counters count up from 0")
+        ident = self._ids[k.CLS_STATUS]
+        if self.fd:
+            check_uint(status.events_queued, 32, "events_queued")
+            vals = [status.events_generated, status.events_sent, status.events_dropped,
+                    status.events_queued, status.late_ticks, status.rx_errors,
+                    status.dropped_fifo_full, status.dropped_stopped,
+                    status.dropped_link_down, link]
+            data = _STATUS_FD.pack(self._next_seq(), _flags(status.running), t,
+                                   *(v & 0xFFFFFFFF for v in vals))
+            return [CanFrame(ident, data, True)]
+        queued = check_uint(status.events_queued, 24, "events_queued (classic CAN)")
+        parts = [_MUX0.pack(0, t, _flags(status.running))]
+        for mux, (a, b) in enumerate(((status.events_generated, queued),
+                                      (status.events_sent, status.late_ticks),
+                                      (status.events_dropped, status.rx_errors)), start=1):
+            parts.append(_MUX_WIDE.pack(mux << 4, a & 0xFFFFFFFF,
+                                        (b & 0xFFFFFF).to_bytes(3, "little")))
+        for mux, a in enumerate((status.dropped_fifo_full, status.dropped_stopped,
+                                 status.dropped_link_down, link), start=4):
+            parts.append(_MUX_ONE.pack(mux << 4, a & 0xFFFFFFFF))
+        frames = []
+        for p in parts:
+            frames.append(CanFrame(ident, bytes([p[0] | self._next_seq()]) + p[1:], False))
+        return frames
 
     def marker(self, marker: Marker) -> list[CanFrame]:
-        raise NotImplementedError
+        """A MARKER frame (ground truth: stimulus id and phase at board time)."""
+        phase = check_uint(int(marker.phase), 1, "marker phase")
+        ident = self._ids[k.CLS_MARKER]
+        t_us = check_uint(marker.t_us, 48, "marker time (µs)")
+        if self.fd:
+            data = _MARKER_FD.pack(self._next_seq(), phase, t_us.to_bytes(6, "little"),
+                                   check_uint(marker.stimulus_id, 32, "stimulus_id"))
+            return [CanFrame(ident, data, True)]
+        data = _MARKER_CLASSIC.pack(self._next_seq() | (phase << 4),
+                                    (t_us & ((1 << 40) - 1)).to_bytes(5, "little"),
+                                    check_uint(marker.stimulus_id, 16, "stimulus_id (classic)"))
+        return [CanFrame(ident, data, False)]
 
     def command(self, command: Command) -> list[CanFrame]:
-        raise NotImplementedError
+        """A COMMAND frame (host→board; commands have their own sequence counter)."""
+        seq, self._cmd_seq = self._cmd_seq, (self._cmd_seq + 1) % self._seq_mod
+        data = _COMMAND.pack(seq, check_uint(int(command.opcode), 8, "opcode"),
+                             check_uint(command.token, 16, "token"),
+                             arg_bits(command.opcode, command.arg))
+        return [CanFrame(self._ids[k.CLS_COMMAND], data, self.fd)]
 
     def ack(self, ack: Ack) -> list[CanFrame]:
-        raise NotImplementedError
+        """An ACK frame (board→host answer to a command)."""
+        data = _ACK.pack(self._next_seq(), int(bool(ack.ok)),
+                         check_uint(int(ack.opcode), 8, "opcode"),
+                         check_uint(int(ack.reason), 8, "reason"),
+                         check_uint(ack.token, 16, "token"))
+        return [CanFrame(self._ids[k.CLS_ACK], data, self.fd)]
 
 
 class CanDecoder:
-    """Incremental decoder of one board's CAN frames."""
+    """Incremental decoder of one board's frames: feed frames in any batches.
+
+    Frames of other boards or unknown IDs are counted in ``counters.foreign_frames``; never
+    raises on bad frames (SPEC.md §6).
+    """
 
     def __init__(self, board_id: int = 0, fd: bool = False) -> None:
-        self.board_id = board_id
-        self.fd = fd
+        self.board_id = _board(board_id)
+        self.fd = bool(fd)
         self.counters = LinkCounters()
+        self._st = np.zeros(k.D_SIZE, dtype=np.int64)
+        self._c = np.zeros(k.C_SIZE, dtype=np.int64)
+        self._status = StatusTracker()
+        self._group: list[bytes] = []
+        self._group_seq = -1
 
     def feed(self, frames: Iterable[CanFrame]) -> DecodeResult:
-        raise NotImplementedError
+        """Decode a batch of received frames (in bus order)."""
+        frames = list(frames)
+        if not frames:
+            return DecodeResult.empty()
+        ids = np.fromiter((f.arbitration_id for f in frames), dtype=np.int64, count=len(frames))
+        datas = [bytes(f.data) for f in frames]
+        lens = np.fromiter(map(len, datas), dtype=np.int64, count=len(datas))
+        blob = np.frombuffer(b"".join(datas) + b"\0" * 8, dtype=np.uint8)
+        t, a, ne, rec_ix, nr = k.decode_frames(ids, lens, blob, self.board_id, self.fd,
+                                              self._st, self._c)
+        events = np.empty(ne, dtype=EVENT_DTYPE)
+        events["t"] = t[:ne]
+        events["addr"] = a[:ne]
+        events["p"] = 1
+        records: list[Record] = []
+        for r in range(nr):
+            f, cls, decoded, ref_us = (int(v) for v in rec_ix[r])
+            record = self._record(cls, datas[f], decoded, ref_us)
+            if record is not None:
+                records.append(record)
+        self._sync_counters()
+        return DecodeResult(events, records)
+
+    def _record(self, cls: int, data: bytes, decoded: int, ref_us: int) -> Record | None:
+        if cls == k.CLS_STATUS:
+            return self._fd_status(data, decoded) if self.fd else self._classic_status(
+                data, decoded)
+        if cls == k.CLS_MARKER:
+            if self.fd:
+                _, phase, t, sid = _MARKER_FD.unpack(data[:12])
+                return Marker(int.from_bytes(t, "little"), sid, MarkerPhase(phase))
+            b0, t, sid = _MARKER_CLASSIC.unpack(data[:8])
+            t_us = int.from_bytes(t, "little")
+            if ref_us >= 0:
+                t_us = unwrap(ref_us, t_us, 40)
+            return Marker(t_us, sid, MarkerPhase(b0 >> 4))
+        if cls == k.CLS_COMMAND:
+            _, op, token, bits = _COMMAND.unpack(data[:8])
+            return Command(token, enum_or_int(CommandCode, op), arg_value(op, bits))
+        _, ok, op, reason, token = _ACK.unpack(data[:6])
+        return Ack(token, enum_or_int(CommandCode, op), bool(ok & 1),
+                   enum_or_int(NackReason, reason))
+
+    def _fd_status(self, data: bytes, decoded: int) -> Status:
+        _, flags, t, *v = _STATUS_FD.unpack(data[:48])
+        raw = Status(int.from_bytes(t, "little"), v[0], v[1], v[2], v[3], v[4], v[5],
+                     bool(flags & 1), v[6], v[7], v[8])
+        return self._status.update(raw, v[9], decoded, _FD_WIDTHS, self.counters)
+
+    def _classic_status(self, data: bytes, decoded: int) -> Status | None:
+        seq, mux = data[0] & 0xF, data[0] >> 4
+        if mux == 0:
+            self._group = [data]
+        elif mux == len(self._group) and seq == (self._group_seq + 1) % k.CLASSIC_SEQ_MOD:
+            self._group.append(data)
+        else:
+            self._group = []
+        self._group_seq = seq
+        if len(self._group) < STATUS_FRAMES_CLASSIC:
+            return None
+        g, self._group = self._group, []
+        _, t, flags = _MUX0.unpack(g[0][:8])
+        wide = [_MUX_WIDE.unpack(d[:8]) for d in g[1:4]]
+        one = [_MUX_ONE.unpack(d[:5])[1] for d in g[4:8]]
+
+        def u24(b: bytes) -> int:
+            return int.from_bytes(b, "little")
+
+        raw = Status(int.from_bytes(t, "little"), wide[0][1], wide[1][1], wide[2][1],
+                     u24(wide[0][2]), u24(wide[1][2]), u24(wide[2][2]), bool(flags & 1),
+                     one[0], one[1], one[2])
+        return self._status.update(raw, one[3], decoded, _CLASSIC_WIDTHS, self.counters)
+
+    def _sync_counters(self) -> None:
+        c, lc = self._c, self.counters
+        lc.frames_ok = int(c[k.C_FRAMES_OK])
+        lc.malformed = int(c[k.C_MALFORMED])
+        lc.seq_gaps = int(c[k.C_GAPS])
+        lc.frames_lost = int(c[k.C_LOST])
+        lc.duplicates = int(c[k.C_DUPS])
+        lc.foreign_frames = int(c[k.C_FOREIGN])
+        lc.events_decoded = int(c[k.C_EVENTS])
+        lc.events_untimed = int(c[k.C_UNTIMED])
+        lc.syncs = int(c[k.C_SYNCS])
+

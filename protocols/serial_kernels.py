@@ -62,6 +62,16 @@ def get_le(buf: np.ndarray, pos: int, n: int) -> int:
 
 
 @numba.njit(cache=True, nogil=True)
+def unwrap_near(previous: int, raw: int, bits: int) -> int:
+    """The value congruent to ``raw`` modulo ``2**bits`` nearest to ``previous``."""
+    mod = 1 << bits
+    delta = (raw - previous) % mod
+    if delta >= mod >> 1:
+        delta -= mod
+    return previous + delta
+
+
+@numba.njit(cache=True, nogil=True)
 def encode_sync(st: np.ndarray, base: int, pkt: np.ndarray, out: np.ndarray, pos: int) -> int:
     """Append a SYNC packet with time base ``base`` (steps); update ``st``; return the end."""
     epoch = (st[E_EPOCH] + 1) % EPOCH_MOD
@@ -69,7 +79,7 @@ def encode_sync(st: np.ndarray, base: int, pkt: np.ndarray, out: np.ndarray, pos
     pkt[1] = st[E_SEQ] & 0xFF
     pkt[2] = PROTOCOL_VERSION
     put_le(pkt, 3, st[E_STEP_US], 2)
-    put_le(pkt, 5, base, 6)
+    put_le(pkt, 5, base & ((1 << 48) - 1), 6)
     st[E_SEQ] = (st[E_SEQ] + 1) & 0xFF
     st[E_EPOCH] = epoch
     st[E_SYNC_VALID] = 1
@@ -320,8 +330,9 @@ def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
         elif typ == T_SYNC:
             st[D_SYNC_VALID] = 1
             st[D_EPOCH] = dec[0] & 0x1F
+            raw = get_le(dec, 5, 6)
+            st[D_BASE] = unwrap_near(st[D_BASE], raw, 48) if st[D_STEP_US] else raw
             st[D_STEP_US] = get_le(dec, 3, 2)
-            st[D_BASE] = get_le(dec, 5, 6)
             c[C_SYNCS] += 1
         else:
             rec[rpos:rpos + m] = dec[:m]

@@ -1,0 +1,312 @@
+"""Compiled inner loops of the CAN codec: events frames out, whole frame batches in.
+
+Layouts are those of SPEC.md §5. State and counters are int64 arrays; the slot names are the
+constants below (counter slots are shared with :mod:`protocols.serial_kernels`).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from protocols.constants import N_CHANNELS, PROTOCOL_VERSION
+from protocols.serial_kernels import (
+    C_DUPS,
+    C_EVENTS,
+    C_FRAMES_OK,
+    C_GAPS,
+    C_LOST,
+    C_MALFORMED,
+    C_SYNCS,
+    C_UNTIMED,
+    get_le,
+    put_le,
+    unwrap_near,
+)
+
+CLS_COMMAND, CLS_ACK, CLS_SYNC, CLS_STATUS, CLS_MARKER, CLS_EVENTS = 1, 2, 3, 4, 5, 6
+"""Frame classes: the 11-bit ID is ``class << 4 | board_id``."""
+
+FD_LENGTHS = np.array([0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64], dtype=np.int64)
+
+CLASSIC_MAX_EVENTS = 4
+FD_MAX_EVENTS = 40
+CLASSIC_MAX_OFFSET = (1 << 9) - 1
+FD_MAX_OFFSET = (1 << 15) - 1
+EPOCH_MOD = 8
+"""SYNC epochs count modulo 8; a sequence gap of 8 frames or more invalidates the time base."""
+CLASSIC_SEQ_MOD = 16
+FD_SEQ_MOD = 256
+C_FOREIGN = 11
+"""Counter slot of frames with another board's or an unknown ID."""
+C_SIZE = 12
+
+# encoder state slots (same meaning as the serial encoder's)
+E_SEQ, E_EPOCH, E_SYNC_VALID, E_SYNC_BASE, E_EVENTS, E_STEP_US, E_LAST_SYNC = range(7)
+E_SIZE = 7
+# decoder state slots
+(D_HAVE_SEQ, D_SEQ, D_SYNC_VALID, D_EPOCH, D_BASE, D_STEP_US, D_HAVE_CMD_SEQ,
+ D_CMD_SEQ) = range(8)
+D_SIZE = 8
+
+
+@numba.njit(cache=True, nogil=True)
+def fd_length(n: int) -> int:
+    """Smallest CAN FD data length that holds ``n`` bytes."""
+    for v in FD_LENGTHS:
+        if v >= n:
+            return v
+    return 64
+
+
+@numba.njit(cache=True, nogil=True)
+def events_frame_len(n: int, fd: bool) -> int:
+    """Data length of an events frame holding ``n`` events."""
+    if fd:
+        return fd_length(4 + (12 * n + 7) // 8)
+    return 2 + (12 * n + 7) // 8
+
+
+@numba.njit(cache=True, nogil=True)
+def encode_sync(st: np.ndarray, base: int, fd: bool, out: np.ndarray, pos: int) -> int:
+    """Write a SYNC frame's data with time base ``base`` (steps) at ``pos``; return its length."""
+    epoch = (st[E_EPOCH] + 1) % EPOCH_MOD
+    if fd:
+        out[pos] = st[E_SEQ] & 0xFF
+        out[pos + 1] = epoch | (PROTOCOL_VERSION << 4)
+        put_le(out, pos + 2, st[E_STEP_US], 2)
+        put_le(out, pos + 4, base & ((1 << 48) - 1), 6)
+        out[pos + 10] = 0
+        out[pos + 11] = 0
+        st[E_SEQ] = (st[E_SEQ] + 1) % FD_SEQ_MOD
+        ln = 12
+    else:
+        out[pos] = (st[E_SEQ] & 0xF) | (epoch << 4)
+        put_le(out, pos + 1, st[E_STEP_US], 2)
+        put_le(out, pos + 3, base & ((1 << 40) - 1), 5)
+        st[E_SEQ] = (st[E_SEQ] + 1) % CLASSIC_SEQ_MOD
+        ln = 8
+    st[E_EPOCH] = epoch
+    st[E_SYNC_VALID] = 1
+    st[E_SYNC_BASE] = base
+    st[E_LAST_SYNC] = base
+    return ln
+
+
+@numba.njit(cache=True, nogil=True)
+def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int,
+                  sync_every: int, fd: bool, out: np.ndarray, lens: np.ndarray,
+                  kinds: np.ndarray) -> int:
+    """Write SYNC and EVENTS frame data for sorted events into ``out`` (zeroed).
+
+    Frame ``f`` has ``lens[f]`` bytes and class ``kinds[f]``, consecutive in ``out``.
+    Returns the number of frames.
+    """
+    n = steps.shape[0]
+    max_n = FD_MAX_EVENTS if fd else CLASSIC_MAX_EVENTS
+    max_off = FD_MAX_OFFSET if fd else CLASSIC_MAX_OFFSET
+    hdr = 4 if fd else 2
+    pos = 0
+    nf = 0
+    i = 0
+    while i < n:
+        base = steps[i]
+        off = base - st[E_SYNC_BASE]
+        if st[E_SYNC_VALID] == 0 or off > max_off or off >= sync_every:
+            ln = encode_sync(st, base, fd, out, pos)
+            lens[nf] = ln
+            kinds[nf] = CLS_SYNC
+            nf += 1
+            pos += ln
+            off = 0
+        wend = (base // span + 1) * span
+        cur = base
+        cnt = 0
+        bitpos = 8 * (pos + hdr)
+        while i < n and cnt < max_n:
+            s = steps[i]
+            d = s - cur
+            if s >= wend or d > 7:
+                break
+            e = (np.int64(addr[i]) << 3) | d
+            p = bitpos >> 3
+            if bitpos & 7:
+                out[p] |= (e & 0xF) << 4
+                out[p + 1] = e >> 4
+            else:
+                out[p] = e & 0xFF
+                out[p + 1] = e >> 8
+            bitpos += 12
+            cur = s
+            cnt += 1
+            i += 1
+        if fd:
+            h = (st[E_SEQ] & 0xFF) | (st[E_EPOCH] << 8) | (cnt << 11) | (off << 17)
+            put_le(out, pos, h, 4)
+            st[E_SEQ] = (st[E_SEQ] + 1) % FD_SEQ_MOD
+        else:
+            h = (st[E_SEQ] & 0xF) | (st[E_EPOCH] << 4) | (off << 7)
+            put_le(out, pos, h, 2)
+            st[E_SEQ] = (st[E_SEQ] + 1) % CLASSIC_SEQ_MOD
+        ln = events_frame_len(cnt, fd)
+        lens[nf] = ln
+        kinds[nf] = CLS_EVENTS
+        nf += 1
+        pos += ln
+        st[E_EVENTS] += cnt
+    return nf
+
+
+@numba.njit(cache=True, nogil=True)
+def _event_at(blob: np.ndarray, o: int, k: int, hdr: int) -> np.int64:
+    bit = 8 * hdr + 12 * k
+    p = o + (bit >> 3)
+    if bit & 7:
+        return (np.int64(blob[p]) >> 4) | (np.int64(blob[p + 1]) << 4)
+    return np.int64(blob[p]) | ((np.int64(blob[p + 1]) & 0xF) << 8)
+
+
+@numba.njit(cache=True, nogil=True)
+def _events_count(blob: np.ndarray, o: int, ln: int, fd: bool) -> np.int64:
+    """Events in a valid events frame, or -1 if its layout is invalid."""
+    if fd:
+        if ln < 4:
+            return np.int64(-1)
+        n = (np.int64(blob[o + 1]) >> 3) | ((np.int64(blob[o + 2]) & 1) << 5)
+        if n < 1 or n > FD_MAX_EVENTS or ln < 4 + (12 * n + 7) // 8:
+            return np.int64(-1)
+        hdr = 4
+    else:
+        if ln == 4:
+            n = np.int64(1)
+        elif ln == 5:
+            n = np.int64(2)
+        elif ln == 7:
+            n = np.int64(3)
+        elif ln == 8:
+            n = np.int64(4)
+        else:
+            return np.int64(-1)
+        hdr = 2
+    for k in range(n):
+        if (_event_at(blob, o, k, hdr) >> 3) >= N_CHANNELS:
+            return np.int64(-1)
+    return n
+
+
+@numba.njit(cache=True, nogil=True)
+def _layout_ok(cls: int, blob: np.ndarray, o: int, ln: int, fd: bool) -> bool:
+    if cls == CLS_SYNC:
+        if fd:
+            return ln >= 10 and (blob[o + 1] >> 4) == PROTOCOL_VERSION and (
+                blob[o + 1] & 0x8) == 0 and get_le(blob, o + 2, 2) > 0
+        return ln >= 8 and get_le(blob, o + 1, 2) > 0 and (blob[o] & 0x80) == 0
+    if cls == CLS_STATUS:
+        if fd:
+            return ln >= 48
+        mux = blob[o] >> 4 if ln > 0 else 99
+        return ln >= 5 and mux <= 7 and (mux >= 4 or ln >= 8)
+    if cls == CLS_MARKER:
+        if fd:
+            return ln >= 12 and blob[o + 1] <= 1
+        return ln >= 8 and (blob[o] >> 4) <= 1
+    if cls == CLS_ACK:
+        return ln >= 6
+    return ln >= 8  # COMMAND
+
+
+@numba.njit(cache=True, nogil=True)
+def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: int, fd: bool,
+                  st: np.ndarray, c: np.ndarray) -> tuple[
+                      np.ndarray, np.ndarray, int, np.ndarray, int]:
+    """Decode a batch of frames (IDs, data lengths, concatenated data) in order.
+
+    Returns ``(t_us, addr, n_events, rec_index, n_records)``; ``rec_index[r] = (frame,
+    class, events decoded before it, time base in µs or -1)`` for record frames.
+    """
+    nf = ids.shape[0]
+    cap = 0
+    for f in range(nf):
+        cap += lens[f]
+    cap = (cap * 8) // 12 + 8
+    out_t = np.empty(cap, dtype=np.int64)
+    out_a = np.empty(cap, dtype=np.uint16)
+    rec_ix = np.empty((nf + 1, 4), dtype=np.int64)
+    seq_mod = FD_SEQ_MOD if fd else CLASSIC_SEQ_MOD
+    hdr = 4 if fd else 2
+    ne = 0
+    nr = 0
+    o = 0
+    for f in range(nf):
+        ln = lens[f]
+        fo = o
+        o += ln
+        ident = ids[f]
+        cls = ident >> 4
+        if ident < 0 or ident > 0x7FF or (ident & 0xF) != board or cls < 1 or cls > 6:
+            c[C_FOREIGN] += 1
+            continue
+        if ln < 1 or (not fd and ln > 8):
+            c[C_MALFORMED] += 1
+            continue
+        count = np.int64(0)
+        if cls == CLS_EVENTS:
+            count = _events_count(blob, fo, ln, fd)
+            if count < 0:
+                c[C_MALFORMED] += 1
+                continue
+        elif not _layout_ok(cls, blob, fo, ln, fd):
+            c[C_MALFORMED] += 1
+            continue
+        seq = blob[fo] & (seq_mod - 1)
+        have, last = (D_HAVE_CMD_SEQ, D_CMD_SEQ) if cls == CLS_COMMAND else (D_HAVE_SEQ, D_SEQ)
+        if st[have]:
+            gap = (seq - st[last] - 1) % seq_mod
+            if gap == seq_mod - 1:
+                c[C_DUPS] += 1
+                continue
+            if gap:
+                c[C_GAPS] += 1
+                c[C_LOST] += gap
+                if gap >= EPOCH_MOD and cls != CLS_COMMAND:
+                    st[D_SYNC_VALID] = 0
+        st[have] = 1
+        st[last] = seq
+        c[C_FRAMES_OK] += 1
+        if cls == CLS_EVENTS:
+            if fd:
+                epoch = blob[fo + 1] & 0x7
+                off = get_le(blob, fo + 2, 2) >> 1
+            else:
+                epoch = (blob[fo] >> 4) & 0x7
+                off = get_le(blob, fo, 2) >> 7
+            if st[D_SYNC_VALID] == 0 or epoch != st[D_EPOCH]:
+                c[C_UNTIMED] += count
+                continue
+            t = st[D_BASE] + off
+            step = st[D_STEP_US]
+            for k in range(count):
+                e = _event_at(blob, fo, k, hdr)
+                t += e & 7
+                out_t[ne] = t * step
+                out_a[ne] = e >> 3
+                ne += 1
+        elif cls == CLS_SYNC:
+            st[D_SYNC_VALID] = 1
+            if fd:
+                st[D_EPOCH] = blob[fo + 1] & 0x7
+                step, raw, bits = get_le(blob, fo + 2, 2), get_le(blob, fo + 4, 6), 48
+            else:
+                st[D_EPOCH] = (blob[fo] >> 4) & 0x7
+                step, raw, bits = get_le(blob, fo + 1, 2), get_le(blob, fo + 3, 5), 40
+            st[D_BASE] = unwrap_near(st[D_BASE], raw, bits) if st[D_STEP_US] else raw
+            st[D_STEP_US] = step
+            c[C_SYNCS] += 1
+        else:
+            rec_ix[nr, 0] = f
+            rec_ix[nr, 1] = cls
+            rec_ix[nr, 2] = c[C_EVENTS] + ne
+            rec_ix[nr, 3] = st[D_BASE] * st[D_STEP_US] if st[D_STEP_US] > 0 else -1
+            nr += 1
+    c[C_EVENTS] += ne
+    return out_t, out_a, ne, rec_ix, nr
