@@ -21,6 +21,9 @@ classes ``decision_function`` is ``d_0`` and positive means ``classes_[1]``.
 
 ``SVC`` was chosen over ``LinearSVC``: on these features (a few hundred trials, ~1700
 features) it fits 5-80 times faster and, one-vs-one, decodes the noisy conditions better.
+It is fitted on the precomputed linear kernel ``Z Zᵀ`` (one BLAS product instead of libsvm's
+per-pair dot products: 4x faster, the same optimisation problem); the hyperplanes are then
+read off the fitted SVM's response to unit kernel rows.
 """
 
 from __future__ import annotations
@@ -78,13 +81,21 @@ class DirectionDecoder(ClassifierMixin, BaseEstimator):  # type: ignore[misc]
         if classes.size < 2:
             raise ConfigError("need trials of at least two classes to fit a decoder")
         scaler = StandardScaler().fit(arr)
-        svm = SVC(kernel="linear", C=self.C, max_iter=self.max_iter, tol=self.tol)
-        svm.fit(scaler.transform(arr), labels)
-        logger.debug("linear SVM: %d support vectors", int(svm.n_support_.sum()))
+        z = scaler.transform(arr)
+        svm = SVC(kernel="precomputed", C=self.C, max_iter=self.max_iter, tol=self.tol,
+                  decision_function_shape="ovo").fit(z @ z.T, labels)
+        # the SVM is linear in the kernel row k(x) = z_train @ z_x: reading its response to
+        # unit rows gives each pair's weights on the support vectors, hence the hyperplanes
+        sv = svm.support_
+        unit = np.zeros((sv.size, z.shape[0]))
+        unit[np.arange(sv.size), sv] = 1.0
+        base = svm.decision_function(np.zeros((1, z.shape[0]))).reshape(1, -1)
+        weights = svm.decision_function(unit).reshape(sv.size, -1) - base
+        logger.debug("linear SVM: %d support vectors", int(sv.size))
         self.spec_ = spec
         self.classes_ = svm.classes_
-        self.coef_ = np.asarray(svm.coef_, dtype=np.float64)
-        self.intercept_ = np.asarray(svm.intercept_, dtype=np.float64)
+        self.coef_ = np.ascontiguousarray(weights.T @ z[sv], dtype=np.float64)
+        self.intercept_ = np.asarray(base[0], dtype=np.float64)
         self.mean_ = np.asarray(scaler.mean_, dtype=np.float64)
         self.scale_ = np.asarray(scaler.scale_, dtype=np.float64)
         self.n_features_in_ = arr.shape[1]

@@ -1,0 +1,215 @@
+"""Parameter sweeps of the information measures (paper Figure 2): K x C (x tension) grids.
+
+Each grid point builds the skin with that spring stiffness ``K`` (N/m), damping ``C``
+(N·s/m) and baseline tension (N), everything else from ``SweepSpec.base``, simulates the 5
+paper stimuli (Figure 3 A-E) for both phases (0–0.5 s) and computes the measures of
+:mod:`skinhil.analysis.information` on the 338 spring forces. The sweep is deterministic (no
+neuron noise enters these measures), so a local run and a Dask run give identical numbers.
+
+Per-point simulation (documented choices):
+
+- ``linear`` mechanics without tension: the exact modal responses of
+  :mod:`skinhil.analysis.modal_response` at ``dt_s = 0.25 ms`` (2 kHz: the fastest mode of
+  the default grid's stiffest skin is ~1 kHz, and the exact zero-order hold has no step
+  error), ~15 ms per point on one core;
+- ``linear`` with tension, and ``geometric``: :meth:`skinhil.SkinModel.simulate_many`; the
+  geometric mechanics' explicit integrator needs ``dt`` below its stability limit, so a point
+  uses the largest step ``≤ dt_s`` and ``≤ 0.9 x`` that limit that tiles the 0.25 s phases
+  (heavily damped points need ~60 µs steps and cost ~1 s); a point that still diverges
+  reports NaN.
+
+Execution: local worker processes (``concurrent.futures``) by default, or a Dask distributed
+cluster given its scheduler address; a tqdm bar shows progress. Every point computes with one
+BLAS thread (the sweep sets this in each worker process, Dask workers included: a BLAS thread
+count changes the rounding, and points are parallel anyway), so results are bit-identical
+wherever they ran.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import time
+from collections.abc import Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+from tqdm.auto import tqdm
+
+from skinhil.analysis.information import InformationMeasures, information_measures
+from skinhil.analysis.modal_response import reduced_responses, supports
+from skinhil.analysis.phases import PhaseWindows
+from skinhil.errors import ConfigError
+from skinhil.skin import Mechanics, SkinModel, SkinParams
+from skinhil.stimuli import paper_stimuli
+
+logger = logging.getLogger(__name__)
+
+MEASURES: tuple[str, ...] = tuple(InformationMeasures.__dataclass_fields__)
+"""Names of the measures stored per grid point."""
+STABILITY_MARGIN = 0.9
+"""Fraction of the geometric integrator's stability limit used as the largest step."""
+
+
+def log_values(low: float, high: float, n: int) -> tuple[float, ...]:
+    """``n`` log-spaced values from ``low`` to ``high`` (both included)."""
+    if not (0 < low <= high) or n < 1:
+        raise ConfigError(f"need 0 < low <= high and n >= 1, got {low}, {high}, {n}")
+    return tuple(float(v) for v in np.geomspace(low, high, n))
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A sweep grid: ``stiffness_n_per_m`` x ``damping_n_s_per_m`` x ``tension_n`` values, the
+    ``mechanics``, the largest step ``dt_s`` (s) and the ``base`` parameters of the rest."""
+
+    stiffness_n_per_m: tuple[float, ...]
+    damping_n_s_per_m: tuple[float, ...]
+    tension_n: tuple[float, ...] = (0.0,)
+    mechanics: Mechanics = "linear"
+    dt_s: float = 2.5e-4
+    base: SkinParams = field(default_factory=SkinParams)
+
+    def __post_init__(self) -> None:
+        for name in ("stiffness_n_per_m", "damping_n_s_per_m", "tension_n"):
+            values = tuple(float(v) for v in getattr(self, name))
+            if not values:
+                raise ConfigError(f"SweepSpec.{name} needs at least one value")
+            object.__setattr__(self, name, values)
+        if not (math.isfinite(self.dt_s) and self.dt_s > 0):
+            raise ConfigError(f"SweepSpec.dt_s must be a number of seconds > 0, got {self.dt_s}")
+        for p in self.points():  # validates every value through SkinParams
+            del p
+
+    @classmethod
+    def log_grid(cls, n_stiffness: int, n_damping: int, mechanics: Mechanics = "linear",
+                 stiffness_range: tuple[float, float] = (5.0, 500.0),
+                 damping_range: tuple[float, float] = (0.005, 0.5),
+                 tension_n: Sequence[float] = (0.0,), dt_s: float = 2.5e-4) -> SweepSpec:
+        """Log-spaced grid; the default ranges span a decade either side of the defaults."""
+        return cls(log_values(*stiffness_range, n_stiffness),
+                   log_values(*damping_range, n_damping), tuple(tension_n), mechanics, dt_s)
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        """(n_tension, n_stiffness, n_damping)."""
+        return len(self.tension_n), len(self.stiffness_n_per_m), len(self.damping_n_s_per_m)
+
+    def points(self) -> Iterator[SkinParams]:
+        """Skin parameters of every point, tension-major, then stiffness, then damping."""
+        for t in self.tension_n:
+            for k in self.stiffness_n_per_m:
+                for c in self.damping_n_s_per_m:
+                    yield replace(self.base, stiffness_n_per_m=k, damping_n_s_per_m=c,
+                                  tension_n=t, mechanics=self.mechanics)
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """Measures on the grid: ``values[name]`` has shape ``spec.shape``; ``seconds`` wall time."""
+
+    spec: SweepSpec
+    values: dict[str, np.ndarray]
+    seconds: float
+
+    def at(self, name: str) -> np.ndarray:
+        """(n_stiffness, n_damping) map of measure ``name`` at the first tension."""
+        return self.values[name][0]
+
+
+def point_step(params: SkinParams, dt_s: float, windows: PhaseWindows) -> float:
+    """The step (s) a point is simulated at (see module docstring)."""
+    if params.mechanics == "linear":
+        return dt_s
+    limit = STABILITY_MARGIN * SkinModel(params).max_dt_s()
+    phase = windows.indentation_s[1] - windows.indentation_s[0]
+    return phase / math.ceil(phase / min(dt_s, limit) - 1e-9)
+
+
+def evaluate_point(params: SkinParams, dt_s: float = 2.5e-4) -> InformationMeasures:
+    """Simulate the paper stimuli with ``params`` and return the information measures."""
+    stimuli = paper_stimuli()
+    windows = PhaseWindows.of(stimuli)
+    with threadpool_limits(1):
+        step = point_step(params, dt_s, windows)
+        if supports(params):
+            responses = reduced_responses(params, stimuli, windows.duration_s, step).reduced
+        else:
+            responses = SkinModel(params).simulate_many(stimuli, windows.duration_s, step)
+        if not np.all(np.isfinite(responses)):
+            logger.warning("sweep point %s diverged; its measures are NaN", params)
+            nan = math.nan
+            return InformationMeasures(nan, nan, nan, nan, nan, nan, nan)
+        return information_measures(responses, step, windows)
+
+
+def _evaluate(args: tuple[SkinParams, float]) -> InformationMeasures:
+    return evaluate_point(*args)
+
+
+def _one_blas_thread() -> None:
+    """Worker set-up: one BLAS thread for the whole process, so that concurrent tasks in one
+    process cannot change each other's thread count (and with it the rounding)."""
+    threadpool_limits(1)
+
+
+def _local(tasks: list[tuple[SkinParams, float]], workers: int, bar: tqdm) -> list:
+    if workers == 1:
+        out = []
+        for t in tasks:
+            out.append(_evaluate(t))
+            bar.update()
+        return out
+    chunk = max(1, len(tasks) // (8 * workers))
+    with ProcessPoolExecutor(max_workers=workers, initializer=_one_blas_thread) as pool:
+        out = []
+        for res in pool.map(_evaluate, tasks, chunksize=chunk):
+            out.append(res)
+            bar.update()
+        return out
+
+
+def _dask(tasks: list[tuple[SkinParams, float]], scheduler: str, bar: tqdm,
+          timeout_s: float) -> list:
+    try:
+        from distributed import Client, as_completed
+    except ImportError:  # pragma: no cover - depends on the installation
+        raise ConfigError("a Dask scheduler was given but dask.distributed is not installed; "
+                          "pip install 'skinhil[dask]'") from None
+    try:
+        client = Client(scheduler, timeout=f"{timeout_s}s")
+    except (OSError, TimeoutError) as exc:
+        raise ConfigError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from None
+    try:
+        client.run(_one_blas_thread)
+        futures = client.map(_evaluate, tasks, pure=False)
+        for _ in as_completed(futures):
+            bar.update()
+        return list(client.gather(futures))
+    finally:
+        client.close()
+
+
+def run_sweep(spec: SweepSpec, workers: int | None = None, scheduler: str | None = None,
+              progress: bool = True, connect_timeout_s: float = 10.0) -> SweepResult:
+    """Evaluate every grid point: on ``workers`` local processes (default: all cores; 1 runs
+    in this process) or, when ``scheduler`` (``tcp://HOST:PORT``) is given, on that Dask
+    cluster (reached within ``connect_timeout_s`` s). The result does not depend on where
+    the points ran."""
+    tasks = [(p, spec.dt_s) for p in spec.points()]
+    n_workers = (os.cpu_count() or 1) if workers is None else int(workers)
+    if n_workers < 1:
+        raise ConfigError(f"workers must be >= 1, got {workers}")
+    start = time.perf_counter()
+    with tqdm(total=len(tasks), desc=f"sweep {spec.mechanics}", unit="point",
+              disable=not progress) as bar:
+        if scheduler:
+            results = _dask(tasks, scheduler, bar, connect_timeout_s)
+        else:
+            results = _local(tasks, min(n_workers, len(tasks)), bar)
+    values = {name: np.array([getattr(r, name) for r in results]).reshape(spec.shape)
+              for name in MEASURES}
+    return SweepResult(spec, values, time.perf_counter() - start)
