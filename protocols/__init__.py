@@ -5,7 +5,8 @@
 - Records: :class:`Status`, :class:`Marker`, :class:`Command`, :class:`Ack`.
 - Wire time: :func:`serial_seconds`, :func:`can_frame_seconds`.
 
-The normative layout is ``protocols/SPEC.md``; the CAN database is ``protocols/skinhil.dbc``.
+The normative layout is ``protocols/SPEC.md``; the CAN databases are ``protocols/skinhil.dbc``
+(classic) and ``protocols/skinhil_fd.dbc`` (FD).
 """
 
 from __future__ import annotations
@@ -30,13 +31,17 @@ from protocols.records import (
 from protocols.serial_codec import SerialDecoder, SerialEncoder
 
 DBC_PATH = Path(__file__).with_name("skinhil.dbc")
-"""The CAN database (DBC) of the classic and FD layouts, for board id 0."""
+"""The CAN database (DBC) of the classic CAN layout, for board id 0."""
+
+DBC_FD_PATH = Path(__file__).with_name("skinhil_fd.dbc")
+"""The CAN database (DBC) of the CAN FD layout, for board id 0."""
 
 SPEC_PATH = Path(__file__).with_name("SPEC.md")
 """The normative protocol specification."""
 
 __all__ = [
-    "DBC_PATH", "SPEC_PATH", "Ack", "CanDecoder", "CanEncoder", "CanFrame", "Command",
-    "CommandCode", "DecodeResult", "LinkCounters", "Marker", "MarkerPhase", "NackReason",
-    "Record", "SerialDecoder", "SerialEncoder", "Status", "can_frame_seconds", "serial_seconds",
+    "DBC_FD_PATH", "DBC_PATH", "SPEC_PATH", "Ack", "CanDecoder", "CanEncoder", "CanFrame",
+    "Command", "CommandCode", "DecodeResult", "LinkCounters", "Marker", "MarkerPhase",
+    "NackReason", "Record", "SerialDecoder", "SerialEncoder", "Status", "can_frame_seconds",
+    "serial_seconds",
 ]

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 from protocols.constants import N_CHANNELS
 from skinhil.errors import ProtocolError
+
+_OK, _UNSORTED, _BAD_ADDR, _NOT_MULTIPLE, _OUT_OF_RANGE = 0, 1, -1, -2, -3
 
 
 def check_step_us(step_us: int) -> int:
@@ -13,6 +16,30 @@ def check_step_us(step_us: int) -> int:
     if not 1 <= int(step_us) <= 0xFFFF:
         raise ProtocolError(f"time step {step_us} µs is outside 1..65535 µs; use e.g. 100")
     return int(step_us)
+
+
+@numba.njit(cache=True, nogil=True)
+def _convert(t: np.ndarray, a: np.ndarray, step_us: int, t_min: int, t_end: int,
+             steps: np.ndarray, addr: np.ndarray) -> int:
+    order_ok = True
+    prev = -1
+    for i in range(t.shape[0]):
+        ti = t[i]
+        ai = a[i]
+        if ai < 0 or ai >= N_CHANNELS:
+            return _BAD_ADDR
+        if ti % step_us:
+            return _NOT_MULTIPLE
+        if ti < t_min or ti >= t_end:
+            return _OUT_OF_RANGE
+        s = ti // step_us
+        steps[i] = s
+        addr[i] = ai
+        key = s * 512 + ai
+        if key < prev:
+            order_ok = False
+        prev = key
+    return _OK if order_ok else _UNSORTED
 
 
 def event_steps(events: np.ndarray, step_us: int, t_end_us: int,
@@ -23,26 +50,24 @@ def event_steps(events: np.ndarray, step_us: int, t_end_us: int,
     ``step_us``, is before ``t_min_us`` (the end of the previous call) or not before
     ``t_end_us``.
     """
-    if events.dtype.names is None or "t" not in events.dtype.names:
+    names = events.dtype.names
+    if names is None or "t" not in names or "addr" not in names:
         raise ProtocolError("events must be an EVENT_DTYPE array (fields t, addr); "
                             "build it with skinhil.events.make_events")
     n = events.shape[0]
+    steps = np.empty(n, dtype=np.int64)
+    addr = np.empty(n, dtype=np.uint16)
     if n == 0:
-        return np.empty(0, np.int64), np.empty(0, np.uint16)
-    t = np.asarray(events["t"], dtype=np.int64)
-    a = np.asarray(events["addr"])
-    if int(a.max()) >= N_CHANNELS or int(a.min()) < 0:
-        raise ProtocolError(f"event address outside 0..{N_CHANNELS - 1}: "
-                            f"{int(a.min())}..{int(a.max())}")
-    steps, rem = np.divmod(t, step_us)
-    if rem.any():
+        return steps, addr
+    code = _convert(events["t"], events["addr"], step_us, t_min_us, t_end_us, steps, addr)
+    if code == _BAD_ADDR:
+        raise ProtocolError(f"an event address is outside 0..{N_CHANNELS - 1}")
+    if code == _NOT_MULTIPLE:
         raise ProtocolError(f"event times must be multiples of the {step_us} µs step")
-    t_lo, t_hi = int(t.min()), int(t.max())
-    if t_lo < t_min_us or t_hi >= t_end_us:
-        raise ProtocolError(f"event times {t_lo}..{t_hi} µs must lie in [{t_min_us}, "
-                            f"{t_end_us}) µs: after the previous call, before t_end_us")
-    key = steps * 512 + a.astype(np.int64)
-    if n > 1 and bool((key[1:] < key[:-1]).any()):
-        order = np.argsort(key, kind="stable")
-        steps, a = steps[order], a[order]
-    return np.ascontiguousarray(steps), np.ascontiguousarray(a, dtype=np.uint16)
+    if code == _OUT_OF_RANGE:
+        raise ProtocolError(f"event times must lie in [{t_min_us}, {t_end_us}) µs: after the "
+                            "previous call's t_end_us and before this call's")
+    if code == _UNSORTED:
+        order = np.argsort(steps * 512 + addr, kind="stable")
+        steps, addr = steps[order], addr[order]
+    return steps, addr

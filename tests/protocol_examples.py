@@ -1,0 +1,73 @@
+"""The worked examples of protocols/SPEC.md, built with the encoders (shared by the tests).
+
+Each example is a name and a function returning the wire form as text: serial examples as
+hex bytes (one packet per line), CAN examples as ``ID#DATA`` lines (candump style, ID and
+data in hex).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from protocols import (
+    Ack,
+    CanEncoder,
+    CanFrame,
+    Command,
+    CommandCode,
+    Marker,
+    MarkerPhase,
+    NackReason,
+    SerialEncoder,
+    Status,
+)
+from skinhil.events import make_events
+
+STATUS = Status(t_us=1_000_000, events_generated=20_000, events_sent=19_990, events_dropped=5,
+                events_queued=5, late_ticks=1, rx_errors=0, running=True,
+                dropped_fifo_full=3, dropped_stopped=2, dropped_link_down=0)
+MARKER = Marker(t_us=250_000, stimulus_id=3, phase=MarkerPhase.ONSET)
+COMMAND = Command(token=0x1234, opcode=CommandCode.SET_SNR, arg=10.0)
+ACK = Ack(token=0x1234, opcode=CommandCode.SET_STIMULUS, ok=False,
+          reason=NackReason.UNKNOWN_STIMULUS)
+EVENTS = make_events([0, 0, 300, 900], [5, 17, 337, 2])
+"""Four events: channels 5 and 17 at 0 µs, 337 at 300 µs, 2 at 900 µs."""
+BURST = make_events([200] * 25, list(range(0, 250, 10)))
+"""25 channels (0, 10, ..., 240) in the step at 200 µs: sent as a bitmap."""
+
+
+def _split_packets(data: bytes) -> str:
+    lines, start = [], 0
+    for i, b in enumerate(data):
+        if b == 0:
+            lines.append(data[start:i + 1].hex(" "))
+            start = i + 1
+    return "\n".join(lines)
+
+
+def _frames(frames: list[CanFrame]) -> str:
+    return "\n".join(f"{f.arbitration_id:03X}#{f.data.hex().upper()}" for f in frames)
+
+
+def _serial(fn: Callable[[SerialEncoder], bytes]) -> Callable[[], str]:
+    return lambda: _split_packets(fn(SerialEncoder()))
+
+
+def _can(fd: bool, fn: Callable[[CanEncoder], list[CanFrame]]) -> Callable[[], str]:
+    return lambda: _frames(fn(CanEncoder(board_id=1, fd=fd)))
+
+
+EXAMPLES: dict[str, Callable[[], str]] = {
+    "serial-events": _serial(lambda e: e.events(EVENTS, 1000)),
+    "serial-bitmap": _serial(lambda e: e.events(BURST, 1000)),
+    "serial-status": _serial(lambda e: e.status(STATUS)),
+    "serial-marker": _serial(lambda e: e.marker(MARKER)),
+    "serial-command": _serial(lambda e: e.command(COMMAND)),
+    "serial-ack": _serial(lambda e: e.ack(ACK)),
+}
+for _fd, _tag in ((False, "can"), (True, "canfd")):
+    EXAMPLES[f"{_tag}-events"] = _can(_fd, lambda e: e.events(EVENTS, 1000))
+    EXAMPLES[f"{_tag}-status"] = _can(_fd, lambda e: e.status(STATUS))
+    EXAMPLES[f"{_tag}-marker"] = _can(_fd, lambda e: e.marker(MARKER))
+    EXAMPLES[f"{_tag}-command"] = _can(_fd, lambda e: e.command(COMMAND))
+    EXAMPLES[f"{_tag}-ack"] = _can(_fd, lambda e: e.ack(ACK))
