@@ -14,7 +14,8 @@ Use from the command line (prints the command's output, exits with its status)::
 
     python tests/uml_vcan.py -- python -m pytest -m vcan tests
 
-Boot to the init script takes about 1.5-2.5 s here; importing numpy inside takes about
+Memory is 2G: with 1G the serve subprocess plus pytest got OOM-killed. Boot to the
+init script takes about 1.5-2.8 s here; importing numpy inside takes about
 1 s and every system call is slow, so use it for correctness at moderate rates.
 """
 
@@ -177,7 +178,7 @@ def _read_float(path: Path) -> float | None:
 
 
 def run_in_uml(command: list[str], cwd: Path, timeout_s: float = 300.0,
-               mem: str = "1G", extra_env: dict[str, str] | None = None) -> UmlResult:
+               mem: str = "2G", extra_env: dict[str, str] | None = None) -> UmlResult:
     """Boot UML, set up vcan0, run ``command`` in ``cwd`` and return its outcome.
 
     ``PATH`` starts with the directory of this Python (so ``python`` is the same
