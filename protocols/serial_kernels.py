@@ -269,13 +269,9 @@ def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
                 code = buf[k]
                 nxt = k + code
                 chain_ok[k - w0] = code != 0 and (nxt == b or (nxt < b and chain_ok[nxt - w0]))
-            tries = 0
             for k in range(a + 1, b):
                 if not chain_ok[k - w0]:
                     continue
-                tries += 1
-                if tries > 64:
-                    break
                 m = try_frame(buf, k, b, dec)
                 if m >= 0:
                     c[C_RESYNCS] += 1

@@ -1,0 +1,203 @@
+"""Round trips of the wire codecs: any event stream and any record comes back identical."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from protocols import (
+    Ack,
+    CanDecoder,
+    CanEncoder,
+    Command,
+    CommandCode,
+    Marker,
+    MarkerPhase,
+    NackReason,
+    SerialDecoder,
+    SerialEncoder,
+    Status,
+)
+from skinhil.errors import ProtocolError
+from skinhil.events import EVENT_DTYPE, make_events
+
+STEP = 100
+LAYOUTS = ("serial", "can", "canfd")
+SETTINGS = settings(max_examples=40, deadline=None, derandomize=True,
+                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+
+
+def canonical(ev: np.ndarray) -> np.ndarray:
+    return ev[np.lexsort((ev["addr"], ev["t"]))]
+
+
+WRAP_BITS = {"serial": 48, "can": 40, "canfd": 48}
+"""Width of the SYNC time base (steps): a stream starting before the wrap crosses it."""
+
+
+@st.composite
+def event_streams(draw: st.DrawFn, wrap_bits: int) -> tuple[np.ndarray, list[int]]:
+    """Sorted events with silences (up to ~2**20 steps), bursts (up to all 338 channels in a
+    step), a start anywhere up to just before the time-base wrap (which the stream then
+    crosses), and the t_end of each encoder call."""
+    start = draw(st.sampled_from([0, 12345, (1 << wrap_bits) - 300]))
+    t = start
+    times: list[int] = []
+    addrs: list[int] = []
+    for i in range(draw(st.integers(1, 25))):
+        if i:
+            t += draw(st.one_of(st.integers(0, 12), st.integers(0, 2000),
+                                st.integers(60_000, 1 << 20)))
+        kind = draw(st.integers(0, 3))
+        if kind == 0:
+            chans = list(range(338))
+        elif kind == 1:
+            chans = sorted(draw(st.sets(st.integers(0, 337), min_size=20, max_size=60)))
+        else:
+            chans = draw(st.lists(st.integers(0, 337), min_size=1, max_size=6))
+        times += [t] * len(chans)
+        addrs += chans
+    ends = sorted(set(draw(st.lists(st.integers(start, t), max_size=6))))
+    ev = make_events(np.array(times, dtype=np.int64) * STEP, np.array(addrs))
+    return ev, [e * STEP for e in ends if e > start] + [(t + 1) * STEP]
+
+
+def encode(layout: str, ev: np.ndarray, ends: list[int], board: int = 0) -> list:
+    enc = SerialEncoder() if layout == "serial" else CanEncoder(board, fd=layout == "canfd")
+    out, lo = [], 0
+    for end in ends:
+        hi = int(np.searchsorted(ev["t"], end))
+        out.append(enc.events(ev[lo:hi], end))
+        lo = hi
+    return out
+
+
+def decode_all(layout: str, chunks: list, board: int = 0) -> tuple[np.ndarray, object]:
+    dec = SerialDecoder() if layout == "serial" else CanDecoder(board, fd=layout == "canfd")
+    parts = [dec.feed(c).events for c in chunks]
+    return np.concatenate(parts) if parts else np.empty(0, EVENT_DTYPE), dec.counters
+
+
+@pytest.mark.parametrize("layout", LAYOUTS)
+@SETTINGS
+@given(data=st.data(), cut_seed=st.integers(0, 2**32 - 1))
+def test_events_round_trip(layout: str, data: st.DataObject, cut_seed: int) -> None:
+    ev, ends = data.draw(event_streams(WRAP_BITS[layout]))
+    out = encode(layout, ev, ends)
+    rng = np.random.default_rng(cut_seed)
+    if layout == "serial":
+        data = b"".join(out)
+        cuts = np.sort(rng.integers(0, len(data) + 1, rng.integers(0, 8)))
+        chunks = [data[a:b] for a, b in zip([0, *cuts], [*cuts, len(data)], strict=True)]
+    else:
+        frames = [f for part in out for f in part]
+        cuts = np.sort(rng.integers(0, len(frames) + 1, rng.integers(0, 5)))
+        chunks = [frames[a:b] for a, b in zip([0, *cuts], [*cuts, len(frames)], strict=True)]
+    got, counters = decode_all(layout, chunks)
+    np.testing.assert_array_equal(got, canonical(ev))
+    assert counters.events_decoded == len(ev)
+    assert counters.frames_lost == 0 and counters.events_untimed == 0
+
+
+def test_bitmap_chosen_only_when_smaller() -> None:
+    """A full step costs one 45-byte bitmap, not 338 two-byte words; a sparse step words."""
+    full = make_events(np.zeros(338, np.int64), np.arange(338))
+    few = make_events(np.zeros(22, np.int64), np.arange(22))
+    full_bytes = len(SerialEncoder().events(full, 100))
+    few_bytes = len(SerialEncoder().events(few, 100))
+    assert full_bytes < 2 * 60
+    assert few_bytes > 2 * 22
+    assert len(SerialDecoder().feed(SerialEncoder().events(full, 100)).events) == 338
+
+
+def test_duplicate_channel_in_a_step_round_trips() -> None:
+    ev = make_events(np.zeros(30, np.int64), np.r_[np.arange(29), 5])
+    got = SerialDecoder().feed(SerialEncoder().events(ev, 100)).events
+    np.testing.assert_array_equal(got, canonical(ev))
+
+
+statuses = st.builds(
+    Status, t_us=st.integers(0, 2**48 - 1), events_generated=st.integers(0, 2**32 - 1),
+    events_sent=st.integers(0, 2**32 - 1), events_dropped=st.integers(0, 2**32 - 1),
+    events_queued=st.integers(0, 2**24 - 1), late_ticks=st.integers(0, 2**24 - 1),
+    rx_errors=st.integers(0, 2**24 - 1), running=st.booleans(),
+    dropped_fifo_full=st.integers(0, 2**32 - 1), dropped_stopped=st.integers(0, 2**32 - 1),
+    dropped_link_down=st.integers(0, 2**32 - 1))
+markers = st.builds(Marker, t_us=st.integers(0, 2**40 - 1), stimulus_id=st.integers(0, 65535),
+                    phase=st.sampled_from(MarkerPhase))
+commands = st.one_of(
+    st.builds(Command, token=st.integers(0, 65535),
+              opcode=st.sampled_from([c for c in CommandCode if c != CommandCode.SET_SNR]),
+              arg=st.integers(0, 2**32 - 1)),
+    st.builds(Command, token=st.integers(0, 65535), opcode=st.just(CommandCode.SET_SNR),
+              arg=st.sampled_from([math.inf, 0.0, -5.5, 10.0, 42.25])))
+acks = st.builds(Ack, token=st.integers(0, 65535), opcode=st.sampled_from(CommandCode),
+                 ok=st.booleans(), reason=st.sampled_from(NackReason))
+
+
+@pytest.mark.parametrize("layout", LAYOUTS)
+@SETTINGS
+@given(records=st.lists(st.one_of(markers, commands, acks), max_size=8), status=statuses,
+       where=st.integers(0, 8))
+def test_records_round_trip(layout: str, records: list, status: Status, where: int) -> None:
+    """Records in any order, with one status (a status stream is checked for unwrapping in
+    test_status_counters_unwrap_across_modulo: counters only make sense counting up)."""
+    records.insert(min(where, len(records)), status)
+    enc = SerialEncoder() if layout == "serial" else CanEncoder(5, fd=layout == "canfd")
+    dec = SerialDecoder() if layout == "serial" else CanDecoder(5, fd=layout == "canfd")
+    got = []
+    for rec in records:
+        method = {Status: enc.status, Marker: enc.marker, Command: enc.command,
+                  Ack: enc.ack}[type(rec)]
+        got += dec.feed(method(rec)).records
+    assert got == records
+    assert dec.counters.frames_lost == 0
+
+
+def test_status_counters_unwrap_across_modulo() -> None:
+    """Counters sent modulo 2**32 (2**24 classic) come back whole when statuses are regular."""
+    for make in (lambda: (SerialEncoder(), SerialDecoder()),
+                 lambda: (CanEncoder(), CanDecoder())):
+        enc, dec = make()
+        seen = []
+        for k in range(6):
+            v = (1 << 32) - 100 + 60 * k
+            status = Status(k, v, v, 0, 0, (1 << 24) - 2 + k, 0, True)
+            seen += dec.feed(enc.status(status)).records
+        assert [s.events_generated for s in seen] == [(1 << 32) - 100 + 60 * k
+                                                      for k in range(6)]
+        assert [s.late_ticks for s in seen] == [(1 << 24) - 2 + k for k in range(6)]
+
+
+@pytest.mark.parametrize("layout", LAYOUTS)
+def test_bad_events_raise_protocol_error(layout: str) -> None:
+    def enc() -> SerialEncoder | CanEncoder:
+        return SerialEncoder() if layout == "serial" else CanEncoder(fd=layout == "canfd")
+
+    with pytest.raises(ProtocolError, match="address"):
+        enc().events(make_events([0], [338]), 100)
+    with pytest.raises(ProtocolError, match="multiples"):
+        enc().events(make_events([50], [3]), 100)
+    with pytest.raises(ProtocolError, match="must lie in"):
+        enc().events(make_events([100], [3]), 100)
+    e = enc()
+    e.events(make_events([0], [1]), 1000)
+    with pytest.raises(ProtocolError, match="must lie in"):
+        e.events(make_events([500], [1]), 2000)
+    with pytest.raises(ProtocolError, match="does not fit"):
+        enc().command(Command(70000, CommandCode.START))
+
+
+def test_empty_calls_emit_sync_only_when_due() -> None:
+    enc = SerialEncoder(sync_us=10_000)
+    assert enc.events(np.empty(0, EVENT_DTYPE), 1000) == b""
+    enc.events(make_events([1000], [1]), 2000)
+    assert enc.events(np.empty(0, EVENT_DTYPE), 5000) == b""
+    sync = enc.events(np.empty(0, EVENT_DTYPE), 20_000)
+    dec = SerialDecoder()
+    dec.feed(sync)
+    assert dec.counters.syncs == 1
