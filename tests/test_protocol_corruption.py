@@ -1,0 +1,252 @@
+"""Corrupted links: the decoders never raise or hang, decode every undamaged frame, and count
+losses exactly where SPEC.md §7 says they are exact."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from protocols import CanDecoder, CanEncoder, CanFrame, SerialDecoder, SerialEncoder, Status
+from skinhil.events import EVENT_DTYPE, make_events
+
+SETTINGS = settings(max_examples=100, deadline=None, derandomize=True,
+                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+N_CALLS = 60
+STATUS_EVERY = 15
+
+
+def spikes(seed: int, rate_per_ms: float = 12.0) -> list[np.ndarray]:
+    """Events of N_CALLS one-millisecond flushes (Poisson, 100 µs steps)."""
+    rng = np.random.default_rng(seed)
+    calls = []
+    for c in range(N_CALLS):
+        n = rng.poisson(rate_per_ms)
+        t = np.sort(rng.integers(0, 10, n)) * 100 + c * 1000
+        a = rng.integers(0, 338, n)
+        ev = make_events(t, a)
+        calls.append(ev[np.lexsort((ev["addr"], ev["t"]))])
+    return calls
+
+
+def cobs_type(packet: bytes) -> int:
+    """Packet type (SPEC.md §3) of one clean COBS packet: the first decoded byte's top bits."""
+    first = packet[1] if packet[0] > 1 else 0
+    return first >> 5
+
+
+def serial_packets(seed: int) -> list[tuple[int, bytes, np.ndarray | None]]:
+    """(type, bytes incl. delimiter, events of an EVENTS packet) of a board stream with a
+    status every STATUS_EVERY ms and at the end."""
+    enc = SerialEncoder(sync_us=5000)
+    out: list[tuple[int, bytes, np.ndarray | None]] = []
+    sent = 0
+    for c, ev in enumerate(spikes(seed)):
+        data = enc.events(ev, (c + 1) * 1000)
+        pkts = [p + b"\0" for p in data.split(b"\0")[:-1]]
+        for p in pkts:
+            typ = cobs_type(p)
+            out.append((typ, p, ev if typ == 0 else None))
+        sent += len(ev)
+        if (c + 1) % STATUS_EVERY == 0:
+            out.append((2, enc.status(Status((c + 1) * 1000, sent, sent, 0, 0, 0, 0, True)),
+                        None))
+    return out
+
+
+def damage(p: bytes, op: int, pos: int, byte: int) -> bytes:
+    body = p[:-1]
+    i = 1 + pos % max(1, len(body) - 1)
+    if op == 0:
+        j = pos % len(body)
+        return body[:j] + bytes([body[j] ^ (1 << (byte % 8))]) + body[j + 1:] + b"\0"
+    if op == 1:
+        return body[:i] + body[i + 1:] + b"\0"
+    if op == 2:
+        return body[:i] + bytes([byte]) + body[i:] + b"\0"
+    if op == 3:
+        return body[:i] + b"\0" + body[i:] + b"\0"
+    if op == 4:
+        return body[:i] + b"\0"
+    return body + bytes([byte | 1])  # delimiter lost: runs into the next packet
+
+
+@SETTINGS
+@given(seed=st.integers(0, 10_000),
+       hits=st.lists(st.tuples(st.integers(0, 10_000), st.integers(0, 5),
+                               st.integers(0, 10_000), st.integers(0, 255)), max_size=10),
+       noise=st.lists(st.tuples(st.integers(0, 10_000), st.binary(min_size=1, max_size=40)),
+                      max_size=5),
+       chunk=st.integers(1, 500))
+def test_serial_corruption(seed: int, hits: list, noise: list, chunk: int) -> None:
+    pkts = serial_packets(seed)
+    last = len(pkts) - 2  # the first packet and the final status stay intact
+    damaged: dict[int, tuple[int, int, int]] = {}
+    for where, op, pos, byte in hits:
+        damaged[1 + where % last] = (op, pos, byte)
+    noise_at = {where % len(pkts): junk for where, junk in noise}
+    stream = bytearray()
+    for i, (_, p, _) in enumerate(pkts):
+        if i in noise_at:
+            stream += noise_at[i]
+        stream += damage(p, *damaged[i]) if i in damaged else p
+    dec = SerialDecoder()
+    got, records = [], []
+    for k in range(0, len(stream), chunk):
+        res = dec.feed(bytes(stream[k:k + chunk]))
+        got.append(res.events)
+        records += res.records
+    # expectation from the spec: an EVENTS packet is timed iff it and its SYNC are intact
+    expected, sync_ok, lost, first_status = [], False, 0, None
+    for i, (typ, _, ev) in enumerate(pkts):
+        ok = i not in damaged
+        if typ == 1:
+            sync_ok = ok
+        elif typ == 0:
+            assert ev is not None
+            if ok and sync_ok:
+                expected.append(ev)
+            elif first_status is not None:
+                lost += len(ev)
+        elif typ == 2 and ok and first_status is None:
+            first_status = i
+    c = dec.counters
+    np.testing.assert_array_equal(np.concatenate(got), np.concatenate(expected or [
+        np.empty(0, EVENT_DTYPE)]))
+    assert c.frames_ok == len(pkts) - len(damaged)
+    assert c.frames_lost == len(damaged)
+    assert c.events_lost == lost
+    assert len(records) == sum(1 for i, (t, _, _) in enumerate(pkts)
+                               if t == 2 and i not in damaged)
+    if damaged:
+        assert c.crc_errors + c.malformed >= 1 and c.bytes_discarded > 0
+
+
+@SETTINGS
+@given(junk=st.binary(max_size=5000), chunk=st.integers(1, 700), seed=st.integers(0, 100))
+def test_serial_random_bytes_then_clean_stream(junk: bytes, chunk: int, seed: int) -> None:
+    """Arbitrary bytes never raise; a clean stream after them decodes completely."""
+    pkts = serial_packets(seed)
+    clean = b"".join(p for _, p, _ in pkts)
+    data = junk + clean
+    dec = SerialDecoder()
+    got = [dec.feed(data[k:k + chunk]).events for k in range(0, len(data), chunk)]
+    every = np.concatenate([ev for t, _, ev in pkts if t == 0 and ev is not None])
+    decoded = np.concatenate(got)
+    np.testing.assert_array_equal(decoded[len(decoded) - len(every):], every)
+
+
+def test_serial_megabyte_of_noise_is_fast_and_harmless() -> None:
+    data = np.random.default_rng(1).integers(0, 256, 1 << 20, dtype=np.uint8).tobytes()
+    dec = SerialDecoder()
+    t0 = time.perf_counter()
+    for k in range(0, len(data), 4096):
+        dec.feed(data[k:k + 4096])
+    assert time.perf_counter() - t0 < 10.0
+    assert dec.counters.bytes_discarded > 0.99 * len(data)
+
+
+def events_in_frame(f: CanFrame, fd: bool) -> int:
+    """Events in an EVENTS frame (SPEC.md §5.3): the DLC (classic) or the count field (FD)."""
+    if fd:
+        return (int.from_bytes(f.data[:4], "little") >> 11) & 0x3F
+    return {4: 1, 5: 2, 7: 3, 8: 4}[len(f.data)]
+
+
+def can_frames(seed: int, fd: bool) -> list[tuple[int, CanFrame, np.ndarray | None]]:
+    enc = CanEncoder(board_id=2, fd=fd, sync_us=5000)
+    out: list[tuple[int, CanFrame, np.ndarray | None]] = []
+    sent = 0
+    for c, ev in enumerate(spikes(seed)):
+        i = 0
+        for f in enc.events(ev, (c + 1) * 1000):
+            cls = f.arbitration_id >> 4
+            if cls == 6:
+                n = events_in_frame(f, fd)
+                out.append((cls, f, ev[i:i + n]))
+                i += n
+            else:
+                out.append((cls, f, None))
+        sent += len(ev)
+        if (c + 1) % STATUS_EVERY == 0:
+            status = Status((c + 1) * 1000, sent, sent, 0, 0, 0, 0, True)
+            out += [(4, f, None) for f in enc.status(status)]
+    return out
+
+
+@pytest.mark.parametrize("fd", [False, True])
+@SETTINGS
+@given(seed=st.integers(0, 10_000), drops=st.sets(st.integers(0, 10_000), max_size=12),
+       dups=st.sets(st.integers(0, 10_000), max_size=6),
+       foreign=st.lists(st.tuples(st.integers(0, 10_000), st.integers(0, 0x7FF),
+                                  st.binary(max_size=8)), max_size=6),
+       batch=st.integers(1, 50))
+def test_can_lost_duplicated_foreign_frames(fd: bool, seed: int, drops: set[int],
+                                            dups: set[int], foreign: list,
+                                            batch: int) -> None:
+    frames = can_frames(seed, fd)
+    n_status = 1 if fd else 8
+    last_ok = len(frames) - n_status - 2  # the first frame and the final status survive
+    drop = set()
+    for d in sorted(1 + x % last_ok for x in drops):
+        if d - 1 not in drop and d + 1 not in drop:  # single losses: every gap is seen
+            drop.add(d)
+    dup = {d % len(frames) for d in dups} - drop
+    extra = {w % len(frames): (ident, data) for w, ident, data in foreign
+             if (ident & 0xF) != 2 or not 1 <= ident >> 4 <= 6}
+    stream: list[CanFrame] = []
+    for i, (_, f, _) in enumerate(frames):
+        if i in extra:
+            stream.append(CanFrame(extra[i][0], extra[i][1], fd))
+        if i in drop:
+            continue
+        stream.append(f)
+        if i in dup:
+            stream.append(f)
+    dec = CanDecoder(board_id=2, fd=fd)
+    got, records = [], []
+    for k in range(0, len(stream), batch):
+        res = dec.feed(stream[k:k + batch])
+        got.append(res.events)
+        records += res.records
+    expected, sync_ok, lost, base_seen = [], False, 0, False
+    group: list[int] = []
+    for i, (cls, _, ev) in enumerate(frames):
+        ok = i not in drop
+        if cls == 3:
+            sync_ok = ok
+        elif cls == 6:
+            assert ev is not None
+            if ok and sync_ok:
+                expected.append(ev)
+            elif base_seen:
+                lost += len(ev)
+        elif cls == 4:
+            group.append(i)
+            if len(group) == n_status:
+                if not base_seen and not any(g in drop for g in group):
+                    base_seen = True
+                group = []
+    c = dec.counters
+    np.testing.assert_array_equal(np.concatenate(got), np.concatenate(expected))
+    assert c.frames_lost == len(drop)
+    assert c.duplicates == len(dup)
+    assert c.frames_ok == len(frames) - len(drop)
+    assert c.foreign_frames == len(extra)
+    assert c.events_lost == lost
+    assert records, "the final status must be decoded"
+
+
+@pytest.mark.parametrize("fd", [False, True])
+@SETTINGS
+@given(frames=st.lists(st.tuples(st.integers(-5, 0x900), st.binary(max_size=64)),
+                       max_size=200))
+def test_can_random_frames_never_raise(fd: bool, frames: list[tuple[int, bytes]]) -> None:
+    dec = CanDecoder(board_id=0, fd=fd)
+    res = dec.feed(CanFrame(i, d, fd) for i, d in frames)
+    assert len(res.events) == dec.counters.events_decoded
+    assert dec.counters.frames_ok + dec.counters.malformed + dec.counters.foreign_frames + \
+        dec.counters.duplicates == len(frames)
