@@ -20,8 +20,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
-from scipy.signal import lfilter
 
 from skinhil.errors import ConfigError
 
@@ -58,6 +58,19 @@ def psp_kernel(t_s: np.ndarray | float, params: PSPParams | None = None) -> np.n
     return np.where(t_ms >= 0, value, 0.0)
 
 
+@numba.njit(cache=True)
+def _filter_kernel(x: np.ndarray, decay_d: float, decay_r: float, scale: float,
+                   sd: np.ndarray, sr: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
+    # x: (m, n_steps, n) counts of any numeric dtype; sd, sr: (m, n) states, updated
+    for b in range(x.shape[0]):
+        for k in range(x.shape[1]):
+            for i in range(x.shape[2]):
+                c = x[b, k, i]
+                sd[b, i] = decay_d * sd[b, i] + c
+                sr[b, i] = decay_r * sr[b, i] + c
+                out[b, k, i] = scale * (sd[b, i] - sr[b, i])
+
+
 class PSPFilterBank:
     """Eq. 12 filter for ``n_channels`` channels at step ``dt_s`` (s); online and offline."""
 
@@ -81,17 +94,15 @@ class PSPFilterBank:
 
     def step_block(self, counts: np.ndarray) -> np.ndarray:
         """Online: spike counts (n_steps, n) of the next steps → PSP (n_steps, n); keeps state."""
-        x = np.asarray(counts, dtype=np.float64)
+        x = np.asarray(counts)
         if x.ndim != 2 or x.shape[1] != self.n_channels:
             raise ConfigError(f"counts have shape {x.shape}; expected (n_steps, "
                               f"{self.n_channels})")
-        if x.shape[0] == 0:
-            return np.zeros_like(x)
-        sd, _ = lfilter([1.0], [1.0, -self.decay_d], x, axis=0, zi=(self.decay_d * self._sd)[None])
-        sr, _ = lfilter([1.0], [1.0, -self.decay_r], x, axis=0, zi=(self.decay_r * self._sr)[None])
-        self._sd = sd[-1].copy()
-        self._sr = sr[-1].copy()
-        return np.asarray(self.params.scale * (sd - sr))
+        out = np.empty((1,) + x.shape)
+        sd, sr = self._sd[None], self._sr[None]
+        _filter_kernel(x[None], self.decay_d, self.decay_r, self.params.scale, sd, sr, out)
+        self._sd, self._sr = sd[0], sr[0]
+        return out[0]
 
     def step(self, counts: np.ndarray) -> np.ndarray:
         """Online: spike counts (n,) of one step → PSP values (n,) at that step."""
@@ -102,8 +113,14 @@ class PSPFilterBank:
         return np.asarray(self.params.scale * (self._sd - self._sr))
 
     def filter(self, raster: np.ndarray) -> np.ndarray:
-        """Offline, from rest: raster (..., n_steps, n) → PSP of the same shape (float64)."""
-        x = np.asarray(raster, dtype=np.float64)
-        sd = lfilter([1.0], [1.0, -self.decay_d], x, axis=-2)
-        sr = lfilter([1.0], [1.0, -self.decay_r], x, axis=-2)
-        return np.asarray(self.params.scale * (sd - sr))
+        """Offline, from rest: raster (..., n_steps, n) of spikes or counts (bool or numeric,
+        not copied) → PSP of the same shape (float64)."""
+        x = np.asarray(raster)
+        if x.ndim < 2:
+            raise ConfigError(f"raster has shape {x.shape}; expected (..., n_steps, n)")
+        flat = x.reshape((-1,) + x.shape[-2:])
+        out = np.empty(flat.shape)
+        states = np.zeros((flat.shape[0], flat.shape[2]))
+        _filter_kernel(flat, self.decay_d, self.decay_r, self.params.scale, states,
+                       states.copy(), out)
+        return out.reshape(x.shape)
