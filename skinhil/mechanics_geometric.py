@@ -30,6 +30,18 @@ RK4_STABILITY_RADIUS = 2.5
 """|λ|·dt bound used for RK4 (its real-axis limit is 2.785, imaginary-axis 2.828)."""
 
 
+@numba.njit(inline="always", fastmath=True)
+def _spring_vector(p: np.ndarray, springs: np.ndarray,
+                   s: int) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
+    """The vector from spring ``s``'s first mass to its second, and its length (m)."""
+    i = springs[s, 0]
+    j = springs[s, 1]
+    dx = p[j, 0] - p[i, 0]
+    dy = p[j, 1] - p[i, 1]
+    dz = p[j, 2] - p[i, 2]
+    return dx, dy, dz, np.sqrt(dx * dx + dy * dy + dz * dz)
+
+
 @numba.njit(cache=True, fastmath=True)
 def _spring_forces(p: np.ndarray, v: np.ndarray, springs: np.ndarray, rest: np.ndarray,
                    k: float, c: float, t: float, out: np.ndarray) -> None:  # pragma: no cover
@@ -37,10 +49,7 @@ def _spring_forces(p: np.ndarray, v: np.ndarray, springs: np.ndarray, rest: np.n
     for s in range(springs.shape[0]):
         i = springs[s, 0]
         j = springs[s, 1]
-        dx = p[j, 0] - p[i, 0]
-        dy = p[j, 1] - p[i, 1]
-        dz = p[j, 2] - p[i, 2]
-        length = np.sqrt(dx * dx + dy * dy + dz * dz)
+        dx, dy, dz, length = _spring_vector(p, springs, s)
         if length <= 0.0:
             continue
         ex = dx / length
@@ -70,12 +79,7 @@ def _rk4_kernel(p: np.ndarray, v: np.ndarray, springs: np.ndarray, rest: np.ndar
     weights = (0.5, 0.5, 1.0)
     for step in range(f_ext.shape[0]):
         for s in range(springs.shape[0]):
-            i = springs[s, 0]
-            j = springs[s, 1]
-            dx = p[j, 0] - p[i, 0]
-            dy = p[j, 1] - p[i, 1]
-            dz = p[j, 2] - p[i, 2]
-            out[step, s] = k * (np.sqrt(dx * dx + dy * dy + dz * dz) - rest[s])
+            out[step, s] = k * (_spring_vector(p, springs, s)[3] - rest[s])
         for stage in range(4):
             if stage == 0:
                 ps[:] = p

@@ -125,6 +125,17 @@ def _sensor_forces(cy_idx: np.ndarray, cy_val: np.ndarray, q: np.ndarray,
             row[s] += cy_val[w, s] * q[cy_idx[w, s]]
 
 
+@numba.njit(inline="always", fastmath=True)
+def _add_input(forces: np.ndarray, dofs: np.ndarray, table: np.ndarray,
+               acc: np.ndarray) -> None:  # pragma: no cover - compiled
+    # acc += Σ_j table[j] · forces[dofs[j]], skipping the (many) unloaded degrees of freedom
+    for j in range(dofs.shape[0]):
+        f = forces[dofs[j]]
+        if f != 0.0:
+            for i in range(acc.shape[0]):
+                acc[i] += table[j, i] * f
+
+
 @numba.njit(cache=True, fastmath=True)
 def _advance_kernel(ad: np.ndarray, bd_t: np.ndarray, cy_idx: np.ndarray, cy_val: np.ndarray,
                     x: np.ndarray, forces: np.ndarray, dofs: np.ndarray,
@@ -134,11 +145,7 @@ def _advance_kernel(ad: np.ndarray, bd_t: np.ndarray, cy_idx: np.ndarray, cy_val
     for k in range(flat.shape[0]):
         _sensor_forces(cy_idx, cy_val, x, out[k])
         xn = ad @ x
-        for j in range(dofs.shape[0]):
-            f = flat[k, dofs[j]]
-            if f != 0.0:
-                for i in range(n_state):
-                    xn[i] += bd_t[j, i] * f
+        _add_input(flat[k], dofs, bd_t, xn)
         for i in range(n_state):
             x[i] = xn[i] if abs(xn[i]) > TINY else 0.0
 
@@ -161,11 +168,7 @@ def _advance_modal_kernel(phi: np.ndarray, mad: np.ndarray, mbd: np.ndarray,
             q[i] = acc
         _sensor_forces(cy_idx, cy_val, q, out[k])
         g[:] = 0.0
-        for j in range(dofs.shape[0]):
-            f = flat[k, dofs[j]]
-            if f != 0.0:
-                for m in range(n_modes):
-                    g[m] += phi[j, m] * f
+        _add_input(flat[k], dofs, phi, g)
         for m in range(n_modes):
             e0 = mad[0, m] * eta[0, m] + mad[1, m] * eta[1, m] + mbd[0, m] * g[m]
             e1 = mad[2, m] * eta[0, m] + mad[3, m] * eta[1, m] + mbd[1, m] * g[m]
