@@ -99,6 +99,11 @@ class CanEncoder:
         self._cmd_seq = 0
         self._t_min_us = 0
         self._ids = [can_id(c, self.board_id) for c in range(7)]
+        self._span = flush_us // step_us
+        self._sync_every = sync_us // step_us
+        self._out = np.empty(0, dtype=np.uint8)
+        self._lens = np.empty(0, dtype=np.int64)
+        self._kinds = np.empty(0, dtype=np.int64)
 
     @property
     def events_encoded(self) -> int:
@@ -121,19 +126,20 @@ class CanEncoder:
                 return [CanFrame(self._ids[k.CLS_SYNC], out[:n].tobytes(), fd)]
             return []
         n_ev = steps.shape[0]
-        out = np.zeros(20 * n_ev + 64, dtype=np.uint8)
-        lens = np.empty(2 * n_ev + 2, dtype=np.int64)
-        kinds = np.empty(2 * n_ev + 2, dtype=np.int64)
-        nf = k.encode_events(steps, addr, st, self.flush_us // self.step_us,
-                             self.sync_us // self.step_us, fd, out, lens, kinds)
-        ends = np.cumsum(lens[:nf]).tolist()
-        data = out[:ends[-1]].tobytes()
+        if self._out.shape[0] < 20 * n_ev + 64:
+            self._out = np.empty(40 * n_ev + 64, dtype=np.uint8)
+            self._lens = np.empty(4 * n_ev + 4, dtype=np.int64)
+            self._kinds = np.empty(4 * n_ev + 4, dtype=np.int64)
+        nf = k.encode_events(steps, addr, st, self._span, self._sync_every, fd, self._out,
+                             self._lens, self._kinds)
+        lens = self._lens[:nf].tolist()
+        data = self._out[:sum(lens)].tobytes()
         ids = self._ids
         frames = []
         start = 0
-        for end, kind in zip(ends, kinds[:nf].tolist(), strict=True):
-            frames.append(CanFrame(ids[kind], data[start:end], fd))
-            start = end
+        for ln, kind in zip(lens, self._kinds[:nf].tolist(), strict=True):
+            frames.append(CanFrame(ids[kind], data[start:start + ln], fd))
+            start += ln
         return frames
 
     def _next_seq(self) -> int:

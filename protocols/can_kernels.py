@@ -97,7 +97,7 @@ def encode_sync(st: np.ndarray, base: int, fd: bool, out: np.ndarray, pos: int) 
 def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int,
                   sync_every: int, fd: bool, out: np.ndarray, lens: np.ndarray,
                   kinds: np.ndarray) -> int:
-    """Write SYNC and EVENTS frame data for sorted events into ``out`` (zeroed).
+    """Write SYNC and EVENTS frame data for sorted events into ``out``.
 
     Frame ``f`` has ``lens[f]`` bytes and class ``kinds[f]``, consecutive in ``out``.
     Returns the number of frames.
@@ -149,6 +149,8 @@ def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int
             put_le(out, pos, h, 2)
             st[E_SEQ] = (st[E_SEQ] + 1) % CLASSIC_SEQ_MOD
         ln = events_frame_len(cnt, fd)
+        for q in range((bitpos + 7) >> 3, pos + ln):
+            out[q] = 0
         lens[nf] = ln
         kinds[nf] = CLS_EVENTS
         nf += 1
