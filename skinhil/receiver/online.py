@@ -1,17 +1,24 @@
 """The online classifier: events on board time → PSP filter bank → onset → window decision.
 
-Per processed block of simulation steps (board time ``k·dt``, exact from the events'
-microsecond timestamps):
+Two stages, so offline training and the live receiver cut their windows with the same code:
+
+:class:`OnsetWindows` (no decoder), per processed block of simulation steps (board time
+``k·dt``, exact from the events' microsecond timestamps):
 
 1. the events of the block become per-step spike counts (n_steps, n_channels);
 2. the PSP filter bank steps through them (:meth:`skinhil.PSPFilterBank.step_block`), so its
-   state is the exact eq. 12 filter of every spike received so far;
+   state is the exact eq. 12 filter of every spike received so far — including the tails of
+   earlier stimuli, as on the board;
 3. the onset detector (:class:`~skinhil.receiver.onset.OnsetDetector`) sees the population
    counts and reports onset steps;
-4. for an onset detected at step ``d`` the decision window starts at ``a = d − lookback``
-   and spans the decoder's feature window; once board time passes its end, its PSP values
-   go through the decoder's own feature code and linear classifier: the same features as
-   in training, where the window starts at the true onset.
+4. for an onset detected at step ``d`` the window starts at ``a = d − lookback`` and spans
+   ``window_steps``; once board time passes its end, its PSP values (window_steps,
+   n_channels) are handed out as a :class:`Window`.
+
+:class:`OnlineClassifier` puts each window through the decoder's own feature code and linear
+classifier (:class:`~skinhil.receiver.decoder_adapter.WindowDecoder`). Training
+(:mod:`skinhil.receiver.training`) runs :class:`OnsetWindows` on a simulated board stream,
+so the decoder is fitted on exactly the windows it later decides online.
 
 Nothing here reads the ground-truth markers; :mod:`skinhil.receiver.scoring` does.
 """
@@ -23,8 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from skinhil.errors import ConfigError, ModelFileError
-from skinhil.psp import PSPFilterBank
+from skinhil.errors import ModelFileError
+from skinhil.psp import PSPFilterBank, PSPParams
 from skinhil.receiver.decoder_adapter import WindowDecoder
 from skinhil.receiver.onset import OnsetDetector
 from skinhil.receiver.params import OnsetParams
@@ -48,20 +55,37 @@ class Prediction:
     host_time_s: float
 
 
-class OnlineClassifier:
-    """Steps the PSP filter bank and the onset detector on board time; decides windows."""
+@dataclass(frozen=True)
+class Window:
+    """A decision window: onset detected at step ``detect_step``, window from ``start_step``
+    (absolute steps since the stream began), ``psp`` its PSP values (window_steps,
+    n_channels), zero before the stream began."""
 
-    def __init__(self, decoder: WindowDecoder, onset: OnsetParams | None = None) -> None:
-        self.decoder = decoder
-        self.dt_s = decoder.dt_s
-        self.dt_us = int(round(self.dt_s * 1e6))
-        if self.dt_us <= 0 or abs(self.dt_us - self.dt_s * 1e6) > 1e-6:
-            raise ModelFileError(f"decoder step {self.dt_s!r} s is not a whole number of µs; "
-                                 "retrain it with a step such as 1e-4 s")
-        self.n_channels = decoder.n_channels
-        self.bank = PSPFilterBank(self.n_channels, self.dt_s, decoder.psp_params)
+    detect_step: int
+    start_step: int
+    psp: np.ndarray
+
+
+def step_us(dt_s: float) -> int:
+    """The step ``dt_s`` (s) in whole µs; refuses steps that are not."""
+    dt_us = int(round(dt_s * 1e6))
+    if dt_us <= 0 or abs(dt_us - dt_s * 1e6) > 1e-6:
+        raise ModelFileError(f"step {dt_s!r} s is not a whole number of µs; use a step such as "
+                             "1e-4 s")
+    return dt_us
+
+
+class OnsetWindows:
+    """Events on board time → PSP bank and onset detector → decision windows (no decoder)."""
+
+    def __init__(self, dt_s: float, n_channels: int, psp_params: PSPParams,
+                 window_steps: int, onset: OnsetParams | None = None) -> None:
+        self.dt_s = float(dt_s)
+        self.dt_us = step_us(self.dt_s)
+        self.n_channels = int(n_channels)
+        self.bank = PSPFilterBank(self.n_channels, self.dt_s, psp_params)
         self.detector = OnsetDetector(self.dt_s, onset)
-        self.window_steps = decoder.window_steps
+        self.window_steps = int(window_steps)
         self.lookback_steps = int(round(self.detector.params.lookback_s / self.dt_s))
         self.history_steps = self.lookback_steps + self.window_steps
         self.reset()
@@ -88,8 +112,9 @@ class OnlineClassifier:
         if events.shape[0]:
             self._pending.append(events)
 
-    def advance(self, t_us: int) -> list[Prediction]:
-        """Process every step that starts before board time ``t_us`` (µs); return decisions."""
+    def advance(self, t_us: int) -> list[Window]:
+        """Process every step that starts before board time ``t_us`` (µs); return the windows
+        that became complete."""
         end_step = int(t_us // self.dt_us)
         n = end_step - self.next_step
         if n <= 0:
@@ -118,7 +143,7 @@ class OnlineClassifier:
         for d in onsets:
             self._open.append((d, d - self.lookback_steps))
         self._keep_history(psp, first)
-        return self._decide_ready()
+        return self._ready()
 
     def _keep_history(self, psp: np.ndarray, first: int) -> None:
         joined = np.concatenate([self._history, psp]) if self._history.shape[0] else psp
@@ -130,7 +155,7 @@ class OnlineClassifier:
         self._history = joined[cut:]
         self._history_start = start + cut
 
-    def _decide_ready(self) -> list[Prediction]:
+    def _ready(self) -> list[Window]:
         out = []
         still = []
         for d, a in self._open:
@@ -141,17 +166,48 @@ class OnlineClassifier:
             window = self._history[max(lo, 0):lo + self.window_steps]
             if lo < 0:  # window starts before the stream did: zero PSP there
                 window = np.concatenate([np.zeros((-lo, self.n_channels)), window])
-            label, scores = self.decoder.decide(window)
-            out.append(Prediction(detect_t_us=d * self.dt_us, window_t_us=a * self.dt_us,
-                                  decided_t_us=(a + self.window_steps) * self.dt_us,
-                                  label=label, scores=tuple(float(s) for s in scores),
-                                  host_time_s=time.monotonic()))
+            out.append(Window(d, a, window.copy()))
         self._open = still
         return out
 
 
-def check_channels(decoder: WindowDecoder, n_channels: int) -> None:
-    """Refuse a decoder trained for another channel count than the stream's."""
-    if decoder.n_channels != n_channels:
-        raise ConfigError(f"the model expects {decoder.n_channels} channels but the stream has "
-                          f"{n_channels}; use a model trained for this board")
+class OnlineClassifier:
+    """Decides every window of :class:`OnsetWindows` with a trained decoder."""
+
+    def __init__(self, decoder: WindowDecoder, onset: OnsetParams | None = None) -> None:
+        self.decoder = decoder
+        self.windows = OnsetWindows(decoder.dt_s, decoder.n_channels, decoder.psp_params,
+                                    decoder.window_steps, onset)
+        self.dt_us = self.windows.dt_us
+
+    def reset(self) -> None:
+        """Back to board time 0 with empty filters and no open window."""
+        self.windows.reset()
+
+    @property
+    def board_time_us(self) -> int:
+        """Board time (µs) up to which every step has been processed."""
+        return self.windows.board_time_us
+
+    @property
+    def late_events(self) -> int:
+        """Events that arrived for steps already processed (applied at the current step)."""
+        return self.windows.late_events
+
+    def push(self, events: np.ndarray) -> None:
+        """Queue received events (EVENT_DTYPE)."""
+        self.windows.push(events)
+
+    def advance(self, t_us: int) -> list[Prediction]:
+        """Process every step that starts before board time ``t_us`` (µs); return decisions."""
+        out = []
+        for w in self.windows.advance(t_us):
+            label, scores = self.decoder.decide(w.psp)
+            out.append(Prediction(detect_t_us=w.detect_step * self.dt_us,
+                                  window_t_us=w.start_step * self.dt_us,
+                                  decided_t_us=(w.start_step + self.windows.window_steps)
+                                  * self.dt_us,
+                                  label=label, scores=tuple(float(s) for s in scores),
+                                  host_time_s=time.monotonic()))
+        return out
+

@@ -26,11 +26,12 @@ import numpy as np
 import protocols
 from firmware_sim.transport import Transport
 from skinhil.errors import TransportError
+from skinhil.stimuli import direction_conditions
 from skinhil.receiver.clock import BoardClock
 from skinhil.receiver.decoder_adapter import WindowDecoder
 from skinhil.receiver.online import OnlineClassifier
 from skinhil.receiver.params import ReceiverParams
-from skinhil.receiver.scoring import Scoreboard, ScoredDecision
+from skinhil.receiver.scoring import ScoredDecision, scoreboard_for
 
 log = logging.getLogger(__name__)
 
@@ -88,6 +89,13 @@ def make_codec(transport: Transport[Any], board_id: int = 0) -> Any:
     return protocols.SerialDecoder()
 
 
+def scored_classes(decoder: WindowDecoder) -> tuple[int, ...]:
+    """Marker classes scored: the decoder's and always the 9 direction conditions (ids 0..8;
+    a condition the decoder lacks can only be missed or wrong)."""
+    n = len(direction_conditions())
+    return tuple(sorted({int(c) for c in decoder.classes} | set(range(n))))
+
+
 def _is_onset(marker: Any) -> bool:
     phase = getattr(marker, "phase", None)
     name = str(getattr(phase, "name", phase)).lower()
@@ -106,8 +114,8 @@ class Receiver:
         self.board_id = board_id
         self.codec = make_codec(transport, board_id)
         self.classifier = OnlineClassifier(decoder, self.params.onset)
-        self.scoreboard = Scoreboard(tuple(int(c) for c in decoder.classes),
-                                     int(round(self.params.match_window_s * 1e6)))
+        self.scoreboard = scoreboard_for(scored_classes(decoder), self.classifier.windows,
+                                         self.params.match_window_s)
         self.clock = BoardClock()
         self.listeners: list[ReceiverListener] = list(listeners)
         self.reopen = reopen
