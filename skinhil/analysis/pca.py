@@ -74,8 +74,7 @@ def phase_pca(samples: np.ndarray) -> PhasePCA:
     lam = np.clip(lam[order], 0.0, None)
     vec = vec[:, order]
     total = lam.sum()
-    scale = np.abs(gram).max() if gram.size else 0.0
-    if not total > 1e-12 * max(scale, np.finfo(float).tiny) or total == 0.0:
+    if not total > 0.0:
         curve = np.full(lam.size, np.nan)
     else:
         curve = np.minimum(np.cumsum(lam) / total, 1.0)

@@ -86,14 +86,20 @@ def fig1f(plt: Any, res: Sequence[MechanicsResults], out: Path) -> Path:
 def _heatmap(ax: Any, sweep: SweepResult, name: str, title: str, plt: Any) -> None:
     k = np.asarray(sweep.spec.stiffness_n_per_m)
     c = np.asarray(sweep.spec.damping_n_s_per_m)
-    img = ax.pcolormesh(c, k, sweep.at(name), shading="nearest", cmap="viridis")
-    ax.set(xscale="log", yscale="log", xlabel="damping C (N·s/m)",
-           ylabel="stiffness K (N/m)", title=title)
+    img = ax.imshow(sweep.at(name), origin="lower", aspect="auto", cmap="viridis",
+                    interpolation="nearest")
+    kt = np.unique(np.linspace(0, k.size - 1, min(k.size, 5)).round().astype(int))
+    ct = np.unique(np.linspace(0, c.size - 1, min(c.size, 5)).round().astype(int))
+    ax.set_yticks(kt, [f"{k[i]:.3g}" for i in kt])
+    ax.set_xticks(ct, [f"{c[i]:.3g}" for i in ct])
+    ax.set(xlabel="damping C (N·s/m, log grid)", ylabel="stiffness K (N/m, log grid)",
+           title=title)
     plt.colorbar(img, ax=ax)
 
 
 def fig2(plt: Any, res: Sequence[MechanicsResults], out: Path) -> Path:
-    fig, axes = plt.subplots(len(res), 3, figsize=(14, 3.8 * len(res)), squeeze=False)
+    fig, axes = plt.subplots(len(res), 3, figsize=(15, 4.2 * len(res)), squeeze=False,
+                             layout="constrained")
     for row, r in zip(axes, res, strict=True):
         for ax, (name, label) in zip(row, (("area", "A: area between curves"),
                                            ("npc_ratio", "B: nPC99 ratio ind/post"),
@@ -104,14 +110,14 @@ def fig2(plt: Any, res: Sequence[MechanicsResults], out: Path) -> Path:
 
 def fig3(plt: Any, res: Sequence[MechanicsResults], out: Path, dt_s: float) -> list[Path]:
     names = [s.name for s in paper_stimuli()]
-    fig, axes = plt.subplots(len(res), 5, figsize=(18, 3.2 * len(res)), squeeze=False,
-                             sharex=True)
+    fig, axes = plt.subplots(len(res), 5, figsize=(19, 3.6 * len(res)), squeeze=False,
+                             sharex=True, layout="constrained")
     for row, r in zip(axes, res, strict=True):
         t = np.arange(r.responses.shape[1]) * dt_s * 1e3
         for ax, i in zip(row, range(5), strict=True):
             ax.plot(t, r.responses[i][:, r.focus_sensors] * 1e3, lw=0.8)
             ax.set(title=f"3{'ABCDE'[i]}: stimulus {names[i]} ({r.mechanics})",
-                   xlabel="time (ms)", ylabel="force at M15's sensors (mN)")
+                   xlabel="time (ms)", ylabel="M15's sensors (mN)" if i == 0 else "")
     paths = [_save(fig, out, "fig3A-E_responses.png")]
     fig, axes = plt.subplots(1, len(res), figsize=(4.6 * len(res), 3.8), squeeze=False)
     for ax, r in zip(axes[0], res, strict=True):

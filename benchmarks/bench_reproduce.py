@@ -1,0 +1,65 @@
+"""Cost of the reproduction: one sweep grid point on one core, and the full run.
+
+Run: ``python benchmarks/bench_reproduce.py [--out DIR] [--skip-full]``. Reports
+- the time of one K x C grid point (5 paper stimuli, 0.5 s, both phases' measures) on one
+  core, median of 20 points of the default grid, for the linear mechanics (target ≤ 50 ms)
+  and, for information, the geometric one (median of 5);
+- the wall time of the full ``skinhil reproduce`` (20 x 20 sweeps for both mechanics,
+  decoding at 7 SNRs with 100 x 5-fold cross-validation for both) on all cores (target
+  ≤ 10 minutes on 2 cores).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import tempfile
+import time
+
+sys.path.insert(0, os.path.dirname(__file__))
+from machine import describe  # noqa: E402
+
+from skinhil.analysis.sweep import SweepSpec, evaluate_point  # noqa: E402
+from skinhil.reproduce import ReproduceConfig, reproduce  # noqa: E402
+
+
+def point_cost_s(mechanics: str, n: int) -> float:
+    """Median seconds per grid point over ``n`` points spread over the default grid."""
+    points = list(SweepSpec.log_grid(20, 20, mechanics=mechanics).points())  # type: ignore[arg-type]
+    step = max(1, len(points) // n)
+    chosen = points[::step][:n]
+    evaluate_point(chosen[0])  # compile and warm caches
+    times = []
+    for p in chosen:
+        t0 = time.perf_counter()
+        evaluate_point(p)
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", help="output directory of the full run (default: temporary)")
+    parser.add_argument("--skip-full", action="store_true", help="only the grid-point cost")
+    args = parser.parse_args()
+    print(describe())
+    print(f"grid point, linear, one core: {point_cost_s('linear', 20) * 1e3:.1f} ms "
+          "(target <= 50 ms)")
+    print(f"grid point, geometric, one core: {point_cost_s('geometric', 5) * 1e3:.0f} ms")
+    if args.skip_full:
+        return 0
+    out = args.out or tempfile.mkdtemp(prefix="skinhil-reproduce-")
+    t0 = time.perf_counter()
+    outcome = reproduce(out, ReproduceConfig(progress=False))
+    total = time.perf_counter() - t0
+    print(f"full reproduce: {total:.1f} s wall on {os.cpu_count()} cores "
+          f"(target <= 600 s); report {outcome.report}")
+    for r in outcome.results:
+        print(f"  {r.mechanics}: " + ", ".join(f"{k} {v:.1f} s" for k, v in r.seconds.items()))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
