@@ -28,6 +28,7 @@ import dataclasses
 import gc
 import logging
 import math
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -49,6 +50,13 @@ from skinhil.skin import SkinModel, SkinParams
 from skinhil.stimuli import Schedule, ScheduledStimulus
 
 log = logging.getLogger(__name__)
+
+HOUSEKEEPING_SLACK_S = 5e-4
+"""Work that is not part of a tick (extending the schedule) runs only when the next tick
+is due at least this far (s) ahead."""
+SWITCH_INTERVAL_S = 2e-4
+"""Python's thread switch interval (s) while the board runs (default 5 ms): a transport's
+reader thread never holds the interpreter lock for longer than this against the tick."""
 
 
 @dataclass(frozen=True)
@@ -373,6 +381,8 @@ class Board:
         tighten_timer_slack()
         gc.collect()
         gc.freeze()
+        switch_interval = sys.getswitchinterval()
+        sys.setswitchinterval(SWITCH_INTERVAL_S)
         cpu0, wall0 = time.process_time(), time.monotonic()
         n_ticks = None if duration_s is None else int(round(duration_s / self.config.tick_s))
         next_report = wall0 + report_period_s
@@ -382,11 +392,14 @@ class Board:
                 self.clock.wait()
                 self.tick()
                 self.clock.done()
+                if self.clock.slack_s() > HOUSEKEEPING_SLACK_S:
+                    self.timeline.prepare(self.board_time_us() * 1e-6)
                 if on_second is not None and time.monotonic() >= next_report:
                     next_report += report_period_s
                     on_second(self)
             self._finish()
         finally:
+            sys.setswitchinterval(switch_interval)
             if self.link is not None:
                 self._wire_busy_s += self.link.pacer.busy_s
                 self._units_sent += self.link.units_sent
@@ -395,7 +408,9 @@ class Board:
         return self.summary(time.monotonic() - wall0, time.process_time() - cpu0)
 
     def warm_up(self) -> None:
-        """Run the model once off the clock (compiles kernels), then reset it to rest."""
+        """Run the model and every link code path once off the clock (compiles or loads the
+        numba kernels: a cold compile inside a tick is a stall of about a second), then
+        reset the model to rest."""
         if self.sensor.step_index:
             return
         n = self.config.steps_per_tick
@@ -405,6 +420,8 @@ class Board:
             Schedule((ScheduledStimulus(0.0, entry.stimulus, 0),)).force_at(t_s)
         self.sensor.events(np.zeros((n, self.sensor.model.n_springs), dtype=bool), 0)
         self.sensor.reset()
+        if self.link is not None:
+            self.link.warm_up(self.status())
 
     def _finish(self) -> None:
         link = self.link

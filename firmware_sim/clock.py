@@ -16,6 +16,7 @@ from __future__ import annotations
 import ctypes
 import ctypes.util
 import logging
+import os
 import time
 
 import numpy as np
@@ -32,6 +33,22 @@ def tighten_timer_slack(slack_ns: int = 1000) -> bool:
         return int(libc.prctl(_PR_SET_TIMERSLACK, int(slack_ns), 0, 0, 0)) == 0
     except (OSError, AttributeError):
         return False
+
+
+def request_realtime(priority: int = 10) -> str | None:
+    """Ask for the real-time FIFO scheduling class at ``priority`` (1..99), as firmware has
+    the CPU to itself. Returns None on success, else why not (one line).
+
+    Needs root or CAP_SYS_NICE (or ``ulimit -r``). The board sleeps between ticks, so it
+    takes its ~20 % of one core first and leaves the rest to everything else; Linux's
+    real-time throttling caps it at 95 % should it ever spin.
+    """
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(int(priority)))
+    except (OSError, AttributeError, ValueError) as exc:
+        return (f"cannot use real-time scheduling ({exc}); run as root, grant CAP_SYS_NICE "
+                "or raise 'ulimit -r'")
+    return None
 
 
 class TickClock:
@@ -85,6 +102,10 @@ class TickClock:
         if time.monotonic() > self.due(self.index) + self.tick_s:
             self.deadline_misses += 1
         self.index += 1
+
+    def slack_s(self) -> float:
+        """How long (s) until the next tick is due (negative when it is already late)."""
+        return self.due(self.index) - time.monotonic()
 
     def behind_s(self) -> float:
         """How far (s) the next tick's due time lies in the past (0 if on time)."""

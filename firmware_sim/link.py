@@ -19,6 +19,7 @@ import numpy as np
 import protocols
 from firmware_sim.pacing import WirePacer
 from firmware_sim.transport import Transport
+from skinhil.events import make_events
 
 log = logging.getLogger(__name__)
 
@@ -35,8 +36,10 @@ class BoardLink:
                  allowance_s: float = 1e-3, step_us: int = 100) -> None:
         self.transport = transport
         self.is_can = transport.kind == "can"
+        self._codec_args: dict[str, Any] = {"step_us": step_us}
         if self.is_can:
-            self.encoder: Any = protocols.CanEncoder(board_id=board_id, fd=fd, step_us=step_us)
+            self._codec_args.update(board_id=board_id, fd=fd)
+            self.encoder: Any = protocols.CanEncoder(**self._codec_args)
             self.decoder: Any = protocols.CanDecoder(board_id=board_id, fd=fd)
             self._frames: collections.deque[Any] = collections.deque()
             self._frame_s: collections.deque[float] = collections.deque()
@@ -51,6 +54,39 @@ class BoardLink:
         """Bytes (serial) or frames (CAN) handed to the transport."""
         self.rx_errors = 0
         """Host data the decoder rejected by raising (a correct decoder never does)."""
+
+    def warm_up(self, status: Any) -> None:
+        """Run every encode and decode path once on throwaway codecs, off the clock.
+
+        The protocol kernels are compiled (or loaded from numba's cache) on first use; that
+        takes milliseconds from a warm cache and about a second from a cold one, so it must
+        never happen inside a tick: the first status, marker, ACK, event block or host
+        command would stall the board. The link's own encoder, decoder and queue are not
+        touched.
+        """
+        encoder = type(self.encoder)(**self._codec_args)
+        decoder = type(self.decoder)(**{k: v for k, v in self._codec_args.items()
+                                        if k != "step_us"})
+        step = self._codec_args["step_us"]
+        t = np.array([0, step, step, 70 * step, 5000 * step], dtype=np.int64)
+        ev = make_events(t, np.array([0, 1, 337, 200, 5]))
+        # a one-event block is a distinct compiled signature (its field view is contiguous)
+        out = [encoder.status(status), encoder.events(ev[:1], step),
+               encoder.events(ev[1:], int(t[-1]) + step),
+               encoder.events(ev[:0], int(t[-1]) + 400_000),
+               encoder.marker(protocols.Marker(t_us=0, stimulus_id=0,
+                                               phase=protocols.MarkerPhase.ONSET)),
+               encoder.marker(protocols.Marker(t_us=step, stimulus_id=1,
+                                               phase=protocols.MarkerPhase.END)),
+               encoder.ack(protocols.Ack(token=1, opcode=protocols.CommandCode.PING, ok=True,
+                                         reason=protocols.NackReason.NONE)),
+               encoder.command(protocols.Command(token=1, opcode=protocols.CommandCode.SET_SNR,
+                                                 arg=20.0))]
+        for payload in out:
+            decoder.feed(payload)
+            if self.is_can:
+                for frame in payload:
+                    self.transport.wire_seconds([frame])
 
     # -- transmit queue ---------------------------------------------------------------
     def _queue(self, payload: Any) -> None:

@@ -31,7 +31,11 @@ from skinhil.stimuli import (
 DEFAULT_REST_S = 0.25
 """Rest (s) after each stimulus of the default random schedule."""
 _BLOCK = 64
-"""Stimuli added to the default schedule at a time."""
+"""Stimuli added to the default schedule at a time (about 55 s of board time)."""
+EXTEND_AHEAD_S = 10.0
+""":meth:`Timeline.prepare` extends the default schedule when less than this (s) is left."""
+_EXTEND_LATE_S = 2.0
+""":meth:`Timeline.forces` extends it itself (on the tick) only when less than this is left."""
 
 
 @dataclass(frozen=True)
@@ -75,7 +79,11 @@ class Timeline:
 
     @property
     def schedule(self) -> Schedule:
-        """The stimuli placed so far, in board time (s)."""
+        """The stimuli not yet finished (and those started), in board time (s).
+
+        Stimuli that ended before the last :meth:`prepare` are forgotten, so a board that
+        runs for days keeps a short schedule and a constant cost per tick.
+        """
         return self._schedule
 
     def _add(self, entries: list[ScheduledStimulus]) -> None:
@@ -137,9 +145,32 @@ class Timeline:
         self._add([ScheduledStimulus(now_s, stim, int(stimulus_id))])
         return True
 
+    def prepare(self, now_s: float) -> bool:
+        """Housekeeping off the tick: extend the default schedule when less than
+        :data:`EXTEND_AHEAD_S` (s) of it is left after board time ``now_s`` (s), forgetting
+        the stimuli that ended before ``now_s``. Returns True if it did anything.
+
+        The board calls this in a tick's spare time, so the per-tick path (:meth:`forces`)
+        never builds schedules; :meth:`forces` still extends by itself when it gets close to
+        the end (callers that never call this).
+        """
+        if self.mode != self.SCHEDULE_RANDOM or now_s <= self._random_end_s - EXTEND_AHEAD_S:
+            return False
+        self._forget_before(now_s)
+        self._extend_random()
+        return True
+
+    def _forget_before(self, now_s: float) -> None:
+        keep = [e for e in self._entries if e.end_s >= now_s]
+        if len(keep) < len(self._entries):
+            self._entries = keep
+            self._schedule = Schedule(tuple(keep))
+
     def forces(self, t_s: np.ndarray) -> np.ndarray:
         """External force on every mass at board times ``t_s`` (s): (len, 77, 3) N."""
-        if self.mode == self.SCHEDULE_RANDOM and t_s.size and t_s[-1] > self._random_end_s - 5:
+        if (self.mode == self.SCHEDULE_RANDOM and t_s.size
+                and t_s[-1] > self._random_end_s - _EXTEND_LATE_S):
+            self._forget_before(float(t_s[0]))
             self._extend_random()
         return self._schedule.force_at(t_s)
 

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 from harness.peers import PtyPeer
-from harness.serve import ServeProcess
+from harness.serve import ServeProcess, realtime_args
 
 import protocols
 from firmware_sim.timeline import Timeline
@@ -77,7 +77,8 @@ def test_serve_pty_stream_markers_status_and_commands(pty_pair) -> None:
 def test_serve_low_baud_holds_real_time_and_loss_is_exact(pty_pair) -> None:
     duration, baud = 2.0, 9600
     serve = ServeProcess("--port", pty_pair.path, "--baud", str(baud), "--duration",
-                         str(duration), "--snr-db", "25", "--fifo", "64", "--json")
+                         str(duration), "--snr-db", "25", "--fifo", "64", "--json",
+                         *realtime_args())
     peer = PtyPeer(pty_pair.master)
     try:
         assert serve.wait(40) == 0, serve.stderr

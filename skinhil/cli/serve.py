@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from firmware_sim.board import Board, BoardConfig, BoardSummary
+from firmware_sim.clock import request_realtime
 from firmware_sim.timeline import Timeline
 from skinhil.cli.options import add_model_options
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
@@ -51,6 +52,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="start stopped: stream only after a START command")
     p.add_argument("--reconnect", action="store_true",
                    help="when the link goes away, keep running and reopen it when it returns")
+    p.add_argument("--realtime", action="store_true",
+                   help="run with real-time (FIFO) scheduling so other programs cannot delay "
+                        "ticks (needs root or CAP_SYS_NICE)")
     out = p.add_mutually_exclusive_group()
     out.add_argument("--quiet", action="store_true", help="print nothing but errors")
     out.add_argument("--json", action="store_true",
@@ -118,6 +122,10 @@ def run(args: argparse.Namespace) -> int:
             print(("\n" if tty else "") + f"skinhil serve: {msg}", file=sys.stderr, flush=True)
 
     board = Board(config, lambda: open_transport(args), schedule, on_link)
+    if args.realtime:
+        why = request_realtime()
+        if why is not None:
+            raise ConfigError(f"--realtime: {why}")
 
     def on_second(b: Board) -> None:
         info = _live(b)

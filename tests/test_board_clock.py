@@ -1,0 +1,72 @@
+"""The board's tick clock: deadlines from t0 and k (no drift), lateness, counted misses."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+from firmware_sim.clock import TickClock
+
+TICK_S = 2e-3
+
+
+def test_deadlines_come_from_t0_and_index_not_from_wake_ups() -> None:
+    clock = TickClock(TICK_S)
+    clock.start(t0=100.0)
+    assert clock.due(0) == pytest.approx(100.0 + TICK_S)
+    assert clock.due(999) == pytest.approx(100.0 + 1000 * TICK_S)
+
+
+def test_ticks_track_wall_time_without_drift() -> None:
+    clock = TickClock(TICK_S)
+    n = 100
+    clock.start()
+    assert clock.t0 is not None
+    for k in range(n):
+        assert clock.wait() == k
+        clock.done()
+    elapsed = time.monotonic() - clock.t0
+    # never early; a late tick does not push later deadlines back
+    assert elapsed >= n * TICK_S
+    assert clock.ticks == n
+    lat = clock.lateness_s()
+    assert lat.shape == (n,) and np.all(lat >= 0)
+
+
+def test_a_stall_is_counted_and_the_ticks_behind_it_run_back_to_back() -> None:
+    clock = TickClock(TICK_S)
+    clock.start()
+    clock.wait()
+    time.sleep(10 * TICK_S)  # the tick's work takes ten periods
+    clock.done()
+    assert clock.deadline_misses == 1
+    assert clock.behind_s() > 5 * TICK_S
+    t = time.monotonic()
+    caught_up = 0
+    while clock.behind_s() > 0:  # late ticks do not sleep
+        clock.wait()
+        clock.done()
+        caught_up += 1
+    assert caught_up >= 5
+    assert time.monotonic() - t < 5 * TICK_S
+    assert clock.max_lateness_s >= 9 * TICK_S
+    assert clock.lateness_percentiles_ms()["max"] == pytest.approx(clock.max_lateness_s * 1e3)
+
+
+def test_history_keeps_the_newest_latenesses_in_order() -> None:
+    clock = TickClock(TICK_S, history=4)
+    clock.start(t0=time.monotonic() - 1.0)  # every tick is already late, less and less
+    for _ in range(6):
+        clock.wait()
+        clock.done()
+    lat = clock.lateness_s()
+    assert lat.shape == (4,)
+    assert np.all(np.diff(lat) < 0)
+    assert clock.ticks == 6
+
+
+def test_bad_period_is_refused() -> None:
+    with pytest.raises(ValueError, match="tick_s"):
+        TickClock(0.0)
