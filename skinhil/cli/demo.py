@@ -18,6 +18,7 @@ import os
 import time
 from pathlib import Path
 
+from firmware_sim.timeline import DEFAULT_REST_S
 from skinhil.cli.listen import LivePrinter, class_names, print_summary, summary
 from skinhil.cli.options import snr_value
 from skinhil.cli.train import print_report
@@ -29,11 +30,14 @@ from skinhil.receiver.session import run_against_board, serve_command
 from skinhil.receiver.training import train_decoder
 
 DEFAULT_SNR_DB = 40.0
-"""Demo noise level (dB): high enough that the force, not the noise, drives the spikes."""
+"""Demo noise level (dB): noisy, yet the force, not the noise, drives the spikes (below
+~24 dB the measured-power noise runs away and nothing can be decoded; see docs/receiver.md)."""
 DEFAULT_DURATION_S = 20.0
-DEMO_REPS = 30
-"""Training trials per condition for the cached demo model."""
-MODEL_FORMAT_TAG = "v1"
+DEMO_REST_S = DEFAULT_REST_S
+"""Rest (s) after each stimulus: the board's default."""
+DEMO_REPS = 15
+"""Training stimuli per condition for the cached demo model."""
+MODEL_FORMAT_TAG = "v2"
 """Bumped when the cached model must be retrained."""
 
 
@@ -66,12 +70,14 @@ def cache_dir() -> Path:
 
 def cached_model(snr_db: float, quiet: bool) -> Path:
     """The cached demo model for ``snr_db``, trained now (with a progress bar) if missing."""
-    path = cache_dir() / f"demo-decoder-{snr_db:g}dB-{MODEL_FORMAT_TAG}.npz"
+    path = cache_dir() / (f"demo-decoder-{snr_db:g}dB-rest{DEMO_REST_S:g}s-"
+                          f"{MODEL_FORMAT_TAG}.npz")
     if path.exists():
         return path
     print(f"training the demo model at {snr_db:g} dB (first use; cached in {path.parent})",
           flush=True)
-    decoder, report = train_decoder(snr_db, DEMO_REPS, seed=0, progress=not quiet)
+    decoder, report = train_decoder(snr_db, DEMO_REPS, seed=0, rest_s=DEMO_REST_S,
+                                    progress=not quiet)
     if not quiet:
         print_report(report, class_names())
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -89,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
     decoder = load_window_decoder(model_path)
     link, slave_fd = PtyMasterTransport.open_pair(args.baud)
     cmd = serve_command(["--port", link.slave_path, "--baud", str(args.baud)],
-                        args.duration_s, args.snr_db, args.seed)
+                        args.duration_s, args.snr_db, args.seed, DEMO_REST_S)
     names = class_names()
     receiver = Receiver(link, decoder)
     if not args.quiet:

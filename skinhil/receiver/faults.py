@@ -10,10 +10,15 @@ in :attr:`FaultyTransport.injected`:
 - a CAN link (payloads are lists of frames): each frame is dropped with probability
   ``drop_p``, else duplicated with ``duplicate_p``; each data byte is bit-flipped with
   ``corrupt_byte_p``; a frame is held back ``delay_s`` (s) with ``delay_p``;
-- a serial link (payloads are bytes): each received chunk is dropped whole with ``drop_p``
-  (a burst loss, as when a UART overruns), else duplicated with ``duplicate_p``; each byte is
-  bit-flipped (one random non-zero XOR mask) with ``corrupt_byte_p``; a chunk is held back
-  ``delay_s`` with ``delay_p``.
+- a serial link (payloads are bytes), ``serial_unit="packet"`` (default): the unit is one
+  packet of the zero-delimited stream (its bytes up to and including the ``0x00``
+  delimiter; a partial packet waits for the rest of it): each packet is dropped with
+  ``drop_p``, else duplicated with ``duplicate_p``; each byte before the delimiter is
+  bit-flipped (one random non-zero XOR mask) with ``corrupt_byte_p`` — the delimiter is
+  kept, so every damaged packet is exactly one lost frame; a packet is held back
+  ``delay_s`` with ``delay_p``;
+- a serial link with ``serial_unit="chunk"``: the same on whatever each read returned
+  (a burst loss, as when a UART overruns; corruption may hit delimiters too).
 
 Delayed items come out in order behind the items already due, so delays never reorder the
 stream (as on a real link); they only add latency.
@@ -43,8 +48,13 @@ class FaultParams:
     delay_p: float = 0.0
     delay_s: float = 0.0
     seed: int = 0
+    serial_unit: str = "packet"
+    """Serial links: ``"packet"`` (zero-delimited frames) or ``"chunk"`` (reads)."""
 
     def __post_init__(self) -> None:
+        if self.serial_unit not in ("packet", "chunk"):
+            raise ConfigError(f"FaultParams.serial_unit must be 'packet' or 'chunk', "
+                              f"got {self.serial_unit!r}")
         for name in ("drop_p", "corrupt_byte_p", "duplicate_p", "delay_p"):
             v = getattr(self, name)
             if not (isinstance(v, int | float) and 0.0 <= v <= 1.0):
@@ -71,10 +81,14 @@ class InjectedFaults:
 
 
 class FaultyTransport(Transport[Any]):
-    """``inner`` with seeded faults injected on :meth:`recv` (and :meth:`send` if asked)."""
+    """``inner`` with seeded faults injected on :meth:`recv` (and :meth:`send` if asked).
+
+    ``keep_clean``: keep every payload as it was before the faults in :attr:`clean` (bytes
+    or CAN frames), so what was lost can be counted against what was sent.
+    """
 
     def __init__(self, inner: Transport[Any], params: FaultParams,
-                 on_send: bool = False, on_recv: bool = True) -> None:
+                 on_send: bool = False, on_recv: bool = True, keep_clean: bool = False) -> None:
         self.inner = inner
         self.params = params
         self.kind = inner.kind
@@ -83,6 +97,10 @@ class FaultyTransport(Transport[Any]):
         self.injected = InjectedFaults()
         self._rng = np.random.default_rng(params.seed)
         self._held: deque[tuple[float, Any]] = deque()
+        self._partial = b""
+        self.keep_clean = keep_clean
+        self.clean: list[Any] = []
+        """Payloads before the faults (when ``keep_clean``)."""
 
     @property
     def name(self) -> str:
@@ -93,11 +111,13 @@ class FaultyTransport(Transport[Any]):
         return bool(getattr(self.inner, "fd", False))
 
     # -- faults -------------------------------------------------------------------------
-    def _corrupt(self, data: bytes) -> bytes:
+    def _corrupt(self, data: bytes, keep_last: bool = False) -> bytes:
         p = self.params.corrupt_byte_p
         if p <= 0 or not data:
             return data
         hit = self._rng.random(len(data)) < p
+        if keep_last:
+            hit[-1] = False
         if not hit.any():
             return data
         arr = np.frombuffer(data, dtype=np.uint8).copy()
@@ -107,8 +127,19 @@ class FaultyTransport(Transport[Any]):
         self.injected.corrupted_units += 1
         return arr.tobytes()
 
+    @property
+    def _packets(self) -> bool:
+        return self.kind != "can" and self.params.serial_unit == "packet"
+
     def _units(self, payload: Any) -> list[Any]:
-        return list(payload) if self.kind == "can" else ([payload] if payload else [])
+        if self.kind == "can":
+            return list(payload)
+        if not self._packets:
+            return [payload] if payload else []
+        data = self._partial + bytes(payload)
+        end = data.rfind(b"\x00") + 1
+        self._partial = data[end:]
+        return [part + b"\x00" for part in data[:end].split(b"\x00")[:-1]]
 
     def _join(self, units: list[Any]) -> Any:
         return units if self.kind == "can" else b"".join(units)
@@ -130,7 +161,7 @@ class FaultyTransport(Transport[Any]):
                 if data != bytes(unit.data):
                     unit = replace(unit, data=data)
             else:
-                unit = self._corrupt(bytes(unit))
+                unit = self._corrupt(bytes(unit), keep_last=self._packets)
             copies = 1
             if self._rng.random() < p.duplicate_p:
                 self.injected.units_duplicated += 1
@@ -157,6 +188,8 @@ class FaultyTransport(Transport[Any]):
         payload = self.inner.recv(timeout)
         if not self.on_recv:
             return payload
+        if self.keep_clean and payload:
+            self.clean.append(list(payload) if self.kind == "can" else bytes(payload))
         return self._apply(payload)
 
     def wire_seconds(self, payload: Any) -> float:

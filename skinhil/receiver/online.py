@@ -100,6 +100,8 @@ class OnsetWindows:
         self._history_start = 0
         self._open: list[tuple[int, int]] = []  # (detect step, window start step)
         self.late_events = 0
+        self.max_late_us = 0
+        """Largest lateness (µs) of an event for an already processed step."""
         self.bad_address_events = 0
 
     @property
@@ -130,6 +132,7 @@ class OnsetWindows:
             late = rel < 0
             if late.any():
                 self.late_events += int(late.sum())
+                self.max_late_us = max(self.max_late_us, int(-rel.min()) * self.dt_us)
                 rel = np.maximum(rel, 0)
             addr = now["addr"].astype(np.int64)
             bad = addr >= self.n_channels

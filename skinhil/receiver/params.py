@@ -54,14 +54,19 @@ class ReceiverParams:
     ``guard_s`` (s): the receiver steps its filters only up to the board time it knows is
     complete: the newest event's time, else the newest record's or the host clock's estimate
     of board time minus this guard (events that still arrive for earlier steps are counted
-    as late and applied at the current step). ``match_window_s`` (s): a decision is scored
-    against the ground-truth marker whose onset precedes its detection by at most this.
+    as late and applied at the current step). When late events arrive, the guard grows to
+    twice the largest lateness seen, up to ``max_guard_s`` (s), so a board that lags behind
+    real time (a loaded host) is followed without shifting spikes. ``match_window_s`` (s):
+    a decision is scored against the ground-truth marker whose onset precedes its detection
+    by at most this.
     """
 
     onset: OnsetParams = field(default_factory=OnsetParams)
     guard_s: float = 0.02
+    max_guard_s: float = 0.25
     match_window_s: float = 0.1
 
     def __post_init__(self) -> None:
         _positive(self, "guard_s")
+        _positive(self, "max_guard_s")
         _positive(self, "match_window_s")

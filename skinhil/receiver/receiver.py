@@ -26,12 +26,12 @@ import numpy as np
 import protocols
 from firmware_sim.transport import Transport
 from skinhil.errors import TransportError
-from skinhil.stimuli import direction_conditions
 from skinhil.receiver.clock import BoardClock
 from skinhil.receiver.decoder_adapter import WindowDecoder
 from skinhil.receiver.online import OnlineClassifier
 from skinhil.receiver.params import ReceiverParams
 from skinhil.receiver.scoring import ScoredDecision, scoreboard_for
+from skinhil.stimuli import direction_conditions
 
 log = logging.getLogger(__name__)
 
@@ -74,7 +74,11 @@ class LinkReport:
     board_sent: int
     board_dropped: int
     lost_on_link: int
-    """Events the board's last status says it sent minus those decoded before that status."""
+    """Events the board put on the wire that never came out of the decoder (the protocol's
+    ``events_lost``: exact as of the last SYNC received)."""
+    untimed_events: int
+    """Events received in frames whose time base was lost (not returned; in lost_on_link)."""
+    malformed: int
     late_events: int
     link_errors: int
 
@@ -120,8 +124,8 @@ class Receiver:
         self.listeners: list[ReceiverListener] = list(listeners)
         self.reopen = reopen
         self.last_status: Any = None
-        self._decoded_at_status = 0
         self.link_errors = 0
+        self._guard_us = int(round(self.params.guard_s * 1e6))
         self._last_event_us = -1
         self._last_record_us = -1
         self._stop = threading.Event()
@@ -160,7 +164,6 @@ class Receiver:
                 listener.on_marker(rec)
         elif isinstance(rec, protocols.Status):
             self.last_status = rec
-            self._decoded_at_status = int(self.codec.counters.events_decoded)
             for listener in self.listeners:
                 listener.on_status(rec)
         elif isinstance(rec, protocols.Ack):
@@ -169,7 +172,7 @@ class Receiver:
 
     def known_board_time_us(self, host_s: float | None = None) -> int:
         """Board time (µs) before which the stream is taken as complete."""
-        guard = int(round(self.params.guard_s * 1e6))
+        guard = self._guard_us
         known = self._last_event_us
         if self._last_record_us >= 0:
             known = max(known, self._last_record_us - guard)
@@ -189,6 +192,11 @@ class Receiver:
             for listener in self.listeners:
                 listener.on_decision(scored)
         self.scoreboard.resolve(self.classifier.board_time_us)
+        late_us = self.classifier.windows.max_late_us
+        if late_us and self._guard_us < late_us * 2:
+            self._guard_us = min(int(round(self.params.max_guard_s * 1e6)), 2 * late_us)
+            log.info("events arrived %.1f ms late: board-time guard now %.1f ms",
+                     late_us * 1e-3, self._guard_us * 1e-3)
         return out
 
     def flush(self) -> list[ScoredDecision]:
@@ -276,5 +284,6 @@ class Receiver:
             frames_lost=g(c, "frames_lost"), duplicates=g(c, "duplicates"),
             board_generated=g(st, "events_generated"), board_sent=g(st, "events_sent"),
             board_dropped=g(st, "events_dropped"),
-            lost_on_link=max(0, g(st, "events_sent") - self._decoded_at_status) if st else 0,
-            late_events=self.classifier.late_events, link_errors=self.link_errors)
+            lost_on_link=g(c, "events_lost"), untimed_events=g(c, "events_untimed"),
+            malformed=g(c, "malformed"), late_events=self.classifier.late_events,
+            link_errors=self.link_errors)

@@ -57,6 +57,11 @@ class SessionRecorder(ReceiverListener):
         return np.concatenate(self._events)
 
     @property
+    def markers(self) -> np.ndarray:
+        """Markers received so far (:data:`MARKER_DTYPE`: t_us, stimulus_id, phase)."""
+        return np.array(self._markers, dtype=MARKER_DTYPE)
+
+    @property
     def decisions(self) -> np.ndarray:
         return np.array(self._decisions, dtype=DECISION_DTYPE)
 
@@ -65,5 +70,5 @@ class SessionRecorder(ReceiverListener):
         p = Path(path)
         p.parent.mkdir(parents=True, exist_ok=True)
         np.savez_compressed(p, events=self.events, decisions=self.decisions,
-                            markers=np.array(self._markers, dtype=MARKER_DTYPE),
+                            markers=self.markers,
                             meta=np.array(json.dumps(meta or {})))

@@ -20,8 +20,8 @@ The offline **accuracy** is the cross-validated window accuracy times the fracti
 markers that got a window (misses count as wrong): the same definition as the online
 accuracy. A class with fewer than ``CV_FOLDS`` detected windows (at 40 dB the weakest,
 0.1 N, stimuli are rarely detected) is left out of the decoder; its windows count as wrong
-offline, as they must be online. The training stream's seed is ``TRAIN_SEED_BASE + seed`` so it never coincides
-with a board run at a small seed.
+offline, as they must be online. The training stream's seed is ``TRAIN_SEED_BASE + seed``
+so it never coincides with a board run at a small seed.
 """
 
 from __future__ import annotations
@@ -30,7 +30,6 @@ import logging
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
-
 
 import numpy as np
 from tqdm.auto import tqdm
@@ -73,6 +72,10 @@ class StreamWindows:
     misses: int
     false_alarms: int
     spec: FeatureSpec
+    snr_db: float
+    rest_s: float
+    n_stimuli: int
+    seed: int
 
 
 @dataclass(frozen=True)
@@ -105,6 +108,8 @@ class TrainingReport:
         missed markers, count as wrong)."""
         if self.markers == 0:
             return math.nan
+        if self.decodable_windows == 0:
+            return 0.0
         return self.window_accuracy * self.decodable_windows / self.markers
 
 
@@ -196,43 +201,60 @@ def stream_windows(n_stimuli: int, snr_db: float, rest_s: float, seed: int,
     bar.close()
     x = np.array(xs) if xs else np.zeros((0, spec.n_features))
     return StreamWindows(x, np.array(ys, dtype=np.int64), len(ys) + board.misses,
-                         board.misses, board.false_alarms, spec)
+                         board.misses, board.false_alarms, spec, snr_db, rest_s, n_stimuli,
+                         seed)
+
+
+def fit_windows(sw: StreamWindows, cross_validation: bool = True
+                ) -> tuple[DirectionDecoder | None, TrainingReport]:
+    """Cross-validate and fit a decoder on labelled windows; the report in any case.
+
+    Classes with fewer than ``CV_FOLDS`` windows are left out (their windows count as wrong);
+    with fewer than two classes left no decoder can be fitted (None; the report's accuracy
+    then counts every scored marker as wrong).
+    """
+    classes, counts = np.unique(sw.labels, return_counts=True)
+    need = CV_FOLDS if cross_validation else 1
+    kept = classes[counts >= need]
+    use = np.isin(sw.labels, kept) if kept.size >= 2 else np.zeros(sw.labels.size, bool)
+    if 0 < use.sum() < use.size:
+        left_out = sorted(set(classes.tolist()) - set(kept.tolist()))
+        log.warning("classes %s have fewer than %d detected windows and are left out of the "
+                    "decoder; their %d windows count as wrong", left_out, need,
+                    int((~use).sum()))
+    x, y = sw.features[use], sw.labels[use]
+    acc, std = math.nan, math.nan
+    conf = np.zeros((kept.size, kept.size), dtype=np.int64)
+    decoder = None
+    if use.any():
+        if cross_validation:
+            cv = cross_validate(DirectionDecoder(sw.spec), x, y, folds=CV_FOLDS,
+                                repeats=CV_REPEATS, seed=sw.seed)
+            acc, std, conf = cv.accuracy, cv.accuracy_std, cv.confusion
+        decoder = DirectionDecoder(sw.spec).fit(x, y)
+    report = TrainingReport(sw.snr_db, sw.rest_s, sw.n_stimuli, sw.seed, sw.markers,
+                            int(sw.labels.size), int(use.sum()), sw.misses, sw.false_alarms,
+                            float(acc), float(std), np.asarray(conf),
+                            tuple(int(c) for c in kept) if use.any() else ())
+    return decoder, report
 
 
 def train_decoder(snr_db: float = 10.0, reps: int = 50, seed: int = 0, dt_s: float = 1e-4,
                   rest_s: float = DEFAULT_REST_S, progress: bool = False,
                   cross_validation: bool = True) -> tuple[DirectionDecoder, TrainingReport]:
     """Simulate ``9·reps`` board stimuli (each condition ``reps`` times), cut and label
-    windows, cross-validate and fit.
+    windows, cross-validate and fit (:func:`fit_windows`).
 
-    Raises ConfigError when the onset detector matched too few windows of some class to fit
-    (and cross-validate) a decoder: at such a noise level nothing can be decoded online.
+    Raises ConfigError when the onset detector matched too few windows to fit a decoder (at
+    such a noise level nothing can be decoded online either).
     """
-    n_stimuli = 9 * reps
-    sw = stream_windows(n_stimuli, snr_db, rest_s, seed, dt_s, progress=progress)
-    classes, counts = np.unique(sw.labels, return_counts=True)
-    need = CV_FOLDS if cross_validation else 1
-    kept = classes[counts >= need]
-    if kept.size < 2:
+    sw = stream_windows(9 * reps, snr_db, rest_s, seed, dt_s, progress=progress)
+    decoder, report = fit_windows(sw, cross_validation)
+    if decoder is None:
+        classes, counts = np.unique(sw.labels, return_counts=True)
         raise ConfigError(
             f"at {snr_db:g} dB the onset detector matched only {sw.labels.size} of "
             f"{sw.markers} stimuli ({dict(zip(classes.tolist(), counts.tolist(), strict=True))}"
-            f" windows per class); need {need} windows for each of at least two classes: "
+            f" windows per class); need {CV_FOLDS} windows for each of at least two classes: "
             "raise --reps or the SNR")
-    use = np.isin(sw.labels, kept)
-    if not use.all():
-        log.warning("classes %s have fewer than %d detected windows and are left out of the "
-                    "decoder; their %d windows count as wrong", sorted(set(classes.tolist()) - set(kept.tolist())),
-                    need, int((~use).sum()))
-    x, y = sw.features[use], sw.labels[use]
-    acc, std = math.nan, math.nan
-    conf = np.zeros((kept.size, kept.size), dtype=np.int64)
-    if cross_validation:
-        cv = cross_validate(DirectionDecoder(sw.spec), x, y, folds=CV_FOLDS,
-                            repeats=CV_REPEATS, seed=seed)
-        acc, std, conf = cv.accuracy, cv.accuracy_std, cv.confusion
-    decoder = DirectionDecoder(sw.spec).fit(x, y)
-    report = TrainingReport(snr_db, rest_s, n_stimuli, seed, sw.markers, int(sw.labels.size),
-                            int(use.sum()), sw.misses, sw.false_alarms, float(acc), float(std),
-                            np.asarray(conf), tuple(int(c) for c in decoder.classes_))
     return decoder, report
