@@ -11,20 +11,21 @@ import pytest
 from skinhil.cli import main
 from skinhil.errors import ModelFileError
 from skinhil.receiver.model_file import load_window_decoder
-from skinhil.receiver.training import training_trials
+from skinhil.receiver.training import stream_windows
 
 
 @pytest.fixture(scope="module")
 def model_path(tmp_path_factory):
     path = tmp_path_factory.mktemp("model") / "decoder.npz"
-    assert main(["train", "--out", str(path), "--snr-db", "inf", "--reps", "6",
-                 "--no-progress"]) == 0
+    assert main(["train", "--out", str(path), "--snr-db", "inf", "--reps", "5", "--rest",
+                 "0.05", "--no-progress"]) == 0
     return path
 
 
 def test_round_trip_gives_the_same_decisions(model_path):
     a, b = load_window_decoder(model_path), load_window_decoder(model_path)
-    x, _, spec = training_trials(math.inf, 2, seed=5)
+    x = stream_windows(18, math.inf, 0.05, seed=5).features
+    assert x.shape[0] == 18
     xa = a.decoder.decision_function(x)
     assert np.array_equal(xa, b.decoder.decision_function(x))
     assert np.array_equal(a.decoder.predict(x), b.decoder.predict(x))
