@@ -12,13 +12,18 @@ Runs the board as a subprocess, as a user would, and reports from its own summar
 
 Usage::
 
-    python benchmarks/bench_serve.py [--duration 60] [--skip-vcan]
+    python benchmarks/bench_serve.py [--duration 60] [--skip-vcan] [--realtime]
+
+Each pty run also reports how busy the whole machine was meanwhile (from /proc/stat) and
+the load average: tick lateness on a shared machine says more about the others than about
+the board, unless it runs with ``--realtime``.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
@@ -31,6 +36,26 @@ from harness.peers import CanPeer, PtyPeer  # noqa: E402
 from harness.serve import ServeProcess  # noqa: E402
 from machine import describe  # noqa: E402
 from uml_vcan import host_has_can, in_uml, run_in_uml  # noqa: E402
+
+
+def _cpu_times() -> tuple[float, float]:
+    """(busy, total) jiffies of all CPUs since boot, from /proc/stat (0, 0 if unknown)."""
+    try:
+        with open("/proc/stat", encoding="ascii") as fh:
+            vals = [float(v) for v in fh.readline().split()[1:]]
+    except OSError:
+        return 0.0, 0.0
+    idle = vals[3] + (vals[4] if len(vals) > 4 else 0.0)
+    return sum(vals) - idle, sum(vals)
+
+
+def _machine_load(t0: tuple[float, float]) -> str:
+    """How busy the whole machine was since ``t0`` (all cores), and the load average."""
+    busy, total = _cpu_times()
+    share = (busy - t0[0]) / (total - t0[1]) if total > t0[1] else float("nan")
+    la = os.getloadavg()
+    return (f"machine during the run: {100 * share:.0f}% of all {os.cpu_count()} cores busy "
+            f"(this run included); load average {la[0]:.2f} {la[1]:.2f} {la[2]:.2f}")
 
 
 def _pty_run(duration: float, *extra: str) -> dict:
@@ -83,18 +108,26 @@ def main() -> int:
     ap.add_argument("--duration", type=float, default=60.0, help="seconds per run (60)")
     ap.add_argument("--skip-vcan", action="store_true", help="no vcan run")
     ap.add_argument("--vcan-only", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--realtime", action="store_true",
+                    help="serve with --realtime (FIFO scheduling; needs root or CAP_SYS_NICE)")
     args = ap.parse_args()
+    rt = ["--realtime"] if args.realtime else []
     if args.vcan_only:  # inside UML (or on a host with vcan0): print one JSON summary
-        print("RESULT " + json.dumps(_vcan_run(args.duration, "--snr-db", "20")))
+        print("RESULT " + json.dumps(_vcan_run(args.duration, "--snr-db", "20", *rt)))
         return 0
     print(describe())
-    print(_line("defaults, 921600-baud pty", _pty_run(args.duration)), flush=True)
-    print(_line("saturated (--snr-db 20), 921600-baud pty",
-                _pty_run(args.duration, "--snr-db", "20")), flush=True)
+    tag = " --realtime" if rt else ""
+    t0 = _cpu_times()
+    print(_line(f"defaults{tag}, 921600-baud pty", _pty_run(args.duration, *rt)), flush=True)
+    print("  " + _machine_load(t0), flush=True)
+    t0 = _cpu_times()
+    print(_line(f"saturated (--snr-db 20){tag}, 921600-baud pty",
+                _pty_run(args.duration, "--snr-db", "20", *rt)), flush=True)
+    print("  " + _machine_load(t0), flush=True)
     if args.skip_vcan:
         return 0
     cmd = [sys.executable, str(Path(__file__).resolve()), "--vcan-only", "--duration",
-           str(args.duration)]
+           str(args.duration), *rt]
     if host_has_can("vcan0") or in_uml():
         where = "host vcan0"
         import subprocess
@@ -109,7 +142,7 @@ def main() -> int:
         print(f"vcan run failed:\n{out}")
         return 1
     s = json.loads(result[-1][7:])
-    print(_line(f"saturated (--snr-db 20), 1 Mbit/s classic CAN, {where}", s))
+    print(_line(f"saturated (--snr-db 20){tag}, 1 Mbit/s classic CAN, {where}", s))
     print(f"  frames received {s['received_frames']}, reader overflows {s['rx_overflows']}")
     return 0
 

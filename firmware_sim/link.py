@@ -56,34 +56,12 @@ class BoardLink:
         """Host data the decoder rejected by raising (a correct decoder never does)."""
 
     def warm_up(self, status: Any) -> None:
-        """Run every encode and decode path once on throwaway codecs, off the clock.
-
-        The protocol kernels are compiled (or loaded from numba's cache) on first use; that
-        takes milliseconds from a warm cache and about a second from a cold one, so it must
-        never happen inside a tick: the first status, marker, ACK, event block or host
-        command would stall the board. The link's own encoder, decoder and queue are not
-        touched.
-        """
+        """Run every encode and decode path once on throwaway codecs, off the clock
+        (:func:`exercise_codecs`); the link's own encoder, decoder and queue are untouched."""
         encoder = type(self.encoder)(**self._codec_args)
         decoder = type(self.decoder)(**{k: v for k, v in self._codec_args.items()
                                         if k != "step_us"})
-        step = self._codec_args["step_us"]
-        t = np.array([0, step, step, 70 * step, 5000 * step], dtype=np.int64)
-        ev = make_events(t, np.array([0, 1, 337, 200, 5]))
-        # a one-event block is a distinct compiled signature (its field view is contiguous)
-        out = [encoder.status(status), encoder.events(ev[:1], step),
-               encoder.events(ev[1:], int(t[-1]) + step),
-               encoder.events(ev[:0], int(t[-1]) + 400_000),
-               encoder.marker(protocols.Marker(t_us=0, stimulus_id=0,
-                                               phase=protocols.MarkerPhase.ONSET)),
-               encoder.marker(protocols.Marker(t_us=step, stimulus_id=1,
-                                               phase=protocols.MarkerPhase.END)),
-               encoder.ack(protocols.Ack(token=1, opcode=protocols.CommandCode.PING, ok=True,
-                                         reason=protocols.NackReason.NONE)),
-               encoder.command(protocols.Command(token=1, opcode=protocols.CommandCode.SET_SNR,
-                                                 arg=20.0))]
-        for payload in out:
-            decoder.feed(payload)
+        for payload in exercise_codecs(encoder, decoder, self._codec_args["step_us"], status):
             if self.is_can:
                 for frame in payload:
                     self.transport.wire_seconds([frame])
@@ -200,3 +178,33 @@ class BoardLink:
 
     def shutdown(self) -> None:
         self.transport.shutdown()
+
+
+def exercise_codecs(encoder: Any, decoder: Any, step_us: int, status: Any) -> list[Any]:
+    """Encode a status, one-event and several-event blocks, an idle span, markers, an ACK
+    and a command with fresh ``encoder``, decode them all with fresh ``decoder``; return
+    the payloads.
+
+    The protocol kernels are compiled (or loaded from numba's cache) on first use: that
+    takes milliseconds from a warm cache and about a second from a cold one, so it must
+    never happen inside a tick (the first status, marker, ACK, event block or host command
+    would stall the board). The board calls this before its clock starts; the UML test
+    runner calls it on the host so the cache is warm before booting.
+    """
+    t = np.array([0, step_us, step_us, 70 * step_us, 5000 * step_us], dtype=np.int64)
+    ev = make_events(t, np.array([0, 1, 337, 200, 5]))
+    # a one-event block is a distinct compiled signature (its field view is contiguous)
+    out = [encoder.status(status), encoder.events(ev[:1], step_us),
+           encoder.events(ev[1:], int(t[-1]) + step_us),
+           encoder.events(ev[:0], int(t[-1]) + 400_000),
+           encoder.marker(protocols.Marker(t_us=0, stimulus_id=0,
+                                           phase=protocols.MarkerPhase.ONSET)),
+           encoder.marker(protocols.Marker(t_us=step_us, stimulus_id=1,
+                                           phase=protocols.MarkerPhase.END)),
+           encoder.ack(protocols.Ack(token=1, opcode=protocols.CommandCode.PING, ok=True,
+                                     reason=protocols.NackReason.NONE)),
+           encoder.command(protocols.Command(token=1, opcode=protocols.CommandCode.SET_SNR,
+                                             arg=20.0))]
+    for payload in out:
+        decoder.feed(payload)
+    return out

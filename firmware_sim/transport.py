@@ -284,6 +284,9 @@ class CanTransport(Transport[list[Any]]):
             kwargs.pop("bitrate")
             if not hasattr(socket, "AF_CAN"):
                 raise TransportError(_no_can_message(channel))
+        can_log = logging.getLogger("can")
+        level = can_log.level
+        can_log.setLevel(logging.CRITICAL)  # its own error line would repeat ours below
         try:
             self._bus = can.Bus(**kwargs)
         except can.CanInterfaceNotImplementedError as exc:
@@ -306,6 +309,8 @@ class CanTransport(Transport[list[Any]]):
         except (can.CanError, ValueError, TypeError, ImportError) as exc:
             raise TransportError(f"cannot open CAN channel {channel!r} on {interface!r}: "
                                  f"{exc}") from None
+        finally:
+            can_log.setLevel(level)
         sock = getattr(self._bus, "socket", None)
         if isinstance(sock, socket.socket):
             try:

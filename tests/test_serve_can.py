@@ -17,19 +17,24 @@ import protocols
 @pytest.mark.vcan
 @pytest.mark.parametrize("fd", [False, True], ids=["classic", "fd"])
 def test_serve_on_vcan(fd: bool) -> None:
-    duration = 2.0
+    # no --duration: inside UML a 2 s run can end before the slower peer has decoded its
+    # first status, so the commands go out while it runs and Ctrl-C (SIGINT) ends it
+    min_board_s = 2.0
     peer = CanPeer("vcan0", fd=fd, board_id=3)
     extra = ["--fd"] if fd else []
-    serve = ServeProcess("--can", "vcan0", "--board-id", "3", "--duration", str(duration),
-                         "--seed", "1", "--json", *extra)
+    serve = ServeProcess("--can", "vcan0", "--board-id", "3", "--seed", "1", "--json", *extra)
     try:
-        assert peer.wait_for(lambda p: p.of(protocols.Status) or serve.exited, 60)
+        assert peer.wait_for(lambda p: p.of(protocols.Status) or serve.exited, 120)
         assert not serve.exited, serve.stderr
         codes = protocols.CommandCode
         t_ok = peer.command(codes.QUERY_STATUS)
         t_bad = peer.command(codes.SET_SCHEDULE, 77)
+        assert peer.wait_for(lambda p: {a.token for a in p.of(protocols.Ack)} >= {t_ok, t_bad}
+                             and p.of(protocols.Status)[-1].t_us >= min_board_s * 1e6, 60)
+        serve.interrupt()
         assert serve.wait(60) == 0, serve.stderr
-        peer.wait_for(lambda p: p.of(protocols.Status)[-1].t_us >= duration * 1e6, 3)
+        end_us = round(serve.summary()["board_time_s"] * 1e6)
+        peer.wait_for(lambda p: p.of(protocols.Status)[-1].t_us >= end_us, 5)
     finally:
         serve.kill()
         peer.close()

@@ -14,9 +14,15 @@ Use from the command line (prints the command's output, exits with its status)::
 
     python tests/uml_vcan.py -- python -m pytest -m vcan tests
 
-Memory is 2G: with 1G the serve subprocess plus pytest got OOM-killed. Boot to the
-init script takes about 1.5-2.8 s here; importing numpy inside takes about
-1 s and every system call is slow, so use it for correctness at moderate rates.
+Memory: UML backs its RAM with a file mapped page by page into the host processes that
+run its programs, so a UML program with a large resident set needs one host mapping per
+scattered page: past the host's ``vm.max_map_count`` (65530 by default, about 600 MB of
+scattered resident memory in one UML program) the host ``mmap`` fails with ENOMEM and UML
+kills the program ("UML ran out of memory on the host side"). :func:`run_in_uml` reports
+that case in :attr:`UmlResult.host_maps_exhausted`; run big suites one test file per boot,
+or raise the limit (``sysctl -w vm.max_map_count=262144``). Boot to the init script takes
+about 1.5-2.8 s here; importing numpy inside takes about 1 s and every system call is
+slow, so use it for correctness at moderate rates.
 """
 
 from __future__ import annotations
@@ -70,6 +76,12 @@ class UmlResult:
     total_s: float
     console: str
 
+    @property
+    def host_maps_exhausted(self) -> bool:
+        """True if UML hit the host's ``vm.max_map_count`` (a program was killed for it)."""
+        return "vm.max_map_count has been reached" in self.console \
+            or "ran out of memory on the host side" in self.console
+
 
 def host_has_can(channel: str = "vcan0") -> bool:
     """True if this kernel has SocketCAN and a CAN interface named ``channel`` is up."""
@@ -81,6 +93,41 @@ def host_has_can(channel: str = "vcan0") -> bool:
     except OSError:
         return False
     return True
+
+
+def host_max_map_count() -> int | None:
+    """This host's ``vm.max_map_count`` (mappings per process), None if unknown."""
+    try:
+        return int(Path("/proc/sys/vm/max_map_count").read_text().strip())
+    except (OSError, ValueError):
+        return None
+
+
+WARM_CACHE_CODE = """
+import protocols
+from firmware_sim.link import exercise_codecs
+status = protocols.Status(t_us=0, events_generated=0, events_sent=0, events_dropped=0,
+                          events_queued=0, late_ticks=0, rx_errors=0, running=True)
+for fd in (False, True):
+    exercise_codecs(protocols.CanEncoder(board_id=0, fd=fd, step_us=100),
+                    protocols.CanDecoder(board_id=0, fd=fd), 100, status)
+"""
+
+
+def warm_numba_cache(cwd: Path, timeout_s: float = 300.0) -> None:
+    """Compile (or load) the board's numba kernels on this host, into numba's on-disk cache.
+
+    UML sees the same files, so its programs then load the kernels instead of compiling
+    them with slow system calls and hundreds of MB more memory: one short ``skinhil serve``
+    over ``loop://`` (model, neurons, serial codec) and the CAN codecs, classic and FD.
+    """
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [str(cwd)] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])}
+    for argv in ([sys.executable, "-m", "skinhil", "serve", "--port", "loop://",
+                  "--duration", "0.01", "--quiet"],
+                 [sys.executable, "-c", WARM_CACHE_CODE]):
+        subprocess.run(argv, cwd=cwd, env=env, check=True, timeout=timeout_s,
+                       stdin=subprocess.DEVNULL, capture_output=True)
 
 
 def in_uml() -> bool:
@@ -142,7 +189,9 @@ def _init_script(workdir: Path, modules: list[Path], command: list[str], cwd: Pa
         f"date +%s.%N > {q(str(workdir / 'started'))}",
         "mount -t proc proc /proc",
         "mount -t sysfs sysfs /sys",
-        "mount -t tmpfs tmpfs /dev/shm 2>/dev/null",
+        # UML's devtmpfs has no /dev/shm: without it every multiprocessing lock (joblib,
+        # scikit-learn) fails with ENOENT
+        "mkdir -p /dev/shm && mount -t tmpfs -o size=256m tmpfs /dev/shm",
         "export PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin",
         f"exec 3> {q(str(workdir / 'setup.log'))}",
     ]
