@@ -160,10 +160,13 @@ def test_fault_injection_is_survived_and_accounted(decoder_inf):
 @pytest.mark.vcan
 def test_online_accuracy_through_vcan_matches_offline():
     """Light (runs inside user-mode Linux): a small decoder trained here without noise,
-    27 stimuli at inf (decodable), then 100 at 10 dB (the issue's comparison)."""
+    27 stimuli at inf (decodable), then 27 at 10 dB. (100 stimuli at 10 dB took 5 minutes
+    inside UML, where the saturated 10 dB stream makes the board lag: online 0.000 over 94
+    scored stimuli against offline 0.000; see docs/receiver.md.) Offline at 10 dB is 0: no
+    onset is detected (test_online_accuracy_through_a_pty_matches_offline_at_10_db)."""
     decoder, offline = train_decoder(math.inf, reps=5, seed=0, rest_s=REST_S)
     wd = WindowDecoder(decoder)
-    for snr_db, n, ref in ((math.inf, 27, offline.accuracy), (10.0, N_STIMULI, 0.0)):
+    for snr_db, n, ref in ((math.inf, 27, offline.accuracy), (10.0, 27, 0.0)):
         bus = CanTransport("vcan0")
         receiver = Receiver(bus, wd)
         try:
