@@ -31,7 +31,7 @@ import numpy as np
 from skinhil.errors import ConfigError
 from skinhil.geometry import N_MASSES, N_SPRINGS, build_mesh
 from skinhil.mechanics_geometric import GeometricMechanics, max_stable_dt
-from skinhil.mechanics_linear import LinearMechanics, state_space
+from skinhil.mechanics_linear import LinearMechanics
 from skinhil.stimuli import Stimulus
 
 Mechanics = Literal["linear", "geometric"]
@@ -97,14 +97,14 @@ class SkinModel:
         self.fixed = self.mesh.fixed
         self.n_springs = N_SPRINGS
         self.n_masses = N_MASSES
-        self._a, _ = state_space(self.mesh, p.mass_kg, p.stiffness_n_per_m,
-                                 p.damping_n_s_per_m, p.tension_n)
 
     def max_dt_s(self) -> float:
         """Largest step (s) the chosen mechanics accepts (inf for the exact linear ZOH)."""
         if self.params.mechanics == "linear":
             return math.inf
-        return max_stable_dt(self._a)
+        p = self.params
+        return max_stable_dt(self.mesh, p.mass_kg, p.stiffness_n_per_m, p.damping_n_s_per_m,
+                             p.tension_n)
 
     def stepper(self, dt_s: float) -> SkinStepper:
         """A fresh fixed-step stepper at rest for real-time block stepping at ``dt_s`` (s)."""
