@@ -52,8 +52,8 @@ from skinhil.stimuli import Schedule, ScheduledStimulus
 log = logging.getLogger(__name__)
 
 HOUSEKEEPING_SLACK_S = 5e-4
-"""Work that is not part of a tick (extending the schedule) runs only when the next tick
-is due at least this far (s) ahead."""
+"""Work that is not part of a tick (extending the schedule, the live status callback) runs
+only when the next tick is due at least this far (s) ahead."""
 SWITCH_INTERVAL_S = 2e-4
 """Python's thread switch interval (s) while the board runs (default 5 ms): a transport's
 reader thread never holds the interpreter lock for longer than this against the tick."""
@@ -394,7 +394,9 @@ class Board:
                 self.clock.done()
                 if self.clock.slack_s() > HOUSEKEEPING_SLACK_S:
                     self.timeline.prepare(self.board_time_us() * 1e-6)
-                if on_second is not None and time.monotonic() >= next_report:
+                if on_second is not None and time.monotonic() >= next_report \
+                        and self.clock.slack_s() > HOUSEKEEPING_SLACK_S:
+                    # live status only in a tick's spare time (it waits for one)
                     next_report += report_period_s
                     on_second(self)
             self._finish()

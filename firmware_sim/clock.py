@@ -116,17 +116,29 @@ class TickClock:
         """Ticks measured so far."""
         return self._n
 
-    def lateness_s(self) -> np.ndarray:
-        """The recorded latenesses (s), oldest first (at most ``history`` of them)."""
-        n = min(self._n, len(self._lateness))
-        if self._n <= len(self._lateness):
-            return self._lateness[:n].copy()
-        i = self._n % len(self._lateness)
-        return np.concatenate([self._lateness[i:], self._lateness[:i]])
+    def lateness_s(self, last: int | None = None) -> np.ndarray:
+        """The recorded latenesses (s), oldest first: all kept (at most ``history``), or
+        only the ``last`` ones."""
+        size = len(self._lateness)
+        n = min(self._n, size if last is None else min(int(last), size))
+        if n <= 0:
+            return self._lateness[:0].copy()
+        end = self._n % size
+        if end == 0 and self._n:
+            end = size
+        start = end - n
+        if start >= 0:
+            return self._lateness[start:end].copy()
+        return np.concatenate([self._lateness[start:], self._lateness[:end]])
 
-    def lateness_percentiles_ms(self, qs: tuple[float, ...] = (50, 99)) -> dict[str, float]:
-        """Lateness percentiles and maximum, in ms (keys ``p50``, ``p99``, ``max``)."""
-        lat = self.lateness_s()
+    def lateness_percentiles_ms(self, qs: tuple[float, ...] = (50, 99),
+                                last: int | None = None) -> dict[str, float]:
+        """Lateness percentiles (over all kept ticks, or the ``last`` ones) and the maximum
+        over the whole run, in ms (keys ``p50``, ``p99``, ``max``).
+
+        Over all 60 000 ticks of a minute this takes about 8 ms: a live display inside the
+        tick loop must use ``last`` (1000 ticks: tens of µs)."""
+        lat = self.lateness_s(last)
         out = {f"p{q:g}": float(np.percentile(lat, q)) * 1e3 if lat.size else 0.0 for q in qs}
         out["max"] = self.max_lateness_s * 1e3
         return out

@@ -70,3 +70,16 @@ def test_history_keeps_the_newest_latenesses_in_order() -> None:
 def test_bad_period_is_refused() -> None:
     with pytest.raises(ValueError, match="tick_s"):
         TickClock(0.0)
+
+
+def test_recent_window_of_latenesses() -> None:
+    clock = TickClock(TICK_S, history=8)
+    clock.start(t0=time.monotonic() - 1.0)
+    for _ in range(11):  # wraps the history
+        clock.wait()
+        clock.done()
+    full, last3 = clock.lateness_s(), clock.lateness_s(last=3)
+    assert full.shape == (8,) and last3.shape == (3,)
+    assert np.array_equal(full[-3:], last3)
+    assert clock.lateness_s(last=100).shape == (8,)
+    assert clock.lateness_percentiles_ms(last=3)["p50"] == pytest.approx(last3[1] * 1e3)

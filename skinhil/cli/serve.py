@@ -19,6 +19,9 @@ from skinhil.cli.transport_args import add_transport_args, describe_transport, o
 from skinhil.errors import ConfigError
 from skinhil.stimuli import load_schedule
 
+LIVE_WINDOW_TICKS = 1000
+"""The live status's lateness p99 is over this many most recent ticks (its max is over the
+whole run): percentiles over the whole history inside the tick loop would stall it."""
 MAX_BOARD_ID = 15
 """Largest board id (the CAN layout reserves 4 bits for it)."""
 
@@ -88,7 +91,7 @@ def _config(args: argparse.Namespace) -> BoardConfig:
 
 def _live(board: Board) -> dict[str, Any]:
     c = board.counters
-    lat = board.clock.lateness_percentiles_ms()
+    lat = board.clock.lateness_percentiles_ms(last=LIVE_WINDOW_TICKS)
     return {"type": "status", "board_time_s": round(board.board_time_us() * 1e-6, 4),
             "generated": c.generated, "sent": c.sent, "dropped": c.dropped,
             "dropped_by": dict(c.dropped_by), "queued": len(board.fifo),
