@@ -15,6 +15,15 @@ _DROP_DAC = ["setpriv", "--bounding-set", "-dac_override,-dac_read_search",
              "--inh-caps", "-dac_override,-dac_read_search"]
 
 
+def _no_nice_prefix() -> list[str]:
+    """A command prefix without CAP_SYS_NICE (root) so --realtime is refused."""
+    if os.geteuid() != 0:
+        return []
+    if shutil.which("setpriv") is None:
+        pytest.fail("running as root: need setpriv (util-linux) to test a refused --realtime")
+    return ["setpriv", "--bounding-set", "-sys_nice", "--inh-caps", "-sys_nice"]
+
+
 def _start(argv: list[str]) -> subprocess.Popen[str]:
     return subprocess.Popen(argv, cwd=RUN_DIR, env=serve_env(), stdin=subprocess.DEVNULL,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -55,6 +64,8 @@ def test_serve_bad_input_errors(tmp_path, pty_pair) -> None:
         "can": (serve_argv("--can", "vcan9"),
                 "does not exist" if HAS_VCAN else "no SocketCAN support"),
         "board": (serve_argv("--port", "loop://", "--board-id", "99"), "--board-id"),
+        "realtime": (_no_nice_prefix() + serve_argv("--port", "loop://", "--realtime",
+                                                    "--duration", "0.1"), "real-time"),
     }
     try:
         procs = {name: _start(argv) for name, (argv, _) in cases.items()}
