@@ -1,6 +1,5 @@
 """Sweeps: the modal path equals the full simulation; local, in-process and Dask runs agree."""
 
-import time
 
 import numpy as np
 import pytest
@@ -8,7 +7,6 @@ import pytest
 from skinhil import SkinModel, SkinParams, paper_stimuli
 from skinhil.analysis import SweepSpec, information_measures, run_sweep
 from skinhil.analysis.modal_response import reduced_responses
-from skinhil.analysis.sweep import evaluate_point
 from skinhil.errors import ConfigError
 
 
@@ -28,15 +26,6 @@ def test_modal_responses_equal_skin_model(k: float, c: float) -> None:
 def test_modal_path_refuses_tension() -> None:
     with pytest.raises(ConfigError, match="tension"):
         reduced_responses(SkinParams(tension_n=0.1), paper_stimuli(), 0.5, 5e-4)
-
-
-def test_grid_point_cost_on_one_core() -> None:
-    params = SkinParams(stiffness_n_per_m=120.0, damping_n_s_per_m=0.02)
-    evaluate_point(params)  # warm caches
-    start = time.perf_counter()
-    for _ in range(5):
-        evaluate_point(params)
-    assert (time.perf_counter() - start) / 5 < 0.05
 
 
 def test_local_processes_and_dask_give_identical_results() -> None:

@@ -43,14 +43,14 @@ def test_a_stall_is_counted_and_the_ticks_behind_it_run_back_to_back() -> None:
     clock.done()
     assert clock.deadline_misses == 1
     assert clock.behind_s() > 5 * TICK_S
-    t = time.monotonic()
-    caught_up = 0
+    waits = []
     while clock.behind_s() > 0:  # late ticks do not sleep
+        t = time.monotonic()
         clock.wait()
+        waits.append(time.monotonic() - t)
         clock.done()
-        caught_up += 1
-    assert caught_up >= 5
-    assert time.monotonic() - t < 5 * TICK_S
+    assert len(waits) >= 5
+    assert sorted(waits)[len(waits) // 2] < TICK_S / 2  # median: robust to VM jitter
     assert clock.max_lateness_s >= 9 * TICK_S
     assert clock.lateness_percentiles_ms()["max"] == pytest.approx(clock.max_lateness_s * 1e3)
 
