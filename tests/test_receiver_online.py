@@ -160,34 +160,29 @@ def test_fault_injection_is_survived_and_accounted(decoder_inf):
 
 @pytest.mark.vcan
 def test_online_accuracy_through_vcan_matches_offline():
-    """Light (runs inside user-mode Linux): a small decoder trained here without noise,
-    27 stimuli at inf (decodable), then 27 at 10 dB. (100 stimuli at 10 dB took 5 minutes
-    inside UML, where the saturated 10 dB stream makes the board lag: online 0.000 over 94
-    scored stimuli against offline 0.000; see docs/receiver.md.) Offline at 10 dB is 0: no
-    onset is detected (test_online_accuracy_through_a_pty_matches_offline_at_10_db)."""
+    """Light (runs inside user-mode Linux): a small decoder trained here without noise, then
+    27 stimuli through vcan0. The 10 dB comparison is run through the pty only: a saturated
+    10 dB stream cannot be carried in real time inside UML (every CAN send is a slow system
+    call there; the board falls minutes behind and its last markers are still queued when it
+    stops), so scoring it there measures UML, not the receiver; see docs/receiver.md."""
     decoder, offline = train_decoder(math.inf, reps=5, seed=0, rest_s=REST_S)
-    wd = WindowDecoder(decoder)
+    n = 27
+    bus = CanTransport("vcan0")
     # UML has one slow virtual CPU: its board ticks run up to ~150 ms late, in bursts, so the
     # receiver waits that long for a step's events before it filters the step
-    uml_params = ReceiverParams(guard_s=0.5, max_guard_s=1.0)
-    for snr_db, n, ref in ((math.inf, 27, offline.accuracy), (10.0, 27, 0.0)):
-        bus = CanTransport("vcan0")
-        receiver = Receiver(bus, wd, uml_params)
-        try:
-            status, _, err = run_against_board(
-                receiver, serve_command(["--can", "vcan0"], stream_duration_s(n, REST_S),
-                                        snr_db, BOARD_SEED, REST_S))
-        finally:
-            bus.shutdown()
-        assert status == 0, err
-        sb = receiver.scoreboard
-        print(f"\nvcan {snr_db:g} dB: offline {ref:.3f}, online {sb.accuracy:.3f} over "
-              f"{sb.scored} stimuli ({sb.misses} missed, {sb.false_alarms} false alarms)")
-        # at 10 dB the stream saturates the 1 Mbit/s budget and UML's slow CAN sends leave
-        # the board far behind real time: its last markers are still queued when its 5 s
-        # final drain ends, and they are never sent
-        assert sb.scored >= (n - 1 if snr_db == math.inf else n // 2)
-        assert abs(sb.accuracy - ref) <= TOLERANCE
+    receiver = Receiver(bus, WindowDecoder(decoder), ReceiverParams(guard_s=0.5, max_guard_s=1.0))
+    try:
+        status, _, err = run_against_board(
+            receiver, serve_command(["--can", "vcan0"], stream_duration_s(n, REST_S), math.inf,
+                                    BOARD_SEED, REST_S))
+    finally:
+        bus.shutdown()
+    assert status == 0, err
+    sb = receiver.scoreboard
+    print(f"\nvcan inf dB: offline {offline.accuracy:.3f}, online {sb.accuracy:.3f} over "
+          f"{sb.scored} stimuli ({sb.misses} missed, {sb.false_alarms} false alarms)")
+    assert sb.scored >= n - 1
+    assert abs(sb.accuracy - offline.accuracy) <= TOLERANCE
 
 
 @pytest.mark.vcan
