@@ -75,6 +75,10 @@ def step_us(dt_s: float) -> int:
     return dt_us
 
 
+MAX_BLOCK_STEPS = 10_000
+"""Most steps the receiver filters in one block (1 s at 0.1 ms: 27 MB of PSP values)."""
+
+
 class OnsetWindows:
     """Events on board time → PSP bank and onset detector → decision windows (no decoder)."""
 
@@ -116,8 +120,19 @@ class OnsetWindows:
 
     def advance(self, t_us: int) -> list[Window]:
         """Process every step that starts before board time ``t_us`` (µs); return the windows
-        that became complete."""
+        that became complete.
+
+        A long jump (the host clock's estimate running ahead of a board that lags, or a long
+        silence) is processed in blocks of at most ``MAX_BLOCK_STEPS``, so memory stays
+        bounded whatever the jump.
+        """
         end_step = int(t_us // self.dt_us)
+        out: list[Window] = []
+        while end_step - self.next_step > MAX_BLOCK_STEPS:
+            out += self._advance_steps(self.next_step + MAX_BLOCK_STEPS)
+        return out + self._advance_steps(end_step)
+
+    def _advance_steps(self, end_step: int) -> list[Window]:
         n = end_step - self.next_step
         if n <= 0:
             return []
