@@ -102,11 +102,10 @@ class Stimulus:
 
     def profile(self, t_s: np.ndarray | float) -> np.ndarray:
         """The unitless Figure 1D time profile at times ``t_s`` (s)."""
-        t = np.asarray(t_s, dtype=float)
-        rel = t - self.onset_s
-        out = np.exp(-np.maximum(rel, 0.0) / self.decay_tau_s)
-        out[(rel < 0.0) | (t >= self.end_s)] = 0.0
-        return out
+        t = np.atleast_1d(np.asarray(t_s, dtype=float))
+        out = np.empty(t.shape)
+        _profile_into(out.ravel(), t.ravel(), self.onset_s, self.end_s, self.decay_tau_s)
+        return out.reshape(np.shape(t_s))
 
     def force_at(self, t_s: np.ndarray) -> np.ndarray:
         """Force on every mass at times ``t_s`` (s): (len(t_s), 77, 3) N."""
@@ -120,13 +119,26 @@ class Stimulus:
                       self.onset_s, self.end_s, self.decay_tau_s)
 
 
+@numba.njit(inline="always")
+def _profile_at(t: float, onset: float, end: float, tau: float) -> float:  # pragma: no cover
+    # the Figure 1D profile: exp(-(t - onset)/tau) during the indentation, 0 otherwise
+    return math.exp(-(t - onset) / tau) if onset <= t < end else 0.0
+
+
+@numba.njit(cache=True)
+def _profile_into(out: np.ndarray, t: np.ndarray, onset: float, end: float,
+                  tau: float) -> None:  # pragma: no cover - compiled
+    for k in range(t.shape[0]):
+        out[k] = _profile_at(t[k], onset, end, tau)
+
+
 @numba.njit(cache=True)
 def _add_profiled(out: np.ndarray, t: np.ndarray, pushed: np.ndarray, peak: np.ndarray,
                   onset: float, end: float, tau: float) -> None:  # pragma: no cover - compiled
-    # the same profile as Stimulus.profile, compiled: the board calls this every tick
+    # compiled because the board calls this every tick
     for k in range(t.shape[0]):
-        if onset <= t[k] < end:
-            scale = math.exp(-(t[k] - onset) / tau)
+        scale = _profile_at(t[k], onset, end, tau)
+        if scale != 0.0:
             for m in pushed:
                 for a in range(3):
                     out[k, m, a] += scale * peak[m, a]
