@@ -132,6 +132,9 @@ class BoardSummary:
     nacks: int
     rx_errors: int
     link_losses: int
+    markers_sent: int
+    markers_dropped: int
+    """Ground-truth markers lost because the link was gone (see :mod:`firmware_sim.counters`)."""
     units_sent: int
     """Bytes (serial) or frames (CAN) handed to the link."""
     wire_busy_s: float
@@ -194,7 +197,7 @@ class Board:
             self.link.shutdown()
         self.link = None
         self.counters.drop("link_down", self.fifo.clear())
-        self._markers.clear()
+        self._drop_markers()
         if not self.config.reconnect:
             raise TransportError(f"{exc}; start again, or use --reconnect to wait for the "
                                  "link to return") from None
@@ -235,9 +238,19 @@ class Board:
         fields = {f.name for f in dataclasses.fields(protocols.Status)}
         return protocols.Status(**{k: v for k, v in values.items() if k in fields})
 
-    def _marker(self, m: MarkerEvent) -> Any:
+    def _send_marker(self, link: BoardLink) -> None:
+        """Queue the oldest due ground-truth marker on the link and count it."""
+        m = self._markers.pop(0)
         phase = protocols.MarkerPhase.ONSET if m.phase == "onset" else protocols.MarkerPhase.END
-        return protocols.Marker(t_us=m.t_us, stimulus_id=m.stimulus_id, phase=phase)
+        link.queue_record(protocols.Marker(t_us=m.t_us, stimulus_id=m.stimulus_id, phase=phase))
+        self.counters.markers_sent += 1
+
+    def _drop_markers(self) -> None:
+        """The link is gone: the markers still due are lost, and counted."""
+        self.counters.markers_dropped += len(self._markers)
+        if self._markers:
+            log.warning("%d ground-truth markers lost with the link", len(self._markers))
+        self._markers.clear()
 
     # -- commands -----------------------------------------------------------------------
     def handle(self, cmd: Any) -> Any:
@@ -343,7 +356,7 @@ class Board:
             room = target - link.backlog_s()
             head = self.fifo.peek_time_us()
             while self._markers and (head is None or self._markers[0].t_us <= head):
-                link.queue_record(self._marker(self._markers.pop(0)))
+                self._send_marker(link)
             if head is None:
                 if self.running:
                     link.queue_events(self.fifo.pop(0), t_end_us)
@@ -437,12 +450,14 @@ class Board:
                 link.pump()
                 time.sleep(self.config.tick_s / 4)
             self.counters.drop("shutdown", self.fifo.clear())
-            self._markers.clear()
+            while self._markers:  # ground truth is never left behind with the events
+                self._send_marker(link)
             link.queue_record(self.status())
             link.drain(max(0.5, end - time.monotonic()))
             link.wait_wire_idle(1.0)
         except TransportError as exc:
             log.warning("link lost while finishing: %s", exc)
+            self._drop_markers()
 
     def summary(self, wall_s: float = 0.0, cpu_s: float = 0.0) -> BoardSummary:
         c = self.counters
@@ -454,5 +469,6 @@ class Board:
             deadline_misses=self.clock.deadline_misses,
             lateness_ms=self.clock.lateness_percentiles_ms(), commands=c.commands,
             nacks=c.nacks, rx_errors=c.rx_errors, link_losses=self.link_losses,
+            markers_sent=c.markers_sent, markers_dropped=c.markers_dropped,
             units_sent=self._units_sent + (link.units_sent if link else 0),
             wire_busy_s=self._wire_busy_s + (link.pacer.busy_s if link else 0.0))

@@ -14,6 +14,10 @@ Drop reasons:
 - ``link_down``: the link was gone (waiting to reconnect), including events that were
   queued when it went away;
 - ``shutdown``: still queued when the board stopped and the final drain timed out.
+
+Ground-truth markers are counted apart (``markers_sent``, ``markers_dropped``): they are not
+events and never wait behind dropped events; at shutdown the ones still due are sent after
+the FIFO is cleared, so only a missing link loses one.
 """
 
 from __future__ import annotations
@@ -34,6 +38,10 @@ class BoardCounters:
     """Host bytes or frames the board could not decode."""
     commands: int = 0
     nacks: int = 0
+    markers_sent: int = 0
+    """Ground-truth markers encoded into the transmit queue."""
+    markers_dropped: int = 0
+    """Ground-truth markers never sent: the link was gone (``link_down``) when they fell due."""
 
     @property
     def dropped(self) -> int:

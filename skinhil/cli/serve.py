@@ -109,7 +109,8 @@ def _summary_text(s: BoardSummary) -> str:
             f"{s.deadline_misses} deadline misses, lateness p50 {s.lateness_ms['p50']:.3f} ms "
             f"p99 {s.lateness_ms['p99']:.3f} ms max {s.lateness_ms['max']:.3f} ms; "
             f"CPU {100 * s.cpu_s / max(s.wall_s, 1e-9):.1f}% of one core; "
-            f"{s.commands} commands ({s.nacks} NACK), {s.link_losses} link losses")
+            f"{s.commands} commands ({s.nacks} NACK), {s.link_losses} link losses; "
+            f"{s.markers_sent} markers sent, {s.markers_dropped} lost with the link")
 
 
 def run(args: argparse.Namespace) -> int:
