@@ -1,27 +1,33 @@
 """The host's estimate of the board's clock, from when board-stamped data arrive.
 
 Every received item with a board time ``t`` (µs) that arrived at host monotonic time ``h``
-(s) bounds the offset ``h − t`` from above by the link delay: the estimate is the smallest
-such offset seen, relaxed upward by ``RELAX_PER_S`` per second so a board that falls
-behind real time is followed. ``board_now_us()`` is then the board time the host believes
-has been reached (a lower bound while the link delay is at least its minimum).
+(s) bounds the offset ``h − t`` from above by the link delay. The estimate is the smallest
+such offset among the items of the last ``WINDOW_S`` seconds of host time (the newest item
+always counts): short enough that a board running slower than real time (a loaded host,
+user-mode Linux) is followed within ``WINDOW_S`` times its lag rate, long enough to take
+the fastest delivery of several status/SYNC periods. Between items the estimate runs on
+the host clock, so ``board_now_us()`` keeps advancing through a silent stream; when the
+board stalls, it runs ahead by the stall, which the receiver's board-time guard absorbs.
 """
 
 from __future__ import annotations
 
 import math
 import time
+from collections import deque
 
-RELAX_PER_S = 1e-3
-"""Upward drift (s per s) of the offset estimate, so a slower board is followed."""
+WINDOW_S = 0.25
+"""Host seconds of observations whose smallest offset is the estimate."""
 
 
 class BoardClock:
     """Map host monotonic time (s) ↔ board time (µs)."""
 
-    def __init__(self) -> None:
+    def __init__(self, window_s: float = WINDOW_S) -> None:
+        self.window_s = float(window_s)
         self.offset_s = math.inf
-        self._last_update_s = 0.0
+        self._recent: deque[tuple[float, float]] = deque()
+        """(host time s, offset s) with increasing offsets: a sliding-window minimum."""
 
     @property
     def synced(self) -> bool:
@@ -31,10 +37,14 @@ class BoardClock:
     def observe(self, board_t_us: int, host_s: float | None = None) -> None:
         """A board-stamped item (time ``board_t_us``) arrived at host time ``host_s``."""
         h = time.monotonic() if host_s is None else host_s
-        if self.synced:
-            self.offset_s += RELAX_PER_S * max(0.0, h - self._last_update_s)
-        self._last_update_s = h
-        self.offset_s = min(self.offset_s, h - board_t_us * 1e-6)
+        offset = h - board_t_us * 1e-6
+        recent = self._recent
+        while recent and recent[-1][1] >= offset:
+            recent.pop()
+        recent.append((h, offset))
+        while recent[0][0] < h - self.window_s:
+            recent.popleft()
+        self.offset_s = recent[0][1]
 
     def board_now_us(self, host_s: float | None = None) -> int | None:
         """Board time (µs) estimated now; None before any observation."""
