@@ -20,7 +20,7 @@ from pathlib import Path
 
 from firmware_sim.timeline import DEFAULT_REST_S
 from skinhil.cli.listen import LivePrinter, class_names, print_summary, summary
-from skinhil.cli.options import snr_value
+from skinhil.cli.options import DECODE_SNR_DB, snr_value
 from skinhil.cli.train import print_report
 from skinhil.errors import ConfigError
 from skinhil.receiver import Receiver
@@ -29,9 +29,6 @@ from skinhil.receiver.pty_link import PtyMasterTransport
 from skinhil.receiver.session import run_against_board, serve_command
 from skinhil.receiver.training import train_decoder
 
-DEFAULT_SNR_DB = 40.0
-"""Demo noise level (dB): noisy, yet the force, not the noise, drives the spikes (below
-~24 dB the measured-power noise runs away and nothing can be decoded; see docs/receiver.md)."""
 DEFAULT_DURATION_S = 20.0
 DEMO_REST_S = DEFAULT_REST_S
 """Rest (s) after each stimulus: the board's default."""
@@ -48,8 +45,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "pair, play a random sequence of the 9 direction conditions, print each "
                     "online decision and end with accuracy, latency and loss figures. Trains "
                     "and caches a model on first use.")
-    p.add_argument("--snr-db", type=snr_value, default=DEFAULT_SNR_DB, metavar="DB",
-                   help=f"neuron noise SNR in dB, 'inf' for none (default: {DEFAULT_SNR_DB:g})")
+    p.add_argument("--snr-db", type=snr_value, default=DECODE_SNR_DB, metavar="DB",
+                   help=f"neuron noise SNR in dB, 'inf' for none (default: {DECODE_SNR_DB:g})")
     p.add_argument("--duration", dest="duration_s", type=float, default=DEFAULT_DURATION_S,
                    metavar="SECONDS", help=f"board time to play (default: "
                                            f"{DEFAULT_DURATION_S:g})")

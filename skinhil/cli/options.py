@@ -8,6 +8,12 @@ import math
 from skinhil.errors import ConfigError
 from skinhil.skin import SkinModel, SkinParams
 
+DECODE_SNR_DB = 40.0
+"""Default noise level (dB) of ``skinhil train`` and ``skinhil demo``: noisy, yet the force,
+not the noise, drives the spikes. Below ~24 dB the measured-power noise of the model runs
+away (``skinhil/neurons.py``) and at 10 dB no stimulus onset can be detected, so no decoder
+can be trained there (see docs/receiver.md)."""
+
 
 def snr_value(text: str) -> float:
     """argparse type: an SNR in dB, or 'inf' for no noise."""

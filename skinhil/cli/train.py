@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 
 from firmware_sim.timeline import DEFAULT_REST_S
-from skinhil.cli.options import snr_value
+from skinhil.cli.options import DECODE_SNR_DB, snr_value
 from skinhil.errors import ConfigError
 from skinhil.receiver.training import BIN_S, WINDOW_S, TrainingReport, train_decoder
 
@@ -27,8 +27,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "(.npz + JSON metadata, no pickle). Train at the SNR and rest of the "
                     "board you will decode.")
     p.add_argument("--out", type=Path, required=True, metavar="NPZ", help="decoder file")
-    p.add_argument("--snr-db", type=snr_value, default=10.0, metavar="DB",
-                   help="neuron noise SNR in dB, 'inf' for none (default: 10)")
+    p.add_argument("--snr-db", type=snr_value, default=DECODE_SNR_DB, metavar="DB",
+                   help="neuron noise SNR in dB, 'inf' for none (default: "
+                        f"{DECODE_SNR_DB:g}; below ~24 dB the model's noise hides the "
+                        "stimulus onsets)")
     p.add_argument("--reps", type=int, default=50,
                    help="stimuli per condition on average (9 x reps in all; default: 50)")
     p.add_argument("--rest", dest="rest_s", type=float, default=DEFAULT_REST_S,
