@@ -6,8 +6,9 @@ labelled by the marker they match; accuracy = correct / scored markers under the
 :mod:`skinhil.receiver.scoring` (missed onsets count as wrong, false alarms are reported but
 not scored), offline and online.
 
-Runs: 100 stimuli at 10 dB (the issue's test) and 100 at 40 dB (where decoding works), with
-0.05 s rests (0.3 s per stimulus, ~31 s of real time per run), and a short fault run.
+Runs: 100 stimuli at 10 dB (the issue's test) through the pty and through vcan0, 100 at 40 dB
+through the pty and 27 without noise through vcan0 (where decoding works), with 0.05 s rests
+(0.3 s per stimulus, ~31 s of real time per 100), and short fault runs.
 """
 
 from __future__ import annotations
@@ -24,7 +25,6 @@ from skinhil.receiver import (
     FaultParams,
     FaultyTransport,
     Receiver,
-    ReceiverParams,
     SessionRecorder,
     WindowDecoder,
 )
@@ -158,33 +158,52 @@ def test_fault_injection_is_survived_and_accounted(decoder_inf):
     assert sb.scored - sb.correct <= sb0.scored - sb0.correct + hit
 
 
-@pytest.mark.vcan
-def test_online_decisions_through_vcan():
-    """Light (runs inside user-mode Linux): a small decoder trained here without noise, then
-    27 stimuli through vcan0. The 10 dB comparison is run through the pty only: a saturated
-    10 dB stream cannot be carried in real time inside UML (every CAN send is a slow system
-    call there; the board falls minutes behind and its last markers are still queued when it
-    stops), so scoring it there measures UML, not the receiver; see docs/receiver.md."""
-    decoder, offline = train_decoder(math.inf, reps=5, seed=0, rest_s=REST_S)
-    n = 27
-    bus = CanTransport("vcan0")
-    # UML has one slow virtual CPU: its board ticks run up to ~150 ms late, in bursts, so the
-    # receiver waits that long for a step's events before it filters the step
-    receiver = Receiver(bus, WindowDecoder(decoder), ReceiverParams(guard_s=0.5, max_guard_s=1.0))
+def run_vcan(decoder: WindowDecoder, snr_db: float, n_stimuli: int,
+             bitrate: int = 1_000_000) -> Receiver:
+    bus = CanTransport("vcan0", bitrate=bitrate)
+    receiver = Receiver(bus, decoder)
     try:
         status, _, err = run_against_board(
-            receiver, serve_command(["--can", "vcan0"], stream_duration_s(n, REST_S), math.inf,
-                                    BOARD_SEED, REST_S))
+            receiver, serve_command(["--can", "vcan0", "--bitrate", str(bitrate)],
+                                    stream_duration_s(n_stimuli, REST_S), snr_db, BOARD_SEED,
+                                    REST_S))
     finally:
         bus.shutdown()
     assert status == 0, err
+    return receiver
+
+
+@pytest.mark.vcan
+def test_online_accuracy_through_vcan_matches_offline_at_10_db():
+    """The issue's test through vcan0. The 10 dB stream saturates any link; inside
+    user-mode Linux (where this host's vcan0 lives) every CAN send is a slow system call,
+    about 3,400 frames/s for the board and receiver together, so the bus runs at 125 kbit/s
+    (~960 frames/s; a common CAN rate) and the board drops the excess as ``fifo_full``.
+    Light: a decoder trained without noise (at 10 dB the onset detector finds next to
+    nothing, so the decoder hardly matters)."""
+    decoder, _ = train_decoder(math.inf, reps=5, seed=0, rest_s=REST_S)
+    offline_windows = stream_windows(N_STIMULI, 10.0, REST_S, seed=1, balanced=False)
+    _, offline = fit_windows(offline_windows)
+    receiver = run_vcan(WindowDecoder(decoder), 10.0, N_STIMULI, bitrate=125_000)
+    print(describe("vcan", receiver, offline))
     sb = receiver.scoreboard
-    print(f"\nvcan inf dB: offline {offline.accuracy:.3f}, online {sb.accuracy:.3f} over "
-          f"{sb.scored} stimuli ({sb.misses} missed, {sb.false_alarms} false alarms)")
-    assert sb.scored >= n - 1  # every ground-truth marker came through vcan0
-    # The accuracy is printed, not asserted: inside UML it ranged from 0.48 to 1.00 between
-    # runs of this same test (decisions detected late while the board lags behind real
-    # time), so it measures UML's scheduling, not the receiver. Open in docs/receiver.md.
+    assert sb.scored >= N_STIMULI - 1  # every ground-truth marker came through vcan0
+    assert abs(sb.accuracy - offline.accuracy) <= TOLERANCE
+
+
+@pytest.mark.vcan
+def test_online_accuracy_through_vcan_matches_offline_without_noise():
+    """Where decoding works: 27 noise-free stimuli through vcan0 against the decoder's own
+    cross-validated accuracy, same bound as the 40 dB pty test."""
+    decoder, offline = train_decoder(math.inf, reps=5, seed=0, rest_s=REST_S)
+    n = 27
+    receiver = run_vcan(WindowDecoder(decoder), math.inf, n)
+    print(describe("vcan", receiver, offline))
+    sb = receiver.scoreboard
+    assert sb.scored >= n - 1
+    p = offline.accuracy
+    se = math.sqrt(p * (1 - p) * (1 / sb.scored + 1 / offline.markers))
+    assert abs(sb.accuracy - p) <= max(TOLERANCE, 2 * se)
 
 
 @pytest.mark.vcan
