@@ -15,7 +15,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(__file__))
-from machine import describe, pin_one_core  # noqa: E402
+from machine import describe, load_average, pin_one_core  # noqa: E402
 
 pin_one_core()
 
@@ -59,13 +59,14 @@ def trials_wall_s() -> float:
 
 def main() -> None:
     print(describe())
-    print(f"best of {REPEATS} runs each")
+    print(f"best of {REPEATS} runs each; {load_average()}", flush=True)
     lin = real_time_factor("linear")
-    print(f"real-time factor, linear mechanics:    {lin:6.1f}x  (target >= 20x)")
+    print(f"real-time factor, linear mechanics:    {lin:6.1f}x  (target >= 20x)", flush=True)
     geo = real_time_factor("geometric")
-    print(f"real-time factor, geometric mechanics: {geo:6.1f}x  (target >= 5x)")
+    print(f"real-time factor, geometric mechanics: {geo:6.1f}x  (target >= 5x)", flush=True)
     wall = trials_wall_s()
     print(f"450 trials x 0.5 s at dt 0.1 ms with spikes: {wall:5.2f} s  (target <= 10 s)")
+    print(load_average())
 
 
 if __name__ == "__main__":

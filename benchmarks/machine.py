@@ -28,6 +28,12 @@ def describe() -> str:
             f"command: {' '.join([os.path.basename(sys.executable)] + sys.argv)}")
 
 
+def load_average() -> str:
+    """The machine's 1, 5 and 15 minute load averages (all cores; this run included)."""
+    la = os.getloadavg()
+    return f"load average {la[0]:.2f} {la[1]:.2f} {la[2]:.2f} on {os.cpu_count()} cores"
+
+
 def pin_one_core() -> None:
     """Run on one core (the first allowed) with single-threaded BLAS, where the OS allows."""
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):

@@ -97,18 +97,26 @@ def sensor_matrix(mesh: Mesh, stiffness_n_per_m: float) -> np.ndarray:
     return out
 
 
-def sparse_rows(dense: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Row-wise sparse form of ``dense``: column indices and values, padded with (0, 0.0),
-    each (width, n_rows) so that a kernel can sweep all rows for each slot."""
-    width = max(1, int(np.max(np.count_nonzero(dense, axis=1))))
-    idx = np.zeros((dense.shape[0], width), dtype=np.int64)
-    val = np.zeros((dense.shape[0], width))
-    for r in range(dense.shape[0]):
-        cols = np.flatnonzero(dense[r])
-        idx[r, : cols.size] = cols
-        val[r, : cols.size] = dense[r, cols]
-    return np.ascontiguousarray(idx.T), np.ascontiguousarray(val.T)
+def spring_slots(mesh: Mesh, stiffness_n_per_m: float) -> tuple[np.ndarray, np.ndarray,
+                                                                   np.ndarray]:
+    """The sensor map in spring-vector form: ``k·e`` (3, n_springs) N/m and, per spring, the
+    offsets of its first and second mass's x in the free displacement vector extended by
+    three zeros, which stand for every fixed mass.
 
+    Spring ``s`` then reads ``Σ_a ke[a, s]·(q[jj[s] + a] − q[ii[s] + a])`` (N): the same force
+    as row ``s`` of :func:`sensor_matrix`, from 6 reads instead of a sparse row.
+    """
+    e, _ = spring_frames(mesh)
+    slot = np.full(mesh.positions.shape[0], 3 * mesh.free.size, dtype=np.int64)
+    slot[mesh.free] = 3 * np.arange(mesh.free.size)
+    ke = np.ascontiguousarray((stiffness_n_per_m * e).T)
+    return ke, slot[mesh.springs[:, 0]], slot[mesh.springs[:, 1]]
+
+
+ModalOperands = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                      np.ndarray, np.ndarray, np.ndarray]
+"""``LinearMechanics.modal_operands``: Φ, Φᵀ, per-mode Ad and Bd, k·e, the spring slots ii
+and jj, the free degrees of freedom, the modal state η."""
 
 TINY = 1e-150
 """State components below this are flushed to zero: a decaying state would otherwise reach
@@ -116,13 +124,14 @@ subnormal numbers, which are ~100x slower on x86."""
 
 
 @numba.njit(inline="always", fastmath=True)
-def _sensor_forces(cy_idx: np.ndarray, cy_val: np.ndarray, q: np.ndarray,
+def _spring_forces(ke: np.ndarray, ii: np.ndarray, jj: np.ndarray, q: np.ndarray,
                    row: np.ndarray) -> None:  # pragma: no cover - compiled
-    # cy_idx/cy_val are (width, n_springs): the inner loop runs over independent springs
-    row[:] = 0.0
-    for w in range(cy_idx.shape[0]):
-        for s in range(cy_idx.shape[1]):
-            row[s] += cy_val[w, s] * q[cy_idx[w, s]]
+    # row[s] = k eᵀ(x_j − x_i) (N) from q, the free displacements (m) plus three zeros
+    for s in range(row.shape[0]):
+        i = ii[s]
+        j = jj[s]
+        row[s] = (ke[0, s] * (q[j] - q[i]) + ke[1, s] * (q[j + 1] - q[i + 1])
+                  + ke[2, s] * (q[j + 2] - q[i + 2]))
 
 
 @numba.njit(inline="always", fastmath=True)
@@ -137,13 +146,16 @@ def _add_input(forces: np.ndarray, dofs: np.ndarray, table: np.ndarray,
 
 
 @numba.njit(cache=True, fastmath=True)
-def _advance_kernel(ad: np.ndarray, bd_t: np.ndarray, cy_idx: np.ndarray, cy_val: np.ndarray,
-                    x: np.ndarray, forces: np.ndarray, dofs: np.ndarray,
+def _advance_kernel(ad: np.ndarray, bd_t: np.ndarray, ke: np.ndarray, ii: np.ndarray,
+                    jj: np.ndarray, x: np.ndarray, forces: np.ndarray, dofs: np.ndarray,
                     out: np.ndarray) -> None:  # pragma: no cover - compiled
     flat = forces.reshape(forces.shape[0], -1)
     n_state = x.shape[0]
+    n = dofs.shape[0]
+    q = np.zeros(n + 3)
     for k in range(flat.shape[0]):
-        _sensor_forces(cy_idx, cy_val, x, out[k])
+        q[:n] = x[:n]
+        _spring_forces(ke, ii, jj, q, out[k])
         xn = ad @ x
         _add_input(flat[k], dofs, bd_t, xn)
         for i in range(n_state):
@@ -151,22 +163,23 @@ def _advance_kernel(ad: np.ndarray, bd_t: np.ndarray, cy_idx: np.ndarray, cy_val
 
 
 @numba.njit(cache=True, fastmath=True)
-def _advance_modal_kernel(phi: np.ndarray, mad: np.ndarray, mbd: np.ndarray,
-                          cy_idx: np.ndarray, cy_val: np.ndarray, eta: np.ndarray,
-                          forces: np.ndarray, dofs: np.ndarray,
-                          out: np.ndarray) -> None:  # pragma: no cover - compiled
+def _advance_modal_kernel(forces: np.ndarray, out: np.ndarray, phi: np.ndarray,
+                          phi_t: np.ndarray, mad: np.ndarray, mbd: np.ndarray, ke: np.ndarray,
+                          ii: np.ndarray, jj: np.ndarray, dofs: np.ndarray,
+                          eta: np.ndarray) -> None:  # pragma: no cover - compiled
+    # forces (n, 77, 3) N → out (n, 338) N; the rest are LinearMechanics.modal_operands
     flat = forces.reshape(forces.shape[0], -1)
     n_modes = eta.shape[1]
     g = np.empty(n_modes)
-    q = np.empty(n_modes)
+    q = np.zeros(n_modes + 3)
     for k in range(flat.shape[0]):
-        pos = eta[0]
-        for i in range(n_modes):
-            acc = 0.0
-            for m in range(n_modes):
-                acc += phi[i, m] * pos[m]
-            q[i] = acc
-        _sensor_forces(cy_idx, cy_val, q, out[k])
+        # physical displacements q = Φ η (m), column by column
+        q[:n_modes] = 0.0
+        for m in range(n_modes):
+            pos = eta[0, m]
+            for i in range(n_modes):
+                q[i] += phi_t[m, i] * pos
+        _spring_forces(ke, ii, jj, q, out[k])
         g[:] = 0.0
         _add_input(flat[k], dofs, phi, g)
         for m in range(n_modes):
@@ -213,18 +226,24 @@ class LinearMechanics:
         self.a, self.b = a, b
         self.ad, self.bd = zoh(a, b, dt_s)
         self.cy = sensor_matrix(mesh, stiffness_n_per_m)
-        self.cy_idx, self.cy_val = sparse_rows(self.cy)
+        self.ke, self.ii, self.jj = spring_slots(mesh, stiffness_n_per_m)
         self.dofs = free_dofs(mesh)
         self.bd_t = np.ascontiguousarray(self.bd.T)
         self.dt_s = dt_s
         self.x = np.zeros(a.shape[0])
         self.modal = tension_n == 0.0
+        self.modal_operands: ModalOperands | None = None
+        """What the compiled modal step takes after the forces and the output (None when
+        not modal); their contents are the stepper's state, updated in place."""
         n = self.dofs.size
         if self.modal:
             k_free = -a[n:, :n] * mass_kg
             self.phi, self.mad, self.mbd = modal_form(
                 k_free, mass_kg, damping_n_s_per_m / stiffness_n_per_m, dt_s)
+            self.phi_t = np.ascontiguousarray(self.phi.T)
             self.eta = np.zeros((2, n))
+            self.modal_operands = (self.phi, self.phi_t, self.mad, self.mbd, self.ke, self.ii,
+                                   self.jj, self.dofs, self.eta)
 
     def reset(self) -> None:
         """Back to rest: zero displacement and velocity."""
@@ -246,11 +265,10 @@ class LinearMechanics:
         """
         out = np.empty((forces_n.shape[0], self.cy.shape[0]))
         forces = np.ascontiguousarray(forces_n, dtype=np.float64)
-        if self.modal:
-            _advance_modal_kernel(self.phi, self.mad, self.mbd, self.cy_idx, self.cy_val,
-                                  self.eta, forces, self.dofs, out)
+        if self.modal_operands is not None:
+            _advance_modal_kernel(forces, out, *self.modal_operands)
         else:
-            _advance_kernel(self.ad, self.bd_t, self.cy_idx, self.cy_val, self.x, forces,
+            _advance_kernel(self.ad, self.bd_t, self.ke, self.ii, self.jj, self.x, forces,
                             self.dofs, out)
         return out
 

@@ -43,7 +43,12 @@ import numpy as np
 
 from skinhil.errors import ConfigError
 from skinhil.events import EVENT_DTYPE
-from skinhil.rng import next_normal_pair, seed_states
+from skinhil.rng import fill_normal_pairs, seed_states
+
+KernelOperands = tuple[np.ndarray, np.ndarray, float, float, float, float, float, float, float,
+                       np.ndarray, np.ndarray]
+"""``NeuronPopulation.kernel_operands()``: v, u, a, b, c, d, K, v_peak, noise ratio, streams,
+run-away counts."""
 
 BLOWUP_RMS_MV = 1e4
 """Population RMS of u (mV) beyond which a trial counts as run away (see module docstring)."""
@@ -87,55 +92,72 @@ def noise_power_ratio(snr_db: float) -> float:
     return 0.0 if value == math.inf else 10.0 ** (-value / 10.0)
 
 
+@numba.njit(inline="always")
+def _euler_step(v: np.ndarray, u: np.ndarray, current: np.ndarray, dt_ms: float, a: float,
+                b: float, gain: float) -> None:  # pragma: no cover - compiled
+    # step 1 for one trial's row: v (mV), u, current (N) over dt_ms (ms), in place
+    for i in range(v.shape[0]):
+        vv = v[i]
+        uu = u[i]
+        v[i] = vv + dt_ms * (0.04 * vv * vv + 5.0 * vv + 140.0 - uu + gain * current[i])
+        u[i] = uu + dt_ms * a * (b * vv - uu)
+
+
+@numba.njit(inline="always")
+def _power(v: np.ndarray, u: np.ndarray) -> tuple[float, float]:  # pragma: no cover
+    # Σ v² and Σ u² (mV²) over the row, summed in channel order
+    pv = 0.0
+    pu = 0.0
+    for i in range(v.shape[0]):
+        pv += v[i] * v[i]
+        pu += u[i] * u[i]
+    return pv, pu
+
+
+@numba.njit(inline="always")
+def _noise_and_threshold(v: np.ndarray, u: np.ndarray, zv: np.ndarray, zu: np.ndarray,
+                         sv: float, su: float, c: float, d: float, v_peak: float,
+                         spikes: np.ndarray) -> None:  # pragma: no cover - compiled
+    # steps 2 and 3 for one row: add σ·N(0,1) (mV) from zv, zu, then spike and reset where
+    # v ≥ v_peak (branch-free: a spike's branch would be mispredicted at noisy rates)
+    for i in range(v.shape[0]):
+        vv = v[i] + sv * zv[i]
+        uu = u[i] + su * zu[i]
+        fired = vv >= v_peak
+        spikes[i] = fired
+        v[i] = c if fired else vv
+        u[i] = uu + d if fired else uu
+
+
 @numba.njit(cache=True, fastmath=False)
-def _izhikevich_kernel(v: np.ndarray, u: np.ndarray, current: np.ndarray, dt_ms: float,
-                       a: float, b: float, c: float, d: float, gain: float, v_peak: float,
-                       noise_ratio: float, rng: np.ndarray, blowups: np.ndarray,
-                       spikes: np.ndarray) -> None:  # pragma: no cover - compiled
+def _izhikevich_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray, v: np.ndarray,
+                       u: np.ndarray, a: float, b: float, c: float, d: float, gain: float,
+                       v_peak: float, noise_ratio: float, rng: np.ndarray,
+                       blowups: np.ndarray) -> None:  # pragma: no cover - compiled
+    # current (n_steps, 1 or n_batch, n) N over steps of dt_ms (ms) → spikes (n_steps,
+    # n_batch, n); the rest are NeuronPopulation.kernel_operands()
     n_steps, n_batch, n = spikes.shape
     shared_input = current.shape[1] == 1
-    state = np.empty(4, dtype=np.uint64)  # the trial's stream, local while in use
+    zv = np.zeros(n)  # this step's normals, drawn before use; zero without noise
+    zu = np.zeros(n)
     for k in range(n_steps):
         for bb in range(n_batch):
-            cb = 0 if shared_input else bb
-            pv = 0.0
-            pu = 0.0
-            for i in range(n):
-                vv = v[bb, i]
-                uu = u[bb, i]
-                drive = gain * current[k, cb, i]
-                vn = vv + dt_ms * (0.04 * vv * vv + 5.0 * vv + 140.0 - uu + drive)
-                un = uu + dt_ms * a * (b * vv - uu)
-                v[bb, i] = vn
-                u[bb, i] = un
-                pv += vn * vn
-                pu += un * un
+            vb = v[bb]
+            ub = u[bb]
+            _euler_step(vb, ub, current[k, 0 if shared_input else bb], dt_ms, a, b, gain)
+            pv, pu = _power(vb, ub)
             if not (pu <= n * BLOWUP_RMS_MV * BLOWUP_RMS_MV and pv < math.inf):
                 # the measured-power noise has run away: this trial starts again from rest
                 blowups[bb] += 1
-                for i in range(n):
-                    v[bb, i] = c
-                    u[bb, i] = b * c
+                vb[:] = c
+                ub[:] = b * c
                 pv = n * c * c
                 pu = n * (b * c) * (b * c)
             sv = math.sqrt(pv / n * noise_ratio)
             su = math.sqrt(pu / n * noise_ratio)
             if noise_ratio > 0.0:
-                state[:] = rng[bb]
-            for i in range(n):
-                vv = v[bb, i]
-                if noise_ratio > 0.0:
-                    zv, zu = next_normal_pair(state)
-                    vv += sv * zv
-                    u[bb, i] += su * zu
-                fired = vv >= v_peak
-                spikes[k, bb, i] = fired
-                if fired:
-                    vv = c
-                    u[bb, i] += d
-                v[bb, i] = vv
-            if noise_ratio > 0.0:
-                rng[bb] = state
+                fill_normal_pairs(rng[bb], zv, zu)
+            _noise_and_threshold(vb, ub, zv, zu, sv, su, c, d, v_peak, spikes[k, bb])
 
 
 class NeuronPopulation:
@@ -191,11 +213,18 @@ class NeuronPopulation:
                               f"(n_steps, {self.n_channels}) or "
                               f"(n_steps, {self._n_batch}, {self.n_channels})")
         spikes = np.empty((cur.shape[0], self._n_batch, self.n_channels), dtype=np.bool_)
-        p = self.params
-        _izhikevich_kernel(self.v, self.u, np.ascontiguousarray(cur), dt_s * 1e3, p.a, p.b,
-                           p.c_mv, p.d, p.gain, p.v_peak_mv, self._noise_ratio, self._rng,
-                           self.blowups, spikes)
+        _izhikevich_kernel(np.ascontiguousarray(cur), dt_s * 1e3, spikes,
+                           *self.kernel_operands())
         return spikes[:, 0, :] if self.batch is None else spikes
+
+    def kernel_operands(self) -> KernelOperands:
+        """What the compiled step takes after the current, the step (ms) and the spikes: the
+        membranes v (mV) and u, the parameters a, b, c (mV), d, K, v_peak (mV), the noise
+        power ratio, the noise streams and the run-away counts; the arrays are updated in
+        place."""
+        p = self.params
+        return (self.v, self.u, p.a, p.b, p.c_mv, p.d, p.gain, p.v_peak_mv, self._noise_ratio,
+                self._rng, self.blowups)
 
 
 def simulate_spikes(forces_n: np.ndarray, dt_s: float, snr_db: float = math.inf,

@@ -9,7 +9,9 @@ real time, 1.5 G for the 450-trial benchmark), so the kernels draw their own:
 - standard normals by Marsaglia & Tsang's 128-layer ziggurat (J. Stat. Softw. 5(8), 2000),
   taking the layer and the signed value from disjoint bits of the word, so they are
   independent (Doornik 2005's fix): :func:`next_normal` uses 7 + 32 bits of a word,
-  :func:`next_normal_pair` 7 + 25 bits of each half, two normals per word.
+  :func:`next_normal_pair` 7 + 25 bits of each half, two normals per word;
+- :func:`fill_normal_pairs` draws a row of pairs with the state kept in registers
+  (:func:`xoshiro_step`), which a per-draw array state would chain through memory.
 """
 
 from __future__ import annotations
@@ -65,9 +67,14 @@ def _rotl(x: np.uint64, k: int) -> np.uint64:  # pragma: no cover - compiled
 
 
 @numba.njit(inline="always")
-def next_u64(state: np.ndarray) -> np.uint64:  # pragma: no cover - compiled
-    """Next 64-bit word of the xoshiro256+ stream held in ``state`` (4 uint64, updated)."""
-    s0, s1, s2, s3 = state[0], state[1], state[2], state[3]
+def xoshiro_step(s0: np.uint64, s1: np.uint64, s2: np.uint64,
+                 s3: np.uint64) -> tuple[np.uint64, np.uint64, np.uint64, np.uint64,
+                                         np.uint64]:  # pragma: no cover - compiled
+    """One xoshiro256+ step on a state held in four scalars: ``(word, s0, s1, s2, s3)``.
+
+    Loops that draw many words keep the state in these scalars (registers) rather than in
+    an array, whose stores and reloads would otherwise chain every draw through memory.
+    """
     result = s0 + s3
     t = s1 << np.uint64(17)
     s2 ^= s0
@@ -76,6 +83,13 @@ def next_u64(state: np.ndarray) -> np.uint64:  # pragma: no cover - compiled
     s0 ^= s3
     s2 ^= t
     s3 = _rotl(s3, 45)
+    return result, s0, s1, s2, s3
+
+
+@numba.njit(inline="always")
+def next_u64(state: np.ndarray) -> np.uint64:  # pragma: no cover - compiled
+    """Next 64-bit word of the xoshiro256+ stream held in ``state`` (4 uint64, updated)."""
+    result, s0, s1, s2, s3 = xoshiro_step(state[0], state[1], state[2], state[3])
     state[0], state[1], state[2], state[3] = s0, s1, s2, s3
     return result
 
@@ -124,22 +138,50 @@ def next_normal(state: np.ndarray) -> float:  # pragma: no cover - compiled
 
 
 @numba.njit(inline="always")
-def normal_from_bits(bits: np.uint64, state: np.ndarray) -> float:  # pragma: no cover
-    """A standard normal from 32 random ``bits`` (7 for the layer, 25 for the signed value);
-    the rare rejections draw more words from ``state``."""
+def _normal_from_bits(bits: np.uint64, s0: np.uint64, s1: np.uint64, s2: np.uint64,
+                      s3: np.uint64, spill: np.ndarray) -> tuple[
+                          float, np.uint64, np.uint64, np.uint64, np.uint64]:  # pragma: no cover
+    # a standard normal from 32 random bits (7 for the layer, 25 for the signed value) and
+    # the stream state, updated; the rare rejections draw more words through ``spill``
     iz = np.int64(bits & np.uint64(127))
     hz = np.int64((bits >> np.uint64(7)) & np.uint64(0x1FFFFFF)) - 16777216
     if abs(hz) < ZIG_KN25[iz]:
-        return hz * ZIG_WN25[iz]
-    return _normal_slow(state, hz * 128, iz)
+        return hz * ZIG_WN25[iz], s0, s1, s2, s3
+    spill[0], spill[1], spill[2], spill[3] = s0, s1, s2, s3
+    z = _normal_slow(spill, hz * 128, iz)
+    return z, spill[0], spill[1], spill[2], spill[3]
+
+
+@numba.njit(inline="always")
+def normal_pair(s0: np.uint64, s1: np.uint64, s2: np.uint64, s3: np.uint64,
+                spill: np.ndarray) -> tuple[float, float, np.uint64, np.uint64, np.uint64,
+                                            np.uint64]:  # pragma: no cover - compiled
+    """Two independent standard normals from one 64-bit word (and rarely more) of the stream
+    held in ``s0..s3``: ``(z1, z2, s0, s1, s2, s3)``; ``spill`` is 4 uint64 of scratch."""
+    w, s0, s1, s2, s3 = xoshiro_step(s0, s1, s2, s3)
+    z1, s0, s1, s2, s3 = _normal_from_bits(w & np.uint64(0xFFFFFFFF), s0, s1, s2, s3, spill)
+    z2, s0, s1, s2, s3 = _normal_from_bits(w >> np.uint64(32), s0, s1, s2, s3, spill)
+    return z1, z2, s0, s1, s2, s3
 
 
 @numba.njit(inline="always")
 def next_normal_pair(state: np.ndarray) -> tuple[float, float]:  # pragma: no cover
     """Two independent standard normals from one 64-bit word of ``state`` (and rarely more)."""
-    w = next_u64(state)
-    first = normal_from_bits(w & np.uint64(0xFFFFFFFF), state)
-    return first, normal_from_bits(w >> np.uint64(32), state)
+    z1, z2, s0, s1, s2, s3 = normal_pair(state[0], state[1], state[2], state[3], state)
+    state[0], state[1], state[2], state[3] = s0, s1, s2, s3
+    return z1, z2
+
+
+@numba.njit(cache=True)
+def fill_normal_pairs(state: np.ndarray, first: np.ndarray,
+                      second: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Fill ``first[i], second[i]`` with pair ``i`` of standard normals from the stream
+    ``state`` (4 uint64, updated): the same draws as ``next_normal_pair`` in a loop."""
+    spill = np.empty(4, dtype=np.uint64)
+    s0, s1, s2, s3 = state[0], state[1], state[2], state[3]
+    for i in range(first.shape[0]):
+        first[i], second[i], s0, s1, s2, s3 = normal_pair(s0, s1, s2, s3, spill)
+    state[0], state[1], state[2], state[3] = s0, s1, s2, s3
 
 
 @numba.njit(cache=True)

@@ -3,17 +3,71 @@
 This is the model half of the sensor board: per block of steps, external forces (N) →
 spring forces (N) → spikes. The board's real-time loop and the offline ``simulate`` command
 both step it.
+
+With the modal linear stepper (linear mechanics without baseline tension, the default) a
+block, and under a schedule also its forces, is one compiled call that runs the schedule's,
+the stepper's and the population's own kernels in turn: per-block Python work would
+otherwise cost about as much as the arithmetic of a 1 ms block. Other mechanics step
+through ``SkinStepper.advance`` and ``NeuronPopulation.step_block``.
 """
 
 from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
-from skinhil.neurons import IzhikevichParams, NeuronPopulation, raster_to_events
+from skinhil.mechanics_linear import LinearMechanics, _advance_modal_kernel
+from skinhil.neurons import (
+    IzhikevichParams,
+    NeuronPopulation,
+    _izhikevich_kernel,
+    raster_to_events,
+)
 from skinhil.skin import SkinModel
-from skinhil.stimuli import Schedule
+from skinhil.stimuli import Schedule, add_schedule_forces
+
+
+# numba keys a cached kernel on its own file only: after editing a kernel these two call (in
+# mechanics_linear, neurons, stimuli, rng), clear skinhil/__pycache__/*.nb[ic] or set
+# NUMBA_CACHE_DIR to a fresh directory, or they keep running the old code.
+@numba.njit(cache=True)
+def _modal_sensor_kernel(forces: np.ndarray, springs: np.ndarray, spikes: np.ndarray,
+                         dt_ms: float, phi: np.ndarray, phi_t: np.ndarray, mad: np.ndarray,
+                         mbd: np.ndarray, ke: np.ndarray, ii: np.ndarray, jj: np.ndarray,
+                         dofs: np.ndarray, eta: np.ndarray, v: np.ndarray, u: np.ndarray,
+                         a: float, b: float, c: float, d: float, gain: float, v_peak: float,
+                         noise_ratio: float, rng: np.ndarray,
+                         blowups: np.ndarray) -> None:  # pragma: no cover - compiled
+    # forces (n, 77, 3) N → springs (n, 338) N → spikes (n, 338) over steps of dt_ms (ms);
+    # phi..eta are LinearMechanics.modal_operands, v..blowups NeuronPopulation.kernel_operands()
+    _advance_modal_kernel(forces, springs, phi, phi_t, mad, mbd, ke, ii, jj, dofs, eta)
+    n_steps, n = springs.shape
+    _izhikevich_kernel(springs.reshape(n_steps, 1, n), dt_ms, spikes.reshape(n_steps, 1, n),
+                       v, u, a, b, c, d, gain, v_peak, noise_ratio, rng, blowups)
+
+
+@numba.njit(cache=True)
+def _scheduled_modal_sensor_kernel(
+        first_step: int, dt_s: float, t_offset_s: float, springs: np.ndarray,
+        spikes: np.ndarray, starts: np.ndarray, onsets: np.ndarray, ends: np.ndarray,
+        which: np.ndarray, stim_onsets: np.ndarray, stim_ends: np.ndarray, taus: np.ndarray,
+        pushed_ptr: np.ndarray, pushed: np.ndarray, peaks: np.ndarray, phi: np.ndarray,
+        phi_t: np.ndarray, mad: np.ndarray, mbd: np.ndarray, ke: np.ndarray, ii: np.ndarray,
+        jj: np.ndarray, dofs: np.ndarray, eta: np.ndarray, v: np.ndarray, u: np.ndarray,
+        a: float, b: float, c: float, d: float, gain: float, v_peak: float, noise_ratio: float,
+        rng: np.ndarray, blowups: np.ndarray) -> None:  # pragma: no cover - compiled
+    # the schedule's forces (N) for steps first_step.. of dt_s (s), schedule time 0 at
+    # t_offset_s (s), then _modal_sensor_kernel; starts..peaks are Schedule.kernel_operands
+    n_steps = springs.shape[0]
+    t = (first_step + np.arange(n_steps)) * dt_s - t_offset_s
+    forces = np.zeros((n_steps, peaks.shape[1], 3))
+    add_schedule_forces(forces, t, starts, onsets, ends, which, stim_onsets, stim_ends, taus,
+                        pushed_ptr, pushed, peaks)
+    _modal_sensor_kernel(forces, springs, spikes, dt_s * 1e3, phi, phi_t, mad, mbd, ke, ii,
+                         jj, dofs, eta, v, u, a, b, c, d, gain, v_peak, noise_ratio, rng,
+                         blowups)
 
 
 class SkinSensor:
@@ -28,6 +82,8 @@ class SkinSensor:
         self.neurons = NeuronPopulation(self.model.n_springs, params, snr_db, seed)
         self.step_index = 0
         """Steps taken since the last reset; step k starts at ``k·dt_s``."""
+        self._modal = (self.stepper.modal_operands
+                       if isinstance(self.stepper, LinearMechanics) else None)
 
     def reset(self) -> None:
         """Mechanics and membranes back to rest, time back to 0 (noise streams continue)."""
@@ -45,16 +101,40 @@ class SkinSensor:
         Returns the spring forces (n, 338) N at the start of each step and the bool spikes
         (n, 338) fired during each step.
         """
-        springs = self.stepper.advance(forces_n)
-        spikes = self.neurons.step_block(springs, self.dt_s)
+        if self._modal is None:
+            springs = self.stepper.advance(forces_n)
+            spikes = self.neurons.step_block(springs, self.dt_s)
+        else:
+            springs, spikes = self._advance_modal(forces_n)
         self.step_index += len(forces_n)
+        return springs, spikes
+
+    def _advance_modal(self, forces_n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`advance`'s mechanics and neurons in one compiled call (modal stepper)."""
+        assert self._modal is not None
+        forces = np.ascontiguousarray(forces_n, dtype=np.float64)
+        springs, spikes = self._outputs(forces.shape[0])
+        _modal_sensor_kernel(forces, springs, spikes, self.dt_s * 1e3,
+                             *(self._modal + self.neurons.kernel_operands()))
         return springs, spikes
 
     def advance_schedule(self, schedule: Schedule, n_steps: int,
                          t_offset_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """Step ``n_steps`` under ``schedule`` (schedule time 0 at sensor time ``t_offset_s``)."""
-        t = (self.step_index + np.arange(n_steps)) * self.dt_s - t_offset_s
-        return self.advance(schedule.force_at(t))
+        if self._modal is None:
+            t = (self.step_index + np.arange(n_steps)) * self.dt_s - t_offset_s
+            return self.advance(schedule.force_at(t))
+        springs, spikes = self._outputs(n_steps)
+        operands = schedule.kernel_operands + self._modal + self.neurons.kernel_operands()
+        _scheduled_modal_sensor_kernel(self.step_index, self.dt_s, float(t_offset_s), springs,
+                                       spikes, *operands)
+        self.step_index += n_steps
+        return springs, spikes
+
+    def _outputs(self, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
+        """Fresh spring-force (N) and bool spike arrays for a block, each (n_steps, 338)."""
+        shape = (n_steps, self.model.n_springs)
+        return np.empty(shape), np.empty(shape, dtype=np.bool_)
 
     def events(self, spikes: np.ndarray, first_step: int) -> np.ndarray:
         """Events (µs timestamps) of a spike block whose first row is step ``first_step``."""

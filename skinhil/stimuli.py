@@ -115,7 +115,7 @@ class Stimulus:
 
     def add_force(self, t_s: np.ndarray, out: np.ndarray) -> None:
         """Add the force at times ``t_s`` (s) into ``out`` (len(t_s), 77, 3) N, in place."""
-        _add_profiled(out, np.asarray(t_s, dtype=float), self._pushed, self._peak,
+        _add_profiled(out, np.asarray(t_s, dtype=float), 0.0, self._pushed, self._peak,
                       self.onset_s, self.end_s, self.decay_tau_s)
 
 
@@ -133,15 +133,36 @@ def _profile_into(out: np.ndarray, t: np.ndarray, onset: float, end: float,
 
 
 @numba.njit(cache=True)
-def _add_profiled(out: np.ndarray, t: np.ndarray, pushed: np.ndarray, peak: np.ndarray,
-                  onset: float, end: float, tau: float) -> None:  # pragma: no cover - compiled
-    # compiled because the board calls this every tick
+def _add_profiled(out: np.ndarray, t: np.ndarray, t_shift: float, pushed: np.ndarray,
+                  peak: np.ndarray, onset: float, end: float,
+                  tau: float) -> None:  # pragma: no cover - compiled
+    # out[k] += peak (N) times the profile at t[k] − t_shift (s), on the pushed masses only
     for k in range(t.shape[0]):
-        scale = _profile_at(t[k], onset, end, tau)
+        scale = _profile_at(t[k] - t_shift, onset, end, tau)
         if scale != 0.0:
             for m in pushed:
                 for a in range(3):
                     out[k, m, a] += scale * peak[m, a]
+
+
+@numba.njit(cache=True)
+def add_schedule_forces(out: np.ndarray, t: np.ndarray, starts: np.ndarray,
+                        onsets: np.ndarray, ends: np.ndarray, which: np.ndarray,
+                        stim_onsets: np.ndarray, stim_ends: np.ndarray, taus: np.ndarray,
+                        pushed_ptr: np.ndarray, pushed: np.ndarray,
+                        peaks: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Add into ``out`` (len(t), 77, 3) the force (N) at times ``t`` (s) of every entry whose
+    [onset, end) (s) meets [min t, max t], in entry order; entry ``e`` plays stimulus
+    ``which[e]``. The arrays after ``t`` are a :attr:`Schedule.kernel_operands`."""
+    if t.shape[0] == 0:
+        return
+    lo = t.min()
+    hi = t.max()
+    for e in range(starts.shape[0]):
+        if onsets[e] <= hi and ends[e] > lo:
+            s = which[e]
+            _add_profiled(out, t, starts[e], pushed[pushed_ptr[s]:pushed_ptr[s + 1]], peaks[s],
+                          stim_onsets[s], stim_ends[s], taus[s])
 
 
 def paper_stimuli() -> list[Stimulus]:
@@ -194,13 +215,19 @@ class ScheduledStimulus:
         return self.start_s + self.stimulus.end_s
 
 
+ScheduleOperands = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                         np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+"""``Schedule.kernel_operands``: see :func:`_pack_entries`."""
+
+
 @dataclass(frozen=True)
 class Schedule:
     """A timeline of stimuli (sorted by start); forces of overlapping stimuli add."""
 
     entries: tuple[ScheduledStimulus, ...]
-    _onsets: np.ndarray = field(init=False, repr=False, compare=False)
-    _ends: np.ndarray = field(init=False, repr=False, compare=False)
+    kernel_operands: ScheduleOperands = field(init=False, repr=False, compare=False)
+    """What the compiled force kernel reads after the output and the times (see
+    :func:`_pack_entries`)."""
 
     def __post_init__(self) -> None:
         ordered = tuple(sorted(self.entries, key=lambda e: e.start_s))
@@ -209,8 +236,7 @@ class Schedule:
                 raise ConfigError(f"schedule: start_s must be a finite number >= 0, "
                                   f"got {e.start_s!r} for {e.stimulus.name!r}")
         object.__setattr__(self, "entries", ordered)
-        object.__setattr__(self, "_onsets", np.array([e.onset_s for e in ordered]))
-        object.__setattr__(self, "_ends", np.array([e.end_s for e in ordered]))
+        object.__setattr__(self, "kernel_operands", _pack_entries(ordered))
 
     @property
     def duration_s(self) -> float:
@@ -221,13 +247,32 @@ class Schedule:
         """Total force on every mass at absolute times ``t_s`` (s): (len, 77, 3) N."""
         t = np.asarray(t_s, dtype=float)
         out = np.zeros((t.shape[0], N_MASSES, 3))
-        if t.size == 0:
-            return out
-        lo, hi = float(t.min()), float(t.max())
-        for i in np.flatnonzero((self._onsets <= hi) & (self._ends > lo)):
-            e = self.entries[i]
-            e.stimulus.add_force(t - e.start_s, out)
+        add_schedule_forces(out, t, *self.kernel_operands)
         return out
+
+
+def _pack_entries(entries: Sequence[ScheduledStimulus]) -> ScheduleOperands:
+    """The arrays :func:`add_schedule_forces` reads after ``out`` and ``t``: per entry its start,
+    onset and end (s) and stimulus index; per distinct stimulus its onset, end and decay
+    constant (s), its pushed masses (CSR: pointers, indices) and peak forces (n, 77, 3) N."""
+    index: dict[int, int] = {}
+    stims: list[Stimulus] = []
+    for e in entries:
+        if id(e.stimulus) not in index:
+            index[id(e.stimulus)] = len(stims)
+            stims.append(e.stimulus)
+    counts = [s._pushed.size for s in stims]
+    return (np.array([e.start_s for e in entries], dtype=float),
+            np.array([e.onset_s for e in entries], dtype=float),
+            np.array([e.end_s for e in entries], dtype=float),
+            np.array([index[id(e.stimulus)] for e in entries], dtype=np.int64),
+            np.array([s.onset_s for s in stims], dtype=float),
+            np.array([s.end_s for s in stims], dtype=float),
+            np.array([s.decay_tau_s for s in stims], dtype=float),
+            np.concatenate([[0], np.cumsum(counts, dtype=np.int64)]).astype(np.int64),
+            np.concatenate([s._pushed for s in stims] + [np.zeros(0, np.int64)]).astype(
+                np.int64),
+            np.stack([s._peak for s in stims]) if stims else np.zeros((0, N_MASSES, 3)))
 
 
 def random_schedule(stimuli: Sequence[Stimulus], n: int, rest_s: float = 0.25,
