@@ -31,7 +31,8 @@ from skinhil.stimuli import Schedule, add_schedule_forces
 
 # numba keys a cached kernel on its own file only: after editing a kernel these two call (in
 # mechanics_linear, neurons, stimuli, rng), clear skinhil/__pycache__/*.nb[ic] or set
-# NUMBA_CACHE_DIR to a fresh directory, or they keep running the old code.
+# NUMBA_CACHE_DIR to a fresh directory, or they keep running the old code
+# (tests/test_core_sensor.py compares them with the callees run one by one and fails then).
 @numba.njit(cache=True)
 def _modal_sensor_kernel(forces: np.ndarray, springs: np.ndarray, spikes: np.ndarray,
                          dt_ms: float, phi: np.ndarray, phi_t: np.ndarray, mad: np.ndarray,

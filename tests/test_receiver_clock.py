@@ -1,10 +1,20 @@
-"""The receiver's estimate of board time follows a board slower than real time."""
+"""The receiver's estimate of board time: follows a board slower than real time, and is
+fed only by items that come in stream order."""
 
 from __future__ import annotations
 
-import numpy as np
+import math
+import os
 
+import numpy as np
+import pytest
+
+import protocols
+from skinhil.events import EVENT_DTYPE
+from skinhil.receiver import Receiver, WindowDecoder
 from skinhil.receiver.clock import BoardClock
+from skinhil.receiver.pty_link import PtyMasterTransport
+from skinhil.receiver.training import train_decoder
 
 
 def feed(clock: BoardClock, rate: float, delays_s: np.ndarray, period_s: float) -> list[float]:
@@ -47,3 +57,41 @@ def test_silence_keeps_the_estimate_running_on_the_host_clock():
     assert clock.board_now_us(12.5) == 3_500_000
     host = clock.host_time_s(2_000_000)
     assert host is not None and abs(host - 11.0) < 1e-9
+
+
+@pytest.fixture(scope="module")
+def receiver_parts():
+    decoder, _ = train_decoder(math.inf, reps=5, seed=0, rest_s=0.05)
+    link, slave = PtyMasterTransport.open_pair()
+    yield WindowDecoder(decoder), link
+    link.shutdown()
+    os.close(slave)
+
+
+def _status(t_us: int, queued: int) -> protocols.Status:
+    return protocols.Status(t_us=t_us, events_generated=1000 + queued, events_sent=1000,
+                            events_dropped=0, events_queued=queued, late_ticks=0, rx_errors=0,
+                            running=True)
+
+
+@pytest.mark.parametrize("queued", [0, 400])
+def test_a_status_ahead_of_queued_events_does_not_move_board_time(receiver_parts, queued):
+    """A saturated board stamps its status ahead of the events still in its FIFO: such a
+    status must not tell the receiver those steps are complete (their events would all be
+    late); one sent with nothing queued does."""
+    decoder, link = receiver_parts
+    receiver = Receiver(link, decoder)
+    enc = protocols.SerialEncoder()
+    events = np.zeros(400, dtype=EVENT_DTYPE)
+    events["t"] = np.arange(500_000, 900_000, 1000)
+    events["addr"] = np.arange(400) % 338
+    events["p"] = 1
+    head = enc.events(events[:0], 500_000) + enc.status(_status(1_000_000, queued))
+    receiver.feed(head, 10.0)
+    known = receiver.known_board_time_us(10.0)
+    receiver.feed(enc.events(events, 1_000_000), 10.05)
+    if queued:
+        assert known < 500_000
+        assert receiver.classifier.late_events == 0
+    else:
+        assert known >= 1_000_000 - receiver.params.guard_s * 1e6

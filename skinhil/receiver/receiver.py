@@ -9,7 +9,8 @@ records, acknowledgements and link errors. Corrupted or lost data never stop it:
 counts them, and a link that goes away is reported and, with ``reopen``, reopened.
 
 Board time is followed as the newest event's time (the stream is in time order), else the
-newest status/marker time or the host clock's estimate of board time, minus ``guard_s``.
+newest marker time (or status time, when the board had no events queued) or the host
+clock's estimate of board time from those items, minus ``guard_s``.
 """
 
 from __future__ import annotations
@@ -106,6 +107,13 @@ def _is_onset(marker: Any) -> bool:
     return name.startswith("onset") or name == "0"
 
 
+def _in_stream_order(record: Any) -> bool:
+    """Whether every event before the record's board time was sent before it: markers go in
+    time order with the events; a status does only when the board had no events queued (a
+    saturated board's status is stamped ahead of the events still waiting in its FIFO)."""
+    return not (isinstance(record, protocols.Status) and record.events_queued > 0)
+
+
 class Receiver:
     """Decode, filter and classify the stream of one board, listener style."""
 
@@ -154,7 +162,7 @@ class Receiver:
 
     def _record(self, rec: Any, host_s: float) -> None:
         t = getattr(rec, "t_us", None)
-        if t is not None:
+        if t is not None and _in_stream_order(rec):
             self._last_record_us = max(self._last_record_us, int(t))
             self.clock.observe(int(t), host_s)
         if isinstance(rec, protocols.Marker):
