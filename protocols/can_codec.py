@@ -33,7 +33,7 @@ from protocols.records import (
     Status,
 )
 from skinhil.errors import ProtocolError
-from skinhil.events import EVENT_DTYPE
+from skinhil.events import make_events
 
 log = logging.getLogger(__name__)
 
@@ -240,10 +240,7 @@ class CanDecoder:
         blob = np.frombuffer(b"".join(datas) + b"\0" * 8, dtype=np.uint8)
         t, a, ne, rec_ix, nr = k.decode_frames(ids, lens, blob, self.board_id, self.fd,
                                               self._st, self._c)
-        events = np.empty(ne, dtype=EVENT_DTYPE)
-        events["t"] = t[:ne]
-        events["addr"] = a[:ne]
-        events["p"] = 1
+        events = make_events(t[:ne], a[:ne])
         records: list[Record] = []
         for r in range(nr):
             f, cls, decoded, ref_us = (int(v) for v in rec_ix[r])

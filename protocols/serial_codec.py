@@ -31,7 +31,7 @@ from protocols.records import (
     Status,
 )
 from skinhil.errors import ProtocolError
-from skinhil.events import EVENT_DTYPE
+from skinhil.events import make_events
 
 log = logging.getLogger(__name__)
 
@@ -172,10 +172,7 @@ class SerialDecoder:
         buf = np.frombuffer(bytes(pending[:end + 1]), dtype=np.uint8)
         del pending[:end + 1]
         t, a, ne, rec, rec_ix, nr = k.decode_stream(buf, self._st, self._c)
-        events = np.empty(ne, dtype=EVENT_DTYPE)
-        events["t"] = t[:ne]
-        events["addr"] = a[:ne]
-        events["p"] = 1
+        events = make_events(t[:ne], a[:ne])
         records: list[Record] = []
         for r in range(nr):
             off, m, decoded = (int(v) for v in rec_ix[r])

@@ -42,7 +42,7 @@ import numba
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.events import EVENT_DTYPE
+from skinhil.events import make_events
 from skinhil.rng import fill_normal_pairs, seed_states
 
 KernelOperands = tuple[np.ndarray, np.ndarray, float, float, float, float, float, float, float,
@@ -251,11 +251,7 @@ def raster_to_events(raster: np.ndarray, dt_s: float, t0_us: int = 0) -> np.ndar
     """
     dt_us = _dt_us(dt_s)
     steps, addr = np.nonzero(np.asarray(raster))
-    ev = np.empty(steps.size, dtype=EVENT_DTYPE)
-    ev["t"] = t0_us + steps.astype(np.int64) * dt_us
-    ev["addr"] = addr
-    ev["p"] = 1
-    return ev
+    return make_events(t0_us + steps.astype(np.int64) * dt_us, addr)
 
 
 def events_to_raster(events: np.ndarray, n_steps: int, n_channels: int, dt_s: float,

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import protocols
-from skinhil.events import EVENT_DTYPE
+from skinhil.events import make_events
 from skinhil.receiver import Receiver, WindowDecoder
 from skinhil.receiver.clock import BoardClock
 from skinhil.receiver.pty_link import PtyMasterTransport
@@ -82,10 +82,7 @@ def test_a_status_ahead_of_queued_events_does_not_move_board_time(receiver_parts
     decoder, link = receiver_parts
     receiver = Receiver(link, decoder)
     enc = protocols.SerialEncoder()
-    events = np.zeros(400, dtype=EVENT_DTYPE)
-    events["t"] = np.arange(500_000, 900_000, 1000)
-    events["addr"] = np.arange(400) % 338
-    events["p"] = 1
+    events = make_events(np.arange(500_000, 900_000, 1000), np.arange(400) % 338)
     head = enc.events(events[:0], 500_000) + enc.status(_status(1_000_000, queued))
     receiver.feed(head, 10.0)
     known = receiver.known_board_time_us(10.0)
