@@ -193,13 +193,7 @@ class Receiver:
         known = self.known_board_time_us(host_s)
         if known <= self.classifier.board_time_us:
             return []
-        out = []
-        for pred in self.classifier.advance(known):
-            scored = self.scoreboard.add_prediction(pred, self.clock.host_time_s)
-            out.append(scored)
-            for listener in self.listeners:
-                listener.on_decision(scored)
-        self.scoreboard.resolve(self.classifier.board_time_us)
+        out = self._decide_until(known)
         late_us = self.classifier.windows.max_late_us
         if late_us and self._guard_us < late_us * 2:
             self._guard_us = min(int(round(self.params.max_guard_s * 1e6)), 2 * late_us)
@@ -207,17 +201,21 @@ class Receiver:
                      late_us * 1e-3, self._guard_us * 1e-3)
         return out
 
-    def flush(self) -> list[ScoredDecision]:
-        """Process everything received up to the newest board time seen (end of a stream)."""
-        end = max(self._last_event_us + 1, self._last_record_us)
+    def _decide_until(self, board_t_us: int) -> list[ScoredDecision]:
+        """Filter and classify up to board time ``board_t_us`` (µs); score and announce the
+        decisions, resolve the markers left behind."""
         out = []
-        for pred in self.classifier.advance(end):
+        for pred in self.classifier.advance(board_t_us):
             scored = self.scoreboard.add_prediction(pred, self.clock.host_time_s)
             out.append(scored)
             for listener in self.listeners:
                 listener.on_decision(scored)
         self.scoreboard.resolve(self.classifier.board_time_us)
         return out
+
+    def flush(self) -> list[ScoredDecision]:
+        """Process everything received up to the newest board time seen (end of a stream)."""
+        return self._decide_until(max(self._last_event_us + 1, self._last_record_us))
 
     # -- the link -----------------------------------------------------------------------
     def poll(self, timeout: float | None = 0.02) -> list[ScoredDecision]:
