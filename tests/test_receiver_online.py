@@ -59,6 +59,18 @@ def decoder_inf() -> tuple[WindowDecoder, TrainingReport]:
     return WindowDecoder(decoder), report
 
 
+def play(receiver: Receiver, link_args: list[str], snr_db: float, n_stimuli: int) -> None:
+    """A board on ``link_args`` plays ``n_stimuli`` stimuli into ``receiver`` until it ends;
+    the receiver's transport is shut down after."""
+    try:
+        status, _, err = run_against_board(
+            receiver, serve_command(link_args, stream_duration_s(n_stimuli, REST_S), snr_db,
+                                    BOARD_SEED, REST_S))
+    finally:
+        receiver.transport.shutdown()
+    assert status == 0, err
+
+
 def run_pty(decoder: WindowDecoder, snr_db: float, n_stimuli: int,
             faults: FaultParams | None = None, recorder: SessionRecorder | None = None
             ) -> tuple[Receiver, FaultyTransport | None]:
@@ -66,14 +78,9 @@ def run_pty(decoder: WindowDecoder, snr_db: float, n_stimuli: int,
     transport = link if faults is None else FaultyTransport(link, faults, keep_clean=True)
     receiver = Receiver(transport, decoder, listeners=[recorder] if recorder else [])
     try:
-        status, _, err = run_against_board(
-            receiver, serve_command(["--port", link.slave_path],
-                                    stream_duration_s(n_stimuli, REST_S), snr_db, BOARD_SEED,
-                                    REST_S))
+        play(receiver, ["--port", link.slave_path], snr_db, n_stimuli)
     finally:
-        transport.shutdown()
         os.close(slave_fd)
-    assert status == 0, err
     return receiver, (transport if faults is not None else None)
 
 
@@ -160,16 +167,8 @@ def test_fault_injection_is_survived_and_accounted(decoder_inf):
 
 def run_vcan(decoder: WindowDecoder, snr_db: float, n_stimuli: int,
              bitrate: int = 1_000_000) -> Receiver:
-    bus = CanTransport("vcan0", bitrate=bitrate)
-    receiver = Receiver(bus, decoder)
-    try:
-        status, _, err = run_against_board(
-            receiver, serve_command(["--can", "vcan0", "--bitrate", str(bitrate)],
-                                    stream_duration_s(n_stimuli, REST_S), snr_db, BOARD_SEED,
-                                    REST_S))
-    finally:
-        bus.shutdown()
-    assert status == 0, err
+    receiver = Receiver(CanTransport("vcan0", bitrate=bitrate), decoder)
+    play(receiver, ["--can", "vcan0", "--bitrate", str(bitrate)], snr_db, n_stimuli)
     return receiver
 
 
@@ -212,13 +211,7 @@ def test_dropped_can_frames_equal_the_sequence_gaps():
     bus = FaultyTransport(CanTransport("vcan0"), FaultParams(drop_p=0.01, seed=2),
                           keep_clean=True)
     receiver = Receiver(bus, WindowDecoder(decoder))
-    try:
-        status, _, err = run_against_board(
-            receiver, serve_command(["--can", "vcan0"], stream_duration_s(10, REST_S),
-                                    math.inf, BOARD_SEED, REST_S))
-    finally:
-        bus.shutdown()
-    assert status == 0, err
+    play(receiver, ["--can", "vcan0"], math.inf, 10)
     link = receiver.link_report()
     assert bus.injected.units_dropped > 0
     assert link.frames_lost == bus.injected.units_dropped
