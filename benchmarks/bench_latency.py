@@ -25,9 +25,9 @@ sys.path.insert(0, os.path.dirname(__file__))
 from machine import describe  # noqa: E402
 
 from skinhil.receiver import Receiver, ReceiverListener, WindowDecoder  # noqa: E402
-from skinhil.receiver.pty_link import PtyMasterTransport  # noqa: E402
 from skinhil.receiver.session import run_against_board, serve_command  # noqa: E402
 from skinhil.receiver.training import train_decoder  # noqa: E402
+from skinhil.transports import PtyMasterTransport  # noqa: E402
 
 
 class Arrivals(ReceiverListener):
@@ -81,7 +81,7 @@ def main() -> int:
             cmd = serve_command(["--port", link.slave_path], args.duration, args.snr_db, 3,
                                 args.rest)
         else:
-            from firmware_sim.transport import CanTransport
+            from skinhil.transports import CanTransport
 
             link, slave = CanTransport("vcan0"), -1
             receiver = Receiver(link, wd, listeners=[arrivals])

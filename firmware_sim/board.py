@@ -4,7 +4,7 @@ Per publish tick ``k`` (default 1 ms = 10 steps of 0.1 ms), due at ``t0 + (k+1)�
 (:class:`firmware_sim.clock.TickClock`), in this order:
 
 1. stimulus: the external forces of the timeline at each step's start time
-   (:class:`firmware_sim.timeline.Timeline`), a block (steps, 77, 3) N;
+   (:class:`skinhil.timeline.Timeline`), a block (steps, 77, 3) N;
 2. model: ``SkinStepper.advance`` then ``NeuronPopulation.step_block``
    (:class:`skinhil.sensor.SkinSensor`): spikes (steps, 338);
 3. events: spikes → events stamped with board time in µs (step resolution) → counted as
@@ -42,12 +42,12 @@ from firmware_sim.clock import TickClock, tighten_timer_slack
 from firmware_sim.counters import BoardCounters
 from firmware_sim.fifo import EventFifo
 from firmware_sim.link import BoardLink
-from firmware_sim.timeline import MarkerEvent, Timeline
-from firmware_sim.transport import Transport
 from skinhil.errors import ConfigError, TransportError
 from skinhil.sensor import SkinSensor
 from skinhil.skin import SkinModel, SkinParams
 from skinhil.stimuli import Schedule, ScheduledStimulus
+from skinhil.timeline import MarkerEvent, Timeline
+from skinhil.transports import Transport
 
 log = logging.getLogger(__name__)
 
@@ -148,7 +148,7 @@ class Board:
     """The emulated board over a link opened by ``open_link()``.
 
     ``open_link`` is called at start and again on every reconnection attempt; it returns a
-    :class:`~firmware_sim.transport.Transport` or raises :class:`TransportError`.
+    :class:`~skinhil.transports.Transport` or raises :class:`TransportError`.
     ``file_schedule`` is the schedule file's content (schedule mode 2).
     """
 

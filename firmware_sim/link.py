@@ -18,8 +18,8 @@ import numpy as np
 
 import protocols
 from firmware_sim.pacing import WirePacer
-from firmware_sim.transport import Transport
 from skinhil.events import make_events
+from skinhil.transports import Transport
 
 log = logging.getLogger(__name__)
 

@@ -8,8 +8,8 @@ from harness.peers import PtyPeer
 
 import protocols
 from firmware_sim.board import Board, BoardConfig
-from firmware_sim.timeline import Timeline
-from firmware_sim.transport import SerialTransport
+from skinhil.timeline import Timeline
+from skinhil.transports import SerialTransport
 
 
 def test_markers_survive_a_shutdown_that_drops_queued_events(pty_pair) -> None:

@@ -13,8 +13,8 @@ import protocols
 from skinhil.events import make_events
 from skinhil.receiver import Receiver, WindowDecoder
 from skinhil.receiver.clock import BoardClock
-from skinhil.receiver.pty_link import PtyMasterTransport
 from skinhil.receiver.training import train_decoder
+from skinhil.transports import PtyMasterTransport
 
 
 def feed(clock: BoardClock, rate: float, delays_s: np.ndarray, period_s: float) -> list[float]:

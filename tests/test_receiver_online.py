@@ -20,15 +20,7 @@ import numpy as np
 import pytest
 
 import protocols
-from firmware_sim.transport import CanTransport
-from skinhil.receiver import (
-    FaultParams,
-    FaultyTransport,
-    Receiver,
-    SessionRecorder,
-    WindowDecoder,
-)
-from skinhil.receiver.pty_link import PtyMasterTransport
+from skinhil.receiver import Receiver, SessionRecorder, WindowDecoder
 from skinhil.receiver.session import run_against_board, serve_command
 from skinhil.receiver.training import (
     TrainingReport,
@@ -37,6 +29,7 @@ from skinhil.receiver.training import (
     stream_windows,
     train_decoder,
 )
+from skinhil.transports import CanTransport, FaultParams, FaultyTransport, PtyMasterTransport
 
 N_STIMULI = 100
 REST_S = 0.05

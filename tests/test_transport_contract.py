@@ -1,12 +1,17 @@
-"""One contract, every transport: loopback URL, pty pair, python-can virtual bus, vcan0.
+"""One contract, every transport of :mod:`skinhil.transports`: loopback URL, pty pair, pty
+master, the fault injector, python-can virtual bus, vcan0 (classic and FD).
 
-Each case gives a sending and a receiving :class:`firmware_sim.transport.Transport` (the
-same object for ``loop://``). The pty case is a linked pair of real ptys made by socat, the
-vcan case two sockets on a real ``vcan0`` (inside user-mode Linux where the host has none).
+Each case gives a sending and a receiving :class:`skinhil.transports.Transport` (the
+same object for ``loop://``). The pty case is a linked pair of real ptys made by socat; the
+pty-master case writes the master end of ``os.openpty()`` and reads its slave with pyserial;
+the faulty case is :class:`~skinhil.transports.FaultyTransport` with no fault configured around
+a virtual bus (it must keep the contract of what it wraps); the vcan case two sockets on a real
+``vcan0`` (inside user-mode Linux where the host has none).
 """
 
 from __future__ import annotations
 
+import os
 import random
 import shutil
 import subprocess
@@ -19,10 +24,18 @@ from typing import Any
 import pytest
 
 import protocols
-from firmware_sim.transport import CanTransport, SerialTransport, Transport
 from skinhil.errors import TransportError
+from skinhil.transports import (
+    CanTransport,
+    FaultParams,
+    FaultyTransport,
+    PtyMasterTransport,
+    SerialTransport,
+    Transport,
+)
 
-CASES = ["loop", "pty", "virtual", pytest.param("vcan", marks=pytest.mark.vcan),
+CASES = ["loop", "pty", "pty-master", "faulty", "virtual",
+         pytest.param("vcan", marks=pytest.mark.vcan),
          pytest.param("vcan-fd", marks=pytest.mark.vcan)]
 
 
@@ -52,9 +65,16 @@ def link(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[tuple[Any, 
     elif kind == "pty":
         proc, a, b = _socat_pair(tmp_path)
         tx, rx = SerialTransport(a, 921600), SerialTransport(b, 921600)
-    elif kind == "virtual":
+    elif kind == "pty-master":
+        master, slave_fd = PtyMasterTransport.open_pair(921600)
+        tx, rx = master, SerialTransport(master.slave_path, 921600)
+        os.close(slave_fd)  # pyserial holds the slave open from here on
+    elif kind in ("virtual", "faulty"):
         chan = f"contract-{random.getrandbits(32)}"
         tx, rx = CanTransport(chan, "virtual"), CanTransport(chan, "virtual")
+        if kind == "faulty":
+            tx = FaultyTransport(tx, FaultParams(seed=1), on_send=True, on_recv=False)
+            rx = FaultyTransport(rx, FaultParams(seed=2))
     else:
         fd = kind == "vcan-fd"
         tx, rx = CanTransport("vcan0", fd=fd), CanTransport("vcan0", fd=fd)
@@ -146,11 +166,12 @@ def test_timeouts_poll_deadline_and_block(link) -> None:
 def test_wire_time_and_shutdown(link) -> None:
     tx, rx, kind = link
     payload = _payloads(tx, 1)[0]
+    link = getattr(tx, "inner", tx)  # the fault injector takes its wire time from its link
     if tx.kind == "serial":
-        assert tx.wire_seconds(payload) == pytest.approx(len(payload) * 10 / tx.baud)
+        assert tx.wire_seconds(payload) == pytest.approx(len(payload) * 10 / link.baud)
     else:
         assert tx.wire_seconds(payload * 3) == pytest.approx(
-            3 * protocols.can_frame_seconds(payload[0], tx.bitrate, tx.data_bitrate))
+            3 * protocols.can_frame_seconds(payload[0], link.bitrate, link.data_bitrate))
     with tx:
         pass
     tx.shutdown()  # idempotent

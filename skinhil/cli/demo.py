@@ -18,16 +18,16 @@ import os
 import time
 from pathlib import Path
 
-from firmware_sim.timeline import DEFAULT_REST_S
 from skinhil.cli.listen import LivePrinter, class_names, print_summary, summary
 from skinhil.cli.options import DECODE_SNR_DB, snr_value
 from skinhil.cli.train import print_report
 from skinhil.errors import ConfigError
 from skinhil.receiver import Receiver
 from skinhil.receiver.model_file import load_window_decoder
-from skinhil.receiver.pty_link import PtyMasterTransport
 from skinhil.receiver.session import run_against_board, serve_command
 from skinhil.receiver.training import train_decoder
+from skinhil.timeline import DEFAULT_REST_S
+from skinhil.transports import PtyMasterTransport
 
 DEFAULT_DURATION_S = 20.0
 DEMO_REST_S = DEFAULT_REST_S

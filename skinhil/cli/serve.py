@@ -13,11 +13,11 @@ from typing import Any
 
 from firmware_sim.board import Board, BoardConfig, BoardSummary
 from firmware_sim.clock import request_realtime
-from firmware_sim.timeline import Timeline
 from skinhil.cli.options import add_model_options
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.errors import ConfigError
 from skinhil.stimuli import load_schedule
+from skinhil.timeline import Timeline
 
 LIVE_WINDOW_TICKS = 1000
 """The live status's lateness p99 is over this many most recent ticks (its max is over the

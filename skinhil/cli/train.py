@@ -7,10 +7,10 @@ import math
 import time
 from pathlib import Path
 
-from firmware_sim.timeline import DEFAULT_REST_S
 from skinhil.cli.options import DECODE_SNR_DB, snr_value
 from skinhil.errors import ConfigError
 from skinhil.receiver.training import BIN_S, WINDOW_S, TrainingReport, train_decoder
+from skinhil.timeline import DEFAULT_REST_S
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import argparse
 
-from firmware_sim.transport import CanTransport, SerialTransport, Transport
 from skinhil.errors import ConfigError
+from skinhil.transports import CanTransport, SerialTransport, Transport
 
 DEFAULT_BAUD = 921600
 """Default serial baud rate (bits/s)."""

@@ -5,7 +5,6 @@ See ``docs/receiver.md`` for the pipeline, the onset rule and the measured figur
 
 from skinhil.receiver.clock import BoardClock
 from skinhil.receiver.decoder_adapter import WindowDecoder
-from skinhil.receiver.faults import FaultParams, FaultyTransport, InjectedFaults
 from skinhil.receiver.online import OnlineClassifier, Prediction
 from skinhil.receiver.onset import OnsetDetector
 from skinhil.receiver.params import OnsetParams, ReceiverParams
@@ -15,9 +14,6 @@ from skinhil.receiver.scoring import Scoreboard, ScoredDecision
 
 __all__ = [
     "BoardClock",
-    "FaultParams",
-    "FaultyTransport",
-    "InjectedFaults",
     "LinkReport",
     "OnlineClassifier",
     "OnsetDetector",

@@ -1,6 +1,6 @@
 """The reference receiver: transport → protocols decoder → online classifier → listeners.
 
-A :class:`Receiver` reads a :class:`firmware_sim.transport.Transport` (a pyserial port or a
+A :class:`Receiver` reads a :class:`skinhil.transports.Transport` (a pyserial port or a
 python-can bus), feeds what arrives to the protocols decoder of that link (serial or CAN),
 and passes the events to the :class:`~skinhil.receiver.online.OnlineClassifier` on board
 time. Ground-truth markers go only to the :class:`~skinhil.receiver.scoring.Scoreboard`.
@@ -25,7 +25,6 @@ from typing import Any
 import numpy as np
 
 import protocols
-from firmware_sim.transport import Transport
 from skinhil.errors import TransportError
 from skinhil.receiver.clock import BoardClock
 from skinhil.receiver.decoder_adapter import WindowDecoder
@@ -33,6 +32,7 @@ from skinhil.receiver.online import OnlineClassifier
 from skinhil.receiver.params import ReceiverParams
 from skinhil.receiver.scoring import ScoredDecision, scoreboard_for
 from skinhil.stimuli import direction_conditions
+from skinhil.transports import Transport
 
 log = logging.getLogger(__name__)
 

@@ -5,7 +5,7 @@ Protocol (what the board does, simulated offline and faster than real time):
 1. a continuous board stream: a seeded random sequence of the 9 direction conditions
    (classes 0..8), like the board's default one but balanced (each condition ``reps`` times,
    shuffled, :func:`balanced_schedule`), ``rest_s`` of rest after each, played by the board's
-   own :class:`firmware_sim.timeline.Timeline` (same markers) and felt by one
+   own :class:`skinhil.timeline.Timeline` (same markers) and felt by one
    :class:`skinhil.sensor.SkinSensor` at ``snr_db`` — so every stimulus starts from the state
    the previous one left (adaptation, noise, PSP tails);
 2. its spikes, as events, go through the receiver's own onset and window code
@@ -34,7 +34,6 @@ from dataclasses import dataclass
 import numpy as np
 from tqdm.auto import tqdm
 
-from firmware_sim.timeline import DEFAULT_REST_S, MarkerEvent, Timeline
 from skinhil.decoding import DirectionDecoder, FeatureSpec, cross_validate
 from skinhil.errors import ConfigError
 from skinhil.receiver.online import OnsetWindows
@@ -42,6 +41,7 @@ from skinhil.receiver.params import ReceiverParams
 from skinhil.receiver.scoring import scoreboard_for
 from skinhil.sensor import SkinSensor
 from skinhil.stimuli import Schedule, ScheduledStimulus, direction_conditions
+from skinhil.timeline import DEFAULT_REST_S, MarkerEvent, Timeline
 
 log = logging.getLogger(__name__)
 

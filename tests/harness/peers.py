@@ -1,7 +1,7 @@
 """The host side of a link under test: decode what the board sends, send it commands.
 
 A peer reads its end of the link on a thread (a pty master, or a CAN bus through
-:class:`firmware_sim.transport.CanTransport`), feeds the protocols decoder and keeps every
+:class:`skinhil.transports.CanTransport`), feeds the protocols decoder and keeps every
 event and record in arrival order.
 """
 
@@ -17,8 +17,8 @@ from typing import Any
 import numpy as np
 
 import protocols
-from firmware_sim.transport import CanTransport
 from skinhil.events import EVENT_DTYPE
+from skinhil.transports import CanTransport
 
 
 class Peer:

@@ -7,10 +7,8 @@ import os
 import numpy as np
 import pytest
 
-from firmware_sim.transport import SerialTransport
 from skinhil.errors import ConfigError
-from skinhil.receiver import FaultParams, FaultyTransport
-from skinhil.receiver.pty_link import PtyMasterTransport
+from skinhil.transports import FaultParams, FaultyTransport, PtyMasterTransport, SerialTransport
 
 
 def _pump(params: FaultParams, data: bytes) -> tuple[bytes, FaultyTransport]:

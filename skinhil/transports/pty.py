@@ -1,9 +1,9 @@
-"""The master end of a pty pair as a :class:`firmware_sim.transport.Transport`.
+"""The master end of a pty pair as a :class:`~skinhil.transports.base.Transport`.
 
-``os.openpty()`` gives a real tty: the slave has a path that any serial program (the board's
-pyserial :class:`~firmware_sim.transport.SerialTransport`) opens, but the master end has no
-path, so pyserial cannot open it. This plugin reads and writes the master's file descriptor
-with the same uniform timeouts (None blocks, 0 polls, > 0 deadline, seconds).
+``os.openpty()`` gives a real tty: the slave has a path that any serial program (pyserial,
+:class:`~skinhil.transports.serial.SerialTransport`, ``skinhil serve --port``) opens, but the
+master end has no path, so pyserial cannot open it. This plugin reads and writes the master's
+file descriptor with the same uniform timeouts (None blocks, 0 polls, > 0 deadline, seconds).
 """
 
 from __future__ import annotations
@@ -13,10 +13,11 @@ import select
 import time
 import tty
 
-from firmware_sim.transport import Transport, check_baud
 from skinhil.errors import TransportError
+from skinhil.transports.base import Deadline, Transport, check_baud, write_fd
 
 READ_CHUNK = 65536
+"""Most bytes one :meth:`PtyMasterTransport.recv` returns."""
 
 
 class PtyMasterTransport(Transport[bytes]):
@@ -28,6 +29,7 @@ class PtyMasterTransport(Transport[bytes]):
         self.fd = master_fd
         self.slave_path = slave_path
         self.baud = check_baud(baud)
+        self._closed = False
         os.set_blocking(master_fd, False)
 
     @classmethod
@@ -43,25 +45,19 @@ class PtyMasterTransport(Transport[bytes]):
     def name(self) -> str:
         return f"pty master of {self.slave_path}"
 
+    def _check_open(self) -> None:
+        if self._closed:
+            raise TransportError(f"pty master of {self.slave_path} is closed")
+
     def send(self, payload: bytes, timeout: float | None = None) -> int:
-        view = memoryview(payload)
-        sent = 0
-        end = None if timeout is None else time.monotonic() + timeout
-        while sent < len(view):
-            try:
-                sent += os.write(self.fd, view[sent:])
-                continue
-            except BlockingIOError:
-                pass
-            except OSError as exc:
-                raise TransportError(f"pty {self.slave_path} went away: {exc}") from None
-            left = None if end is None else max(0.0, end - time.monotonic())
-            if left == 0.0:
-                break
-            select.select([], [self.fd], [], left)
-        return sent
+        self._check_open()
+        try:
+            return write_fd(self.fd, payload, Deadline(timeout))
+        except OSError as exc:
+            raise TransportError(f"pty {self.slave_path} went away: {exc}") from None
 
     def recv(self, timeout: float | None = None) -> bytes:
+        self._check_open()
         try:
             ready, _, _ = select.select([self.fd], [], [], timeout)
             if not ready:
@@ -84,6 +80,9 @@ class PtyMasterTransport(Transport[bytes]):
         return b""
 
     def shutdown(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
         try:
             os.close(self.fd)
         except OSError:

@@ -1,4 +1,4 @@
-"""A fault-injecting wrapper around any :class:`firmware_sim.transport.Transport`.
+"""A fault-injecting wrapper around any :class:`~skinhil.transports.base.Transport`.
 
 Wrap the receiving (or sending) end of a link to see how a decoder copes with a bad link::
 
@@ -34,8 +34,8 @@ from typing import Any
 
 import numpy as np
 
-from firmware_sim.transport import Transport
 from skinhil.errors import ConfigError
+from skinhil.transports.base import Transport
 
 
 @dataclass(frozen=True)

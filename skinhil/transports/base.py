@@ -1,0 +1,124 @@
+"""The one interface every link implements: :class:`Transport`, and what its plugins share.
+
+Modelled on python-can's ``BusABC``: :meth:`Transport.send`, :meth:`Transport.recv`,
+:meth:`Transport.shutdown`, usable as a context manager. Timeouts are uniform, in seconds:
+``None`` blocks, ``0`` polls (never blocks), ``> 0`` is a deadline on the monotonic clock
+(:class:`Deadline`).
+
+A serial link carries ``bytes``; a CAN link carries ``list[protocols.CanFrame]``. Both say
+how long a payload occupies the real wire (:meth:`Transport.wire_seconds`), so a sender can
+pace a pty or a vcan, which have no bit timing, to the baud rate or bitrate it emulates.
+
+Transports know nothing about the board: the board and the receiver both use them. Errors
+on open and on a link that goes away are :class:`skinhil.errors.TransportError` with a
+one-line message saying what to do.
+"""
+
+from __future__ import annotations
+
+import abc
+import os
+import select
+import time
+from typing import Generic, TypeVar
+
+from skinhil.errors import TransportError
+
+P = TypeVar("P")
+
+MAX_BAUD = 20_000_000
+"""Largest baud rate accepted (bits/s)."""
+MAX_CAN_BITRATE = 12_000_000
+"""Largest CAN (FD data phase) bitrate accepted (bits/s)."""
+
+
+class Transport(abc.ABC, Generic[P]):
+    """A link that moves payloads of type ``P`` (``bytes`` or ``list[CanFrame]``)."""
+
+    kind: str = "abstract"
+    """"serial" or "can": what payloads it carries (bytes or ``list[CanFrame]``)."""
+
+    @property
+    @abc.abstractmethod
+    def name(self) -> str:
+        """Human-readable name of the link (port or channel)."""
+
+    @abc.abstractmethod
+    def send(self, payload: P, timeout: float | None = None) -> int:
+        """Send ``payload``; return how many units (bytes or frames) the link accepted.
+
+        ``timeout`` None blocks until all is sent, 0 sends what goes without blocking,
+        ``> 0`` sends until the deadline. Raises :class:`TransportError` if the link is gone.
+        """
+
+    @abc.abstractmethod
+    def recv(self, timeout: float | None = None) -> P:
+        """Receive what is available: an empty payload if nothing arrived by the deadline."""
+
+    @abc.abstractmethod
+    def wire_seconds(self, payload: P) -> float:
+        """Seconds (s) ``payload`` occupies on the real wire at this link's rate."""
+
+    @abc.abstractmethod
+    def empty(self) -> P:
+        """An empty payload of this link's type."""
+
+    @abc.abstractmethod
+    def shutdown(self) -> None:
+        """Close the link; idempotent."""
+
+    def __enter__(self) -> Transport[P]:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.shutdown()
+
+
+class Deadline:
+    """A timeout in seconds turned into a monotonic deadline (None: no deadline)."""
+
+    def __init__(self, timeout: float | None) -> None:
+        if timeout is not None and timeout < 0:
+            raise ValueError(f"timeout must be None or >= 0 seconds, got {timeout!r}")
+        self.end = None if timeout is None else time.monotonic() + timeout
+
+    def left(self) -> float | None:
+        return None if self.end is None else max(0.0, self.end - time.monotonic())
+
+
+def check_baud(baud: int) -> int:
+    """``baud`` if it is a usable baud rate (bits/s), else :class:`TransportError`."""
+    if not isinstance(baud, int) or isinstance(baud, bool) or not 50 <= baud <= MAX_BAUD:
+        raise TransportError(f"invalid baud rate {baud!r}: give an integer from 50 to "
+                             f"{MAX_BAUD} bits/s, e.g. --baud 921600")
+    return baud
+
+
+def check_bitrate(bitrate: int, what: str = "bitrate") -> int:
+    """``bitrate`` if it is a usable CAN bitrate (bits/s), else :class:`TransportError`."""
+    if (not isinstance(bitrate, int) or isinstance(bitrate, bool)
+            or not 1000 <= bitrate <= MAX_CAN_BITRATE):
+        raise TransportError(f"invalid CAN {what} {bitrate!r}: give an integer from 1000 to "
+                             f"{MAX_CAN_BITRATE} bits/s, e.g. 1000000")
+    return bitrate
+
+
+def write_fd(fd: int, payload: bytes, deadline: Deadline) -> int:
+    """Write to a non-blocking fd until done or the deadline; return the bytes written."""
+    view = memoryview(payload)
+    sent = 0
+    while sent < len(view):
+        try:
+            sent += os.write(fd, view[sent:])
+            continue
+        except BlockingIOError:
+            pass
+        except InterruptedError:
+            continue
+        left = deadline.left()
+        if left == 0.0:
+            break
+        _, ready, _ = select.select([], [fd], [], left)
+        if not ready:
+            break
+    return sent

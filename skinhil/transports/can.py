@@ -1,0 +1,221 @@
+"""CAN and CAN FD links through python-can's ``can.Bus``: socketcan, virtual, vendor adapters."""
+
+from __future__ import annotations
+
+import collections
+import errno
+import logging
+import socket
+import threading
+import time
+from typing import Any
+
+from skinhil.errors import TransportError
+from skinhil.transports.base import Deadline, Transport, check_bitrate
+
+log = logging.getLogger(__name__)
+
+CAN_RCVBUF_BYTES = 8 * 1024 * 1024
+"""Socket receive buffer requested for a SocketCAN bus (the kernel may cap it)."""
+CAN_RX_QUEUE_FRAMES = 1_000_000
+"""Frames the CAN reader thread holds before it counts overflows."""
+
+
+class CanTransport(Transport[list[Any]]):
+    """A CAN bus through python-can's ``can.Bus``: any interface (socketcan, virtual, ...).
+
+    ``channel`` and ``interface`` go to ``can.Bus``; ``fd`` enables CAN FD; ``bitrate`` and
+    ``data_bitrate`` (bits/s) configure adapters that take them and set the wire budget
+    (SocketCAN takes its bitrate from ``ip link``; vcan has none, so the budget is all that
+    paces it). A reader thread drains the bus continuously, so the kernel's socket buffer
+    never overflows silently; ``rx_overflows`` counts frames the thread had to discard.
+    """
+
+    kind = "can"
+
+    def __init__(self, channel: str, interface: str = "socketcan", fd: bool = False,
+                 bitrate: int = 1_000_000, data_bitrate: int | None = None) -> None:
+        import can
+
+        self.channel = channel
+        self.interface = interface
+        self.fd = bool(fd)
+        self.bitrate = check_bitrate(bitrate)
+        self.data_bitrate = None if data_bitrate is None else check_bitrate(
+            data_bitrate, "data bitrate")
+        if self.data_bitrate is not None and not self.fd:
+            raise TransportError("a CAN data bitrate needs CAN FD: add --fd or drop "
+                                 "--data-bitrate")
+        kwargs: dict[str, Any] = {"channel": channel, "interface": interface, "fd": self.fd,
+                                  "bitrate": self.bitrate}
+        if self.data_bitrate is not None:
+            kwargs["data_bitrate"] = self.data_bitrate
+        if interface == "socketcan":
+            kwargs.pop("bitrate")
+            if not hasattr(socket, "AF_CAN"):
+                raise TransportError(_no_can_message(channel))
+        can_log = logging.getLogger("can")
+        level = can_log.level
+        can_log.setLevel(logging.CRITICAL)  # its own error line would repeat ours below
+        try:
+            self._bus = can.Bus(**kwargs)
+        except can.CanInterfaceNotImplementedError as exc:
+            raise TransportError(f"CAN interface {interface!r} is not available: {exc}; "
+                                 "see python-can's list of interfaces (socketcan, virtual, "
+                                 "pcan, kvaser, slcan, ...)") from None
+        except OSError as exc:
+            if exc.errno in (errno.EAFNOSUPPORT, errno.EPROTONOSUPPORT):
+                raise TransportError(_no_can_message(channel)) from None
+            if exc.errno == errno.ENODEV:
+                raise TransportError(
+                    f"CAN channel {channel!r} does not exist: list them with 'ip link show "
+                    "type can' / 'ip link show type vcan', or create a virtual one with "
+                    f"{_VCAN_HOWTO}") from None
+            if exc.errno in (errno.EACCES, errno.EPERM):
+                raise TransportError(f"permission denied on CAN channel {channel!r}: "
+                                     f"{exc.strerror}") from None
+            raise TransportError(f"cannot open CAN channel {channel!r} on {interface!r}: "
+                                 f"{exc}") from None
+        except (can.CanError, ValueError, TypeError, ImportError) as exc:
+            raise TransportError(f"cannot open CAN channel {channel!r} on {interface!r}: "
+                                 f"{exc}") from None
+        finally:
+            can_log.setLevel(level)
+        sock = getattr(self._bus, "socket", None)
+        if isinstance(sock, socket.socket):
+            try:
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, CAN_RCVBUF_BYTES)
+            except OSError as exc:
+                log.debug("SO_RCVBUF on %s: %s", channel, exc)
+        self.rx_overflows = 0
+        self._rx: collections.deque[Any] = collections.deque()
+        self._rx_ready = threading.Condition()
+        self._rx_error: Exception | None = None
+        self._closed = threading.Event()
+        self._reader = threading.Thread(target=self._read_loop, name=f"can-rx-{channel}",
+                                        daemon=True)
+        self._reader.start()
+
+    @property
+    def name(self) -> str:
+        return f"{self.interface}:{self.channel}"
+
+    def _read_loop(self) -> None:
+        import can
+
+        while not self._closed.is_set():
+            try:
+                msg = self._bus.recv(0.05)
+            except (can.CanError, OSError, ValueError) as exc:
+                if not self._closed.is_set():
+                    self._rx_error = exc
+                with self._rx_ready:
+                    self._rx_ready.notify_all()
+                return
+            if msg is None or msg.is_error_frame or msg.is_remote_frame:
+                continue
+            frame = _frame_from_message(msg)
+            with self._rx_ready:
+                if len(self._rx) >= CAN_RX_QUEUE_FRAMES:
+                    self.rx_overflows += 1
+                    continue
+                self._rx.append(frame)
+                self._rx_ready.notify()
+
+    def send(self, payload: list[Any], timeout: float | None = None) -> int:
+        import can
+
+        if self._closed.is_set():
+            raise TransportError(f"CAN channel {self.channel!r} is closed")
+        deadline = Deadline(timeout)
+        sent = 0
+        for frame in payload:
+            msg = _message_from_frame(frame, self.data_bitrate is not None)
+            while True:
+                try:
+                    self._bus.send(msg, timeout=deadline.left())
+                    break
+                except can.CanOperationError as exc:
+                    if exc.error_code in (errno.ENOBUFS, errno.EAGAIN) or "Transmit buffer" \
+                            in str(exc) or "timed out" in str(exc).lower():
+                        left = deadline.left()
+                        if left == 0.0:
+                            return sent
+                        time.sleep(min(0.0005, left) if left is not None else 0.0005)
+                        continue
+                    raise TransportError(f"CAN channel {self.channel!r} went away: "
+                                         f"{exc}") from None
+                except (can.CanError, OSError) as exc:
+                    raise TransportError(f"CAN channel {self.channel!r} went away: "
+                                         f"{exc}") from None
+            sent += 1
+        return sent
+
+    def recv(self, timeout: float | None = None) -> list[Any]:
+        if self._closed.is_set():
+            raise TransportError(f"CAN channel {self.channel!r} is closed")
+        deadline = Deadline(timeout)
+        with self._rx_ready:
+            while not self._rx:
+                if self._rx_error is not None:
+                    raise TransportError(f"CAN channel {self.channel!r} went away: "
+                                         f"{self._rx_error}")
+                left = deadline.left()
+                if left == 0.0 or self._closed.is_set():
+                    return []
+                self._rx_ready.wait(left)
+            out = list(self._rx)
+            self._rx.clear()
+        return out
+
+    def wire_seconds(self, payload: list[Any]) -> float:
+        from protocols import can_frame_seconds
+
+        return float(sum(can_frame_seconds(f, self.bitrate, self.data_bitrate) for f in payload))
+
+    def empty(self) -> list[Any]:
+        return []
+
+    def shutdown(self) -> None:
+        if self._closed.is_set():
+            return
+        self._closed.set()
+        self._reader.join(timeout=1.0)
+        with self._rx_ready:
+            self._rx_ready.notify_all()
+        try:
+            self._bus.shutdown()
+        except Exception as exc:  # a vanished adapter may fail to close; nothing to recover
+            log.debug("closing %s: %s", self.channel, exc)
+
+
+_VCAN_HOWTO = ("'sudo modprobe vcan && sudo ip link add dev vcan0 type vcan && "
+               "sudo ip link set up vcan0'")
+
+
+def _no_can_message(channel: str) -> str:
+    return (f"cannot open CAN channel {channel!r}: this system has no SocketCAN support "
+            f"(socket.AF_CAN unavailable); on Linux create a virtual bus with {_VCAN_HOWTO}, "
+            "or choose another python-can interface with --interface (e.g. virtual)")
+
+
+def _message_from_frame(frame: Any, bitrate_switch: bool) -> Any:
+    import can
+
+    ext = getattr(frame, "is_extended_id", None)
+    if ext is None:
+        ext = frame.arbitration_id > 0x7FF
+    return can.Message(arbitration_id=frame.arbitration_id, data=frame.data,
+                       is_extended_id=bool(ext), is_fd=bool(frame.is_fd),
+                       bitrate_switch=bool(frame.is_fd and bitrate_switch),
+                       check=False)
+
+
+def _frame_from_message(msg: Any) -> Any:
+    from protocols import CanFrame
+
+    kwargs: dict[str, Any] = {}
+    if "is_extended_id" in getattr(CanFrame, "__dataclass_fields__", {}):
+        kwargs["is_extended_id"] = bool(msg.is_extended_id)
+    return CanFrame(arbitration_id=int(msg.arbitration_id), data=bytes(msg.data),
+                    is_fd=bool(msg.is_fd), **kwargs)
