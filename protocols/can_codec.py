@@ -2,8 +2,10 @@
 
 11-bit IDs ``class << 4 | board_id``; every board→host frame starts with a frame sequence
 counter (4 bits classic, 8 bits FD); events are 12-bit words (9-bit address, 3-bit step
-delta), 4 per classic frame and 40 per 64-byte FD frame, stamped against SYNC frames. The
-compiled loops are in :mod:`protocols.can_kernels`.
+delta), 4 per classic frame and 40 per 64-byte FD frame (version 1), or, for skins of more
+than 338 channels, 24-bit words (20-bit address, 4-bit delta) in WIDE_EVENTS frames, 2 per
+classic and 20 per FD frame (version 2); stamped against SYNC frames. The compiled loops are
+in :mod:`protocols.can_kernels`.
 """
 
 from __future__ import annotations
@@ -15,7 +17,13 @@ from collections.abc import Iterable
 import numpy as np
 
 from protocols import can_kernels as k
-from protocols.constants import DEFAULT_FLUSH_US, DEFAULT_STEP_US, DEFAULT_SYNC_US, PROTOCOL_VERSION
+from protocols.constants import (
+    DEFAULT_FLUSH_US,
+    DEFAULT_STEP_US,
+    DEFAULT_SYNC_US,
+    KNOWN_VERSIONS,
+    N_CHANNELS,
+)
 from protocols.counters import StatusTracker, unwrap
 from protocols.event_input import check_step_us, event_steps
 from protocols.record_fields import arg_bits, arg_value, check_uint, enum_or_int
@@ -32,6 +40,7 @@ from protocols.records import (
     Record,
     Status,
 )
+from protocols.versions import check_versions, refuse_version, wire_version
 from skinhil.errors import ProtocolError
 from skinhil.events import make_events
 
@@ -67,19 +76,22 @@ def _board(board_id: int) -> int:
     return int(board_id)
 
 
-def _flags(running: bool) -> int:
-    return int(bool(running)) | (PROTOCOL_VERSION << 4)
+def _flags(running: bool, version: int) -> int:
+    return int(bool(running)) | (version << 4)
 
 
 class CanEncoder:
     """Encoder of one board's CAN frames (classic 8-byte or, with ``fd``, CAN FD 64-byte).
 
     ``step_us`` is the event time step (µs); ``flush_us`` the longest time one events frame
-    spans (µs); ``sync_us`` the longest time between SYNC frames (µs).
+    spans (µs); ``sync_us`` the longest time between SYNC frames (µs); ``n_channels`` the
+    board's channel count, which selects the format (:attr:`version`): narrow up to 338
+    channels, wide above.
     """
 
     def __init__(self, board_id: int = 0, fd: bool = False, step_us: int = DEFAULT_STEP_US,
-                 flush_us: int = DEFAULT_FLUSH_US, sync_us: int = DEFAULT_SYNC_US) -> None:
+                 flush_us: int = DEFAULT_FLUSH_US, sync_us: int = DEFAULT_SYNC_US,
+                 n_channels: int = N_CHANNELS) -> None:
         self.board_id = _board(board_id)
         self.fd = bool(fd)
         self.step_us = check_step_us(step_us)
@@ -96,9 +108,13 @@ class CanEncoder:
         self._st = np.zeros(k.E_SIZE, dtype=np.int64)
         self._st[k.E_EPOCH] = k.EPOCH_MOD - 1
         self._st[k.E_STEP_US] = self.step_us
+        self.version = wire_version(n_channels)
+        """Protocol version of this stream: 1 narrow, 2 wide (SPEC.md §9)."""
+        self.n_channels = int(n_channels)
+        self._st[k.E_VERSION] = self.version
         self._cmd_seq = 0
         self._t_min_us = 0
-        self._ids = [can_id(c, self.board_id) for c in range(7)]
+        self._ids = [can_id(c, self.board_id) for c in range(8)]
         self._span = flush_us // step_us
         self._sync_every = sync_us // step_us
         self._out = np.empty(0, dtype=np.uint8)
@@ -115,7 +131,8 @@ class CanEncoder:
 
         An empty call returns a SYNC if the last one is ``sync_us`` old, else nothing.
         """
-        steps, addr = event_steps(events, self.step_us, t_end_us, self._t_min_us)
+        steps, addr = event_steps(events, self.step_us, t_end_us, self._t_min_us,
+                                  self.n_channels)
         self._t_min_us = max(self._t_min_us, int(t_end_us))
         st, fd = self._st, self.fd
         if steps.shape[0] == 0:
@@ -163,11 +180,11 @@ class CanEncoder:
                     status.events_queued, status.late_ticks, status.rx_errors,
                     status.dropped_fifo_full, status.dropped_stopped,
                     status.dropped_link_down, link]
-            data = _STATUS_FD.pack(self._next_seq(), _flags(status.running), t,
+            data = _STATUS_FD.pack(self._next_seq(), _flags(status.running, self.version), t,
                                    *(v & 0xFFFFFFFF for v in vals))
             return [CanFrame(ident, data, True)]
         queued = check_uint(status.events_queued, 24, "events_queued (classic CAN)")
-        parts = [_MUX0.pack(0, t, _flags(status.running))]
+        parts = [_MUX0.pack(0, t, _flags(status.running, self.version))]
         for mux, (a, b) in enumerate(((status.events_generated, queued),
                                       (status.events_sent, status.late_ticks),
                                       (status.events_dropped, status.rx_errors)), start=1):
@@ -216,11 +233,14 @@ class CanDecoder:
     """Incremental decoder of one board's frames: feed frames in any batches.
 
     Frames of other boards or unknown IDs are counted in ``counters.foreign_frames``; never
-    raises on bad frames (SPEC.md §6).
+    raises on bad frames (SPEC.md §6). ``versions`` are the protocol versions it reads
+    (default both): a stream that announces another known version raises ProtocolError.
     """
 
-    def __init__(self, board_id: int = 0, fd: bool = False) -> None:
+    def __init__(self, board_id: int = 0, fd: bool = False,
+                 versions: tuple[int, ...] = KNOWN_VERSIONS) -> None:
         self.board_id = _board(board_id)
+        self.versions = check_versions(versions)
         self.fd = bool(fd)
         self.counters = LinkCounters()
         self._st = np.zeros(k.D_SIZE, dtype=np.int64)
@@ -240,6 +260,7 @@ class CanDecoder:
         blob = np.frombuffer(b"".join(datas) + b"\0" * 8, dtype=np.uint8)
         t, a, ne, rec_ix, nr = k.decode_frames(ids, lens, blob, self.board_id, self.fd,
                                               self._st, self._c)
+        refuse_version(int(self._st[k.D_VERSIONS]), self.versions)
         events = make_events(t[:ne], a[:ne])
         records: list[Record] = []
         for r in range(nr):

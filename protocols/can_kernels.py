@@ -1,6 +1,7 @@
 """Compiled inner loops of the CAN codec: events frames out, whole frame batches in.
 
-Layouts are those of SPEC.md §5. State and counters are int64 arrays; the slot names are the
+Layouts are those of SPEC.md §5 (narrow, version 1) and §9 (wide, version 2: WIDE_EVENTS
+frames of 24-bit words). State and counters are int64 arrays; the slot names are the
 constants below (counter slots are shared with :mod:`protocols.serial_kernels`).
 """
 
@@ -9,7 +10,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from protocols.constants import N_CHANNELS, PROTOCOL_VERSION
+from protocols.constants import N_CHANNELS, PROTOCOL_VERSION, WIDE_VERSION
 from protocols.serial_kernels import (
     C_DUPS,
     C_EVENTS,
@@ -19,18 +20,27 @@ from protocols.serial_kernels import (
     C_MALFORMED,
     C_SYNCS,
     C_UNTIMED,
+    WIDE_ITEM_BYTES,
+    WIDE_MAX_DELTA,
     get_le,
+    is_known_version,
     put_le,
     unwrap_near,
 )
+from protocols.versions import MAX_CHANNELS
 
-CLS_COMMAND, CLS_ACK, CLS_SYNC, CLS_STATUS, CLS_MARKER, CLS_EVENTS = 1, 2, 3, 4, 5, 6
-"""Frame classes: the 11-bit ID is ``class << 4 | board_id``."""
+CLS_COMMAND, CLS_ACK, CLS_SYNC, CLS_STATUS, CLS_MARKER, CLS_EVENTS, CLS_WIDE = range(1, 8)
+"""Frame classes: the 11-bit ID is ``class << 4 | board_id``. CLS_WIDE (wide events) belongs
+to a board only once it announced version 2 (a version-2 SYNC)."""
 
 FD_LENGTHS = np.array([0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64], dtype=np.int64)
 
 CLASSIC_MAX_EVENTS = 4
 FD_MAX_EVENTS = 40
+CLASSIC_MAX_WIDE = 2
+"""Wide events per classic frame (2 + 2 x 3 bytes)."""
+FD_MAX_WIDE = 20
+"""Wide events per 64-byte FD frame (4 + 20 x 3 bytes)."""
 CLASSIC_MAX_OFFSET = (1 << 9) - 1
 FD_MAX_OFFSET = (1 << 15) - 1
 EPOCH_MOD = 8
@@ -42,12 +52,12 @@ C_FOREIGN = 11
 C_SIZE = 12
 
 # encoder state slots (same meaning as the serial encoder's)
-E_SEQ, E_EPOCH, E_SYNC_VALID, E_SYNC_BASE, E_EVENTS, E_STEP_US, E_LAST_SYNC = range(7)
-E_SIZE = 7
-# decoder state slots
+E_SEQ, E_EPOCH, E_SYNC_VALID, E_SYNC_BASE, E_EVENTS, E_STEP_US, E_LAST_SYNC, E_VERSION = range(8)
+E_SIZE = 8
+# decoder state slots (D_VERSION: of the last SYNC; D_VERSIONS: bit v set once one was seen)
 (D_HAVE_SEQ, D_SEQ, D_SYNC_VALID, D_EPOCH, D_BASE, D_STEP_US, D_HAVE_CMD_SEQ,
- D_CMD_SEQ) = range(8)
-D_SIZE = 8
+ D_CMD_SEQ, D_VERSION, D_VERSIONS) = range(10)
+D_SIZE = 10
 
 
 @numba.njit(cache=True, nogil=True)
@@ -60,11 +70,12 @@ def fd_length(n: int) -> int:
 
 
 @numba.njit(cache=True, nogil=True)
-def events_frame_len(n: int, fd: bool) -> int:
-    """Data length of an events frame holding ``n`` events."""
+def events_frame_len(n: int, fd: bool, wide: bool = False) -> int:
+    """Data length of an events frame holding ``n`` events (12-bit or, ``wide``, 24-bit)."""
+    bits = 24 if wide else 12
     if fd:
-        return fd_length(4 + (12 * n + 7) // 8)
-    return 2 + (12 * n + 7) // 8
+        return fd_length(4 + (bits * n + 7) // 8)
+    return 2 + (bits * n + 7) // 8
 
 
 @numba.njit(cache=True, nogil=True)
@@ -73,7 +84,7 @@ def encode_sync(st: np.ndarray, base: int, fd: bool, out: np.ndarray, pos: int) 
     epoch = (st[E_EPOCH] + 1) % EPOCH_MOD
     if fd:
         out[pos] = st[E_SEQ] & 0xFF
-        out[pos + 1] = epoch | (PROTOCOL_VERSION << 4)
+        out[pos + 1] = epoch | (st[E_VERSION] << 4)
         put_le(out, pos + 2, st[E_STEP_US], 2)
         put_le(out, pos + 4, base & ((1 << 48) - 1), 6)
         out[pos + 10] = 0
@@ -81,7 +92,8 @@ def encode_sync(st: np.ndarray, base: int, fd: bool, out: np.ndarray, pos: int) 
         st[E_SEQ] = (st[E_SEQ] + 1) % FD_SEQ_MOD
         ln = 12
     else:
-        out[pos] = (st[E_SEQ] & 0xF) | (epoch << 4)
+        out[pos] = (st[E_SEQ] & 0xF) | (epoch << 4) | (0x80 if st[E_VERSION] == WIDE_VERSION
+                                                       else 0)
         put_le(out, pos + 1, st[E_STEP_US], 2)
         put_le(out, pos + 3, base & ((1 << 40) - 1), 5)
         st[E_SEQ] = (st[E_SEQ] + 1) % CLASSIC_SEQ_MOD
@@ -103,7 +115,15 @@ def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int
     Returns the number of frames.
     """
     n = steps.shape[0]
-    max_n = FD_MAX_EVENTS if fd else CLASSIC_MAX_EVENTS
+    wide = st[E_VERSION] == WIDE_VERSION
+    if wide:
+        max_n = FD_MAX_WIDE if fd else CLASSIC_MAX_WIDE
+        max_d = WIDE_MAX_DELTA
+        cls = CLS_WIDE
+    else:
+        max_n = FD_MAX_EVENTS if fd else CLASSIC_MAX_EVENTS
+        max_d = 7
+        cls = CLS_EVENTS
     max_off = FD_MAX_OFFSET if fd else CLASSIC_MAX_OFFSET
     hdr = 4 if fd else 2
     pos = 0
@@ -126,8 +146,15 @@ def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int
         while i < n and cnt < max_n:
             s = steps[i]
             d = s - cur
-            if s >= wend or d > 7:
+            if s >= wend or d > max_d:
                 break
+            if wide:
+                put_le(out, bitpos >> 3, (np.int64(addr[i]) << 4) | d, WIDE_ITEM_BYTES)
+                bitpos += 24
+                cur = s
+                cnt += 1
+                i += 1
+                continue
             e = (np.int64(addr[i]) << 3) | d
             p = bitpos >> 3
             if bitpos & 7:
@@ -148,11 +175,11 @@ def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int
             h = (st[E_SEQ] & 0xF) | (st[E_EPOCH] << 4) | (off << 7)
             put_le(out, pos, h, 2)
             st[E_SEQ] = (st[E_SEQ] + 1) % CLASSIC_SEQ_MOD
-        ln = events_frame_len(cnt, fd)
+        ln = events_frame_len(cnt, fd, wide)
         for q in range((bitpos + 7) >> 3, pos + ln):
             out[q] = 0
         lens[nf] = ln
-        kinds[nf] = CLS_EVENTS
+        kinds[nf] = cls
         nf += 1
         pos += ln
         st[E_EVENTS] += cnt
@@ -166,6 +193,30 @@ def _event_at(blob: np.ndarray, o: int, k: int, hdr: int) -> np.int64:
     if bit & 7:
         return (np.int64(blob[p]) >> 4) | (np.int64(blob[p + 1]) << 4)
     return np.int64(blob[p]) | ((np.int64(blob[p + 1]) & 0xF) << 8)
+
+
+@numba.njit(cache=True, nogil=True)
+def _wide_count(blob: np.ndarray, o: int, ln: int, fd: bool) -> np.int64:
+    """Events in a valid wide events frame, or -1 if its layout is invalid."""
+    if fd:
+        if ln < 4:
+            return np.int64(-1)
+        n = (np.int64(blob[o + 1]) >> 3) | ((np.int64(blob[o + 2]) & 1) << 5)
+        if n < 1 or n > FD_MAX_WIDE or ln < 4 + WIDE_ITEM_BYTES * n:
+            return np.int64(-1)
+        hdr = 4
+    else:
+        if ln == 2 + WIDE_ITEM_BYTES:
+            n = np.int64(1)
+        elif ln == 2 + 2 * WIDE_ITEM_BYTES:
+            n = np.int64(2)
+        else:
+            return np.int64(-1)
+        hdr = 2
+    for k in range(n):
+        if (get_le(blob, o + hdr + WIDE_ITEM_BYTES * k, WIDE_ITEM_BYTES) >> 4) >= MAX_CHANNELS:
+            return np.int64(-1)
+    return n
 
 
 @numba.njit(cache=True, nogil=True)
@@ -200,9 +251,9 @@ def _events_count(blob: np.ndarray, o: int, ln: int, fd: bool) -> np.int64:
 def _layout_ok(cls: int, blob: np.ndarray, o: int, ln: int, fd: bool) -> bool:
     if cls == CLS_SYNC:
         if fd:
-            return ln >= 10 and (blob[o + 1] >> 4) == PROTOCOL_VERSION and (
+            return ln >= 10 and is_known_version(blob[o + 1] >> 4) and (
                 blob[o + 1] & 0x8) == 0 and get_le(blob, o + 2, 2) > 0
-        return ln >= 8 and get_le(blob, o + 1, 2) > 0 and (blob[o] & 0x80) == 0
+        return ln >= 8 and get_le(blob, o + 1, 2) > 0
     if cls == CLS_STATUS:
         if fd:
             return ln >= 48
@@ -232,7 +283,7 @@ def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: in
         cap += lens[f]
     cap = (cap * 8) // 12 + 8
     out_t = np.empty(cap, dtype=np.int64)
-    out_a = np.empty(cap, dtype=np.uint16)
+    out_a = np.empty(cap, dtype=np.uint32)
     rec_ix = np.empty((nf + 1, 4), dtype=np.int64)
     seq_mod = FD_SEQ_MOD if fd else CLASSIC_SEQ_MOD
     hdr = 4 if fd else 2
@@ -245,15 +296,17 @@ def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: in
         o += ln
         ident = ids[f]
         cls = ident >> 4
-        if ident < 0 or ident > 0x7FF or (ident & 0xF) != board or cls < 1 or cls > 6:
+        top = CLS_WIDE if st[D_VERSION] == WIDE_VERSION else CLS_EVENTS
+        if ident < 0 or ident > 0x7FF or (ident & 0xF) != board or cls < 1 or cls > top:
             c[C_FOREIGN] += 1
             continue
         if ln < 1 or (not fd and ln > 8):
             c[C_MALFORMED] += 1
             continue
         count = np.int64(0)
-        if cls == CLS_EVENTS:
-            count = _events_count(blob, fo, ln, fd)
+        if cls == CLS_EVENTS or cls == CLS_WIDE:
+            count = _events_count(blob, fo, ln, fd) if cls == CLS_EVENTS else _wide_count(
+                blob, fo, ln, fd)
             if count < 0:
                 c[C_MALFORMED] += 1
                 continue
@@ -275,7 +328,7 @@ def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: in
         st[have] = 1
         st[last] = seq
         c[C_FRAMES_OK] += 1
-        if cls == CLS_EVENTS:
+        if cls == CLS_EVENTS or cls == CLS_WIDE:
             if fd:
                 epoch = blob[fo + 1] & 0x7
                 off = get_le(blob, fo + 2, 2) >> 1
@@ -288,19 +341,27 @@ def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: in
             t = st[D_BASE] + off
             step = st[D_STEP_US]
             for k in range(count):
-                e = _event_at(blob, fo, k, hdr)
-                t += e & 7
+                if cls == CLS_WIDE:
+                    word = get_le(blob, fo + hdr + WIDE_ITEM_BYTES * k, WIDE_ITEM_BYTES)
+                    t += word & WIDE_MAX_DELTA
+                    out_a[ne] = word >> 4
+                else:
+                    e = _event_at(blob, fo, k, hdr)
+                    t += e & 7
+                    out_a[ne] = e >> 3
                 out_t[ne] = t * step
-                out_a[ne] = e >> 3
                 ne += 1
         elif cls == CLS_SYNC:
             st[D_SYNC_VALID] = 1
             if fd:
                 st[D_EPOCH] = blob[fo + 1] & 0x7
+                st[D_VERSION] = blob[fo + 1] >> 4
                 step, raw, bits = get_le(blob, fo + 2, 2), get_le(blob, fo + 4, 6), 48
             else:
                 st[D_EPOCH] = (blob[fo] >> 4) & 0x7
+                st[D_VERSION] = WIDE_VERSION if blob[fo] & 0x80 else PROTOCOL_VERSION
                 step, raw, bits = get_le(blob, fo + 1, 2), get_le(blob, fo + 3, 5), 40
+            st[D_VERSIONS] |= 1 << st[D_VERSION]
             st[D_BASE] = unwrap_near(st[D_BASE], raw, bits) if st[D_STEP_US] else raw
             st[D_STEP_US] = step
             c[C_SYNCS] += 1

@@ -3,10 +3,23 @@
 from __future__ import annotations
 
 PROTOCOL_VERSION = 1
-"""Version carried by SYNC packets/frames and status flags."""
+"""Version of the narrow format (9-bit addresses), carried by SYNC packets/frames and status
+flags of a stream whose channels all fit it."""
+
+WIDE_VERSION = 2
+"""Version of the wide format (20-bit addresses, SPEC.md §9), for skins of more channels."""
+
+KNOWN_VERSIONS = (PROTOCOL_VERSION, WIDE_VERSION)
+"""Versions the decoders read."""
 
 N_CHANNELS = 338
-"""Event addresses are 0..N_CHANNELS-1 (one per spring sensor)."""
+"""Narrow event addresses are 0..N_CHANNELS-1 (the paper's 6x6 skin: one per spring sensor)."""
+
+WIDE_ADDR_BITS = 20
+"""Address bits of a wide event word (the other 4 of its 24 bits are the step delta)."""
+
+WIDE_MAX_CHANNELS = (1 << WIDE_ADDR_BITS) - 1
+"""Wide addresses are 0..WIDE_MAX_CHANNELS-1 on the wire (the all-ones address is invalid)."""
 
 DEFAULT_STEP_US = 100
 """Default time step of event stamps (µs); the stream carries the actual value in SYNC."""

@@ -20,13 +20,14 @@ def check_step_us(step_us: int) -> int:
 
 @numba.njit(cache=True, nogil=True)
 def _convert(t: np.ndarray, a: np.ndarray, step_us: int, t_min: int, t_end: int,
-             steps: np.ndarray, addr: np.ndarray) -> int:
+             n_channels: int, steps: np.ndarray, addr: np.ndarray) -> int:
     order_ok = True
-    prev = -1
+    prev_s = -1
+    prev_a = -1
     for i in range(t.shape[0]):
         ti = t[i]
-        ai = a[i]
-        if ai < 0 or ai >= N_CHANNELS:
+        ai = int(a[i])
+        if ai < 0 or ai >= n_channels:
             return _BAD_ADDR
         if ti % step_us:
             return _NOT_MULTIPLE
@@ -35,18 +36,18 @@ def _convert(t: np.ndarray, a: np.ndarray, step_us: int, t_min: int, t_end: int,
         s = ti // step_us
         steps[i] = s
         addr[i] = ai
-        key = s * 512 + ai
-        if key < prev:
+        if s < prev_s or (s == prev_s and ai < prev_a):
             order_ok = False
-        prev = key
+        prev_s = s
+        prev_a = ai
     return _OK if order_ok else _UNSORTED
 
 
-def event_steps(events: np.ndarray, step_us: int, t_end_us: int,
-                t_min_us: int) -> tuple[np.ndarray, np.ndarray]:
-    """Return (time in steps int64, address uint16) of ``events``, sorted by (time, address).
+def event_steps(events: np.ndarray, step_us: int, t_end_us: int, t_min_us: int,
+                n_channels: int = N_CHANNELS) -> tuple[np.ndarray, np.ndarray]:
+    """Return (time in steps int64, address uint32) of ``events``, sorted by (time, address).
 
-    Raises ProtocolError if an address is outside 0..337, a time is not a multiple of
+    Raises ProtocolError if an address is outside 0..n_channels-1, a time is not a multiple of
     ``step_us``, is before ``t_min_us`` (the end of the previous call) or not before
     ``t_end_us``.
     """
@@ -56,18 +57,19 @@ def event_steps(events: np.ndarray, step_us: int, t_end_us: int,
                             "build it with skinhil.events.make_events")
     n = events.shape[0]
     steps = np.empty(n, dtype=np.int64)
-    addr = np.empty(n, dtype=np.uint16)
+    addr = np.empty(n, dtype=np.uint32)
     if n == 0:
         return steps, addr
-    code = _convert(events["t"], events["addr"], step_us, t_min_us, t_end_us, steps, addr)
+    code = _convert(events["t"], events["addr"], step_us, t_min_us, t_end_us, n_channels,
+                    steps, addr)
     if code == _BAD_ADDR:
-        raise ProtocolError(f"an event address is outside 0..{N_CHANNELS - 1}")
+        raise ProtocolError(f"an event address is outside 0..{n_channels - 1}")
     if code == _NOT_MULTIPLE:
         raise ProtocolError(f"event times must be multiples of the {step_us} µs step")
     if code == _OUT_OF_RANGE:
         raise ProtocolError(f"event times must lie in [{t_min_us}, {t_end_us}) µs: after the "
                             "previous call's t_end_us and before this call's")
     if code == _UNSORTED:
-        order = np.argsort(steps * 512 + addr, kind="stable")
+        order = np.lexsort((addr, steps))
         steps, addr = steps[order], addr[order]
     return steps, addr

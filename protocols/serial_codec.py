@@ -1,7 +1,8 @@
 """Serial packet stream (SPEC.md §2-§4): encoder and incremental decoder.
 
 Packets are COBS-framed, zero-delimited, CRC-16 protected; events are 16-bit words (9-bit
-address, 7-bit step delta) or a 338-bit bitmap for a crowded step, stamped against an
+address, 7-bit step delta) or a 338-bit bitmap for a crowded step (version 1), or 24-bit words
+(20-bit address, 4-bit delta) for skins of more channels (version 2), stamped against an
 explicit time base (SYNC). The compiled loops are in :mod:`protocols.serial_kernels`.
 """
 
@@ -13,7 +14,13 @@ import struct
 import numpy as np
 
 from protocols import serial_kernels as k
-from protocols.constants import DEFAULT_FLUSH_US, DEFAULT_STEP_US, DEFAULT_SYNC_US
+from protocols.constants import (
+    DEFAULT_FLUSH_US,
+    DEFAULT_STEP_US,
+    DEFAULT_SYNC_US,
+    KNOWN_VERSIONS,
+    N_CHANNELS,
+)
 from protocols.counters import StatusTracker
 from protocols.event_input import check_step_us, event_steps
 from protocols.framing import frame_into
@@ -30,6 +37,7 @@ from protocols.records import (
     Record,
     Status,
 )
+from protocols.versions import check_versions, refuse_version, wire_version
 from skinhil.errors import ProtocolError
 from skinhil.events import make_events
 
@@ -53,11 +61,13 @@ class SerialEncoder:
     host→board commands). Keeps the sequence number, SYNC epoch and event count.
 
     ``step_us`` is the event time step (µs); ``flush_us`` the longest time one events packet
-    spans (µs, a multiple of the step); ``sync_us`` the longest time between SYNCs (µs).
+    spans (µs, a multiple of the step); ``sync_us`` the longest time between SYNCs (µs);
+    ``n_channels`` the board's channel count, which selects the format (:attr:`version`):
+    narrow up to 338 channels, wide above.
     """
 
     def __init__(self, step_us: int = DEFAULT_STEP_US, flush_us: int = DEFAULT_FLUSH_US,
-                 sync_us: int = DEFAULT_SYNC_US) -> None:
+                 sync_us: int = DEFAULT_SYNC_US, n_channels: int = N_CHANNELS) -> None:
         self.step_us = check_step_us(step_us)
         if flush_us < step_us or flush_us % step_us:
             raise ProtocolError(f"flush_us={flush_us} must be a positive multiple of the "
@@ -67,9 +77,13 @@ class SerialEncoder:
                                 f"{0xFFFF * step_us}] µs")
         self.flush_us = flush_us
         self.sync_us = sync_us
+        self.version = wire_version(n_channels)
+        """Protocol version of this stream: 1 narrow, 2 wide (SPEC.md §9)."""
+        self.n_channels = int(n_channels)
         self._st = np.zeros(k.E_SIZE, dtype=np.int64)
         self._st[k.E_EPOCH] = k.EPOCH_MOD - 1
         self._st[k.E_STEP_US] = self.step_us
+        self._st[k.E_VERSION] = self.version
         self._t_min_us = 0
         self._pkt = np.empty(k.MAX_BODY + 8, dtype=np.uint8)
         self._out = np.empty(2 * k.MAX_WIRE, dtype=np.uint8)
@@ -84,7 +98,8 @@ class SerialEncoder:
 
         An empty call returns a SYNC if the last one is ``sync_us`` old, else nothing.
         """
-        steps, addr = event_steps(events, self.step_us, t_end_us, self._t_min_us)
+        steps, addr = event_steps(events, self.step_us, t_end_us, self._t_min_us,
+                                  self.n_channels)
         self._t_min_us = max(self._t_min_us, int(t_end_us))
         st = self._st
         if steps.shape[0] == 0:
@@ -147,10 +162,12 @@ class SerialDecoder:
     """Incremental decoder of a serial packet stream: feed bytes in any chunking.
 
     Never raises on bad data: corrupted or foreign bytes are counted in :attr:`counters`
-    and skipped (SPEC.md §6).
+    and skipped (SPEC.md §6). ``versions`` are the protocol versions it reads (default both):
+    a stream that announces another known version raises :class:`ProtocolError`.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, versions: tuple[int, ...] = KNOWN_VERSIONS) -> None:
+        self.versions = check_versions(versions)
         self.counters = LinkCounters()
         self._pending = bytearray()
         self._st = np.zeros(k.D_SIZE, dtype=np.int64)
@@ -172,6 +189,7 @@ class SerialDecoder:
         buf = np.frombuffer(bytes(pending[:end + 1]), dtype=np.uint8)
         del pending[:end + 1]
         t, a, ne, rec, rec_ix, nr = k.decode_stream(buf, self._st, self._c)
+        refuse_version(int(self._st[k.D_VERSIONS]), self.versions)
         events = make_events(t[:ne], a[:ne])
         records: list[Record] = []
         for r in range(nr):

@@ -1,7 +1,8 @@
 """Compiled inner loops of the serial codec: events packets out, whole byte streams in.
 
 State and counters live in small int64 arrays so the loops run without Python objects; the
-index constants below name their slots. Layouts are those of SPEC.md §3-§4.
+index constants below name their slots. Layouts are those of SPEC.md §3-§4 (narrow, version 1)
+and §9 (wide, version 2: WIDE_EVENTS packets of 24-bit words).
 """
 
 from __future__ import annotations
@@ -9,11 +10,18 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from protocols.constants import BITMAP_BYTES, N_CHANNELS, PROTOCOL_VERSION
+from protocols.constants import BITMAP_BYTES, N_CHANNELS, WIDE_VERSION
 from protocols.framing import cobs_decode, crc16, frame_into
+from protocols.versions import MAX_CHANNELS
 
-T_EVENTS, T_SYNC, T_STATUS, T_MARKER, T_COMMAND, T_ACK = 0, 1, 2, 3, 4, 5
-"""Packet types (high three bits of byte 0)."""
+T_EVENTS, T_SYNC, T_STATUS, T_MARKER, T_COMMAND, T_ACK, T_WIDE = 0, 1, 2, 3, 4, 5, 6
+"""Packet types (high three bits of byte 0); T_WIDE carries wide (version 2) events."""
+
+WIDE_ITEM_BYTES = 3
+"""A wide event word: 24 bits, little-endian: bits 3..0 delta, bits 23..4 address."""
+
+WIDE_MAX_DELTA = 15
+"""Largest step delta of a wide event word (4 bits)."""
 
 BITMAP_ADDR = 511
 """Address field value of a bitmap word."""
@@ -34,11 +42,11 @@ BODY_LEN = np.array([-1, 11, 48, 13, 9, 6, -1, -1], dtype=np.int64)
 """Exact body length of each fixed-size packet type (-1: variable or invalid)."""
 
 # encoder state slots
-E_SEQ, E_EPOCH, E_SYNC_VALID, E_SYNC_BASE, E_EVENTS, E_STEP_US, E_LAST_SYNC = range(7)
-E_SIZE = 7
-# decoder state slots
-D_HAVE_SEQ, D_SEQ, D_SYNC_VALID, D_EPOCH, D_BASE, D_STEP_US = range(6)
-D_SIZE = 6
+E_SEQ, E_EPOCH, E_SYNC_VALID, E_SYNC_BASE, E_EVENTS, E_STEP_US, E_LAST_SYNC, E_VERSION = range(8)
+E_SIZE = 8
+# decoder state slots (D_VERSIONS: bit v set once a SYNC of version v was received)
+D_HAVE_SEQ, D_SEQ, D_SYNC_VALID, D_EPOCH, D_BASE, D_STEP_US, D_VERSIONS = range(7)
+D_SIZE = 7
 # decoder counter slots (LinkCounters fields of the same names)
 (C_FRAMES_OK, C_CRC, C_MALFORMED, C_RESYNCS, C_DISCARDED, C_GAPS, C_LOST, C_DUPS,
  C_EVENTS, C_UNTIMED, C_SYNCS) = range(11)
@@ -77,7 +85,7 @@ def encode_sync(st: np.ndarray, base: int, pkt: np.ndarray, out: np.ndarray, pos
     epoch = (st[E_EPOCH] + 1) % EPOCH_MOD
     pkt[0] = (T_SYNC << 5) | epoch
     pkt[1] = st[E_SEQ] & 0xFF
-    pkt[2] = PROTOCOL_VERSION
+    pkt[2] = st[E_VERSION]
     put_le(pkt, 3, st[E_STEP_US], 2)
     put_le(pkt, 5, base & ((1 << 48) - 1), 6)
     st[E_SEQ] = (st[E_SEQ] + 1) & 0xFF
@@ -96,7 +104,10 @@ def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int
     ``steps`` are event times in steps (sorted), ``addr`` their channels; a packet never
     crosses a multiple of ``span`` steps; a SYNC is sent before a packet whose base is
     ``sync_every`` steps or more after the last SYNC (or out of the 16-bit offset range).
+    A version-2 encoder (``st[E_VERSION]``) writes WIDE_EVENTS packets instead.
     """
+    if st[E_VERSION] == WIDE_VERSION:
+        return _encode_wide(steps, addr, st, span, sync_every, out)
     n = steps.shape[0]
     pkt = np.empty(MAX_BODY + 8, dtype=np.uint8)
     seen = np.zeros(N_CHANNELS, dtype=np.bool_)
@@ -172,15 +183,66 @@ def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int
 
 
 @numba.njit(cache=True, nogil=True)
+def _encode_wide(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int,
+                 sync_every: int, out: np.ndarray) -> int:
+    """:func:`encode_events` for version 2: WIDE_EVENTS packets of 24-bit words."""
+    n = steps.shape[0]
+    pkt = np.empty(MAX_BODY + 8, dtype=np.uint8)
+    pos = 0
+    i = 0
+    while i < n:
+        base = steps[i]
+        if (st[E_SYNC_VALID] == 0 or base - st[E_SYNC_BASE] > 0xFFFF
+                or base - st[E_SYNC_BASE] >= sync_every):
+            pos = encode_sync(st, base, pkt, out, pos)
+        wend = (base // span + 1) * span
+        off = base - st[E_SYNC_BASE]
+        pkt[0] = (T_WIDE << 5) | st[E_EPOCH]
+        pkt[1] = st[E_SEQ] & 0xFF
+        pkt[2] = off & 0xFF
+        pkt[3] = off >> 8
+        ln = 4
+        cur = base
+        count = 0
+        while i < n and ln + WIDE_ITEM_BYTES <= MAX_BODY:
+            s = steps[i]
+            d = s - cur
+            if s >= wend or d > WIDE_MAX_DELTA:
+                break
+            put_le(pkt, ln, (np.int64(addr[i]) << 4) | d, WIDE_ITEM_BYTES)
+            ln += WIDE_ITEM_BYTES
+            cur = s
+            count += 1
+            i += 1
+        pos = frame_into(pkt, ln, out, pos)
+        st[E_SEQ] = (st[E_SEQ] + 1) & 0xFF
+        st[E_EVENTS] += count
+    return pos
+
+
+@numba.njit(cache=True, nogil=True)
+def is_known_version(v: int) -> bool:
+    """Whether ``v`` is a protocol version the decoders read (1 narrow, 2 wide)."""
+    return v == 1 or v == WIDE_VERSION
+
+
+@numba.njit(cache=True, nogil=True)
 def check_body(dec: np.ndarray, m: int) -> int:
     """Number of events in a valid body ``dec[:m]`` (0 for record packets), -1 if invalid."""
     if m < 2:
         return -1
     typ = dec[0] >> 5
+    if typ == T_WIDE:
+        if m < 4 + WIDE_ITEM_BYTES or (m - 4) % WIDE_ITEM_BYTES:
+            return -1
+        for k in range(4, m, WIDE_ITEM_BYTES):
+            if (get_le(dec, k, WIDE_ITEM_BYTES) >> 4) >= MAX_CHANNELS:
+                return -1
+        return (m - 4) // WIDE_ITEM_BYTES
     if typ != T_EVENTS:
         if BODY_LEN[typ] != m:
             return -1
-        if typ == T_SYNC and (dec[2] != PROTOCOL_VERSION or get_le(dec, 3, 2) == 0):
+        if typ == T_SYNC and (not is_known_version(dec[2]) or get_le(dec, 3, 2) == 0):
             return -1
         return 0
     if m < 4:
@@ -230,7 +292,7 @@ def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
     n = buf.shape[0]
     cap = 8 * n + 16
     out_t = np.empty(cap, dtype=np.int64)
-    out_a = np.empty(cap, dtype=np.uint16)
+    out_a = np.empty(cap, dtype=np.uint32)
     rec = np.empty(n + 8, dtype=np.uint8)
     rec_ix = np.empty((n // 4 + 2, 3), dtype=np.int64)
     dec = np.empty(n + 8, dtype=np.uint8)
@@ -295,10 +357,20 @@ def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
         st[D_SEQ] = seq
         c[C_FRAMES_OK] += 1
         typ = dec[0] >> 5
-        if typ == T_EVENTS:
+        if typ == T_EVENTS or typ == T_WIDE:
             if st[D_SYNC_VALID] == 0 or (dec[0] & 0x1F) != st[D_EPOCH]:
                 c[C_UNTIMED] += check_body(dec, m)
                 continue
+        if typ == T_WIDE:
+            t = st[D_BASE] + dec[2] + (np.int64(dec[3]) << 8)
+            step = st[D_STEP_US]
+            for k in range(4, m, WIDE_ITEM_BYTES):
+                word = get_le(dec, k, WIDE_ITEM_BYTES)
+                t += word & WIDE_MAX_DELTA
+                out_t[ne] = t * step
+                out_a[ne] = word >> 4
+                ne += 1
+        elif typ == T_EVENTS:
             t = st[D_BASE] + dec[2] + (np.int64(dec[3]) << 8)
             step = st[D_STEP_US]
             k = 4
@@ -329,6 +401,7 @@ def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
             raw = get_le(dec, 5, 6)
             st[D_BASE] = unwrap_near(st[D_BASE], raw, 48) if st[D_STEP_US] else raw
             st[D_STEP_US] = get_le(dec, 3, 2)
+            st[D_VERSIONS] |= 1 << dec[2]
             c[C_SYNCS] += 1
         else:
             rec[rpos:rpos + m] = dec[:m]

@@ -34,6 +34,10 @@ EVENTS = make_events([0, 0, 300, 900], [5, 17, 337, 2])
 """Four events: channels 5 and 17 at 0 µs, 337 at 300 µs, 2 at 900 µs."""
 BURST = make_events([200] * 25, list(range(0, 250, 10)))
 """25 channels (0, 10, ..., 240) in the step at 200 µs: sent as a bitmap."""
+WIDE_CHANNELS = 15_730
+"""A 32x32 skin's channel count: its stream uses the wide format (version 2)."""
+WIDE_EVENTS = make_events([0, 0, 300, 900], [5, 15_000, 337, 12_810])
+"""Four events of a wide stream: channels 5 and 15000 at 0 µs, 337 at 300 µs, 12810 at 900 µs."""
 
 
 def _split_packets(data: bytes) -> str:
@@ -59,6 +63,8 @@ def _can(fd: bool, fn: Callable[[CanEncoder], list[CanFrame]]) -> Callable[[], s
 
 EXAMPLES: dict[str, Callable[[], str]] = {
     "serial-events": _serial(lambda e: e.events(EVENTS, 1000)),
+    "serial-wide-events": lambda: _split_packets(
+        SerialEncoder(n_channels=WIDE_CHANNELS).events(WIDE_EVENTS, 1000)),
     "serial-bitmap": _serial(lambda e: e.events(BURST, 1000)),
     "serial-status": _serial(lambda e: e.status(STATUS)),
     "serial-marker": _serial(lambda e: e.marker(MARKER)),
@@ -71,3 +77,5 @@ for _fd, _tag in ((False, "can"), (True, "canfd")):
     EXAMPLES[f"{_tag}-marker"] = _can(_fd, lambda e: e.marker(MARKER))
     EXAMPLES[f"{_tag}-command"] = _can(_fd, lambda e: e.command(COMMAND))
     EXAMPLES[f"{_tag}-ack"] = _can(_fd, lambda e: e.ack(ACK))
+    EXAMPLES[f"{_tag}-wide-events"] = (lambda fd: lambda: _frames(
+        CanEncoder(board_id=1, fd=fd, n_channels=WIDE_CHANNELS).events(WIDE_EVENTS, 1000)))(_fd)

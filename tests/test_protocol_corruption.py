@@ -1,5 +1,6 @@
 """Corrupted links: the decoders never raise or hang, decode every undamaged frame, and count
-losses exactly where SPEC.md §7 says they are exact."""
+losses exactly where SPEC.md §7 says they are exact; in the narrow format (the 6x6 skin's 338
+channels) and the wide one (a 32x32 skin's 15,730 channels, SPEC.md §9)."""
 
 from __future__ import annotations
 
@@ -17,16 +18,22 @@ SETTINGS = settings(max_examples=100, deadline=None, derandomize=True,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 N_CALLS = 60
 STATUS_EVERY = 15
+CHANNELS = [338, 15_730]
+"""Channel counts: the narrow format (6x6 skin) and the wide one (32x32 skin)."""
+SERIAL_EVENT_TYPES = (0, 6)
+"""Serial packet types that carry events: EVENTS (narrow) and WIDE_EVENTS."""
+CAN_EVENT_CLASSES = (6, 7)
+"""CAN frame classes that carry events: EVENTS (narrow) and WIDE_EVENTS."""
 
 
-def spikes(seed: int, rate_per_ms: float = 12.0) -> list[np.ndarray]:
+def spikes(seed: int, rate_per_ms: float = 12.0, n_channels: int = 338) -> list[np.ndarray]:
     """Events of N_CALLS one-millisecond flushes (Poisson, 100 µs steps)."""
     rng = np.random.default_rng(seed)
     calls = []
     for c in range(N_CALLS):
         n = rng.poisson(rate_per_ms)
         t = np.sort(rng.integers(0, 10, n)) * 100 + c * 1000
-        a = rng.integers(0, 338, n)
+        a = rng.integers(0, n_channels, n)
         ev = make_events(t, a)
         calls.append(ev[np.lexsort((ev["addr"], ev["t"]))])
     return calls
@@ -38,18 +45,18 @@ def cobs_type(packet: bytes) -> int:
     return first >> 5
 
 
-def serial_packets(seed: int) -> list[tuple[int, bytes, np.ndarray | None]]:
-    """(type, bytes incl. delimiter, events of an EVENTS packet) of a board stream with a
+def serial_packets(seed: int, n_channels: int = 338) -> list[tuple[int, bytes, np.ndarray | None]]:
+    """(type, bytes incl. delimiter, events of an events packet) of a board stream with a
     status every STATUS_EVERY ms and at the end."""
-    enc = SerialEncoder(sync_us=5000)
+    enc = SerialEncoder(sync_us=5000, n_channels=n_channels)
     out: list[tuple[int, bytes, np.ndarray | None]] = []
     sent = 0
-    for c, ev in enumerate(spikes(seed)):
+    for c, ev in enumerate(spikes(seed, n_channels=n_channels)):
         data = enc.events(ev, (c + 1) * 1000)
         pkts = [p + b"\0" for p in data.split(b"\0")[:-1]]
         for p in pkts:
             typ = cobs_type(p)
-            out.append((typ, p, ev if typ == 0 else None))
+            out.append((typ, p, ev if typ in SERIAL_EVENT_TYPES else None))
         sent += len(ev)
         if (c + 1) % STATUS_EVERY == 0:
             out.append((2, enc.status(Status((c + 1) * 1000, sent, sent, 0, 0, 0, 0, True)),
@@ -74,6 +81,7 @@ def damage(p: bytes, op: int, pos: int, byte: int) -> bytes:
     return body + bytes([byte | 1])  # delimiter lost: runs into the next packet
 
 
+@pytest.mark.parametrize("n_channels", CHANNELS)
 @SETTINGS
 @given(seed=st.integers(0, 10_000),
        hits=st.lists(st.tuples(st.integers(0, 10_000), st.integers(0, 5),
@@ -81,8 +89,9 @@ def damage(p: bytes, op: int, pos: int, byte: int) -> bytes:
        noise=st.lists(st.tuples(st.integers(0, 10_000), st.binary(min_size=1, max_size=40)),
                       max_size=5),
        chunk=st.integers(1, 500))
-def test_serial_corruption(seed: int, hits: list, noise: list, chunk: int) -> None:
-    pkts = serial_packets(seed)
+def test_serial_corruption(n_channels: int, seed: int, hits: list, noise: list,
+                           chunk: int) -> None:
+    pkts = serial_packets(seed, n_channels)
     last = len(pkts) - 2  # the first packet and the final status stay intact
     damaged: dict[int, tuple[int, int, int]] = {}
     for where, op, pos, byte in hits:
@@ -105,7 +114,7 @@ def test_serial_corruption(seed: int, hits: list, noise: list, chunk: int) -> No
         ok = i not in damaged
         if typ == 1:
             sync_ok = ok
-        elif typ == 0:
+        elif typ in SERIAL_EVENT_TYPES:
             assert ev is not None
             if ok and sync_ok:
                 expected.append(ev)
@@ -125,16 +134,18 @@ def test_serial_corruption(seed: int, hits: list, noise: list, chunk: int) -> No
         assert c.crc_errors + c.malformed >= 1 and c.bytes_discarded > 0
 
 
+@pytest.mark.parametrize("n_channels", CHANNELS)
 @SETTINGS
 @given(junk=st.binary(max_size=5000), chunk=st.integers(1, 700), seed=st.integers(0, 100))
-def test_serial_random_bytes_then_clean_stream(junk: bytes, chunk: int, seed: int) -> None:
+def test_serial_random_bytes_then_clean_stream(n_channels: int, junk: bytes, chunk: int,
+                                               seed: int) -> None:
     """Arbitrary bytes never raise; a clean stream after them decodes completely."""
-    pkts = serial_packets(seed)
+    pkts = serial_packets(seed, n_channels)
     clean = b"".join(p for _, p, _ in pkts)
     data = junk + clean
     dec = SerialDecoder()
     got = [dec.feed(data[k:k + chunk]).events for k in range(0, len(data), chunk)]
-    every = np.concatenate([ev for t, _, ev in pkts if t == 0 and ev is not None])
+    every = np.concatenate([ev for t, _, ev in pkts if t in SERIAL_EVENT_TYPES and ev is not None])
     decoded = np.concatenate(got)
     np.testing.assert_array_equal(decoded[len(decoded) - len(every):], every)
 
@@ -150,21 +161,25 @@ def test_serial_megabyte_of_noise_is_fast_and_harmless() -> None:
 
 
 def events_in_frame(f: CanFrame, fd: bool) -> int:
-    """Events in an EVENTS frame (SPEC.md §5.3): the DLC (classic) or the count field (FD)."""
+    """Events in an events frame (SPEC.md §5.3, §9.3): the DLC (classic) or the count field
+    (FD)."""
     if fd:
         return (int.from_bytes(f.data[:4], "little") >> 11) & 0x3F
+    if f.arbitration_id >> 4 == 7:
+        return {5: 1, 8: 2}[len(f.data)]
     return {4: 1, 5: 2, 7: 3, 8: 4}[len(f.data)]
 
 
-def can_frames(seed: int, fd: bool) -> list[tuple[int, CanFrame, np.ndarray | None]]:
-    enc = CanEncoder(board_id=2, fd=fd, sync_us=5000)
+def can_frames(seed: int, fd: bool,
+               n_channels: int = 338) -> list[tuple[int, CanFrame, np.ndarray | None]]:
+    enc = CanEncoder(board_id=2, fd=fd, sync_us=5000, n_channels=n_channels)
     out: list[tuple[int, CanFrame, np.ndarray | None]] = []
     sent = 0
-    for c, ev in enumerate(spikes(seed)):
+    for c, ev in enumerate(spikes(seed, n_channels=n_channels)):
         i = 0
         for f in enc.events(ev, (c + 1) * 1000):
             cls = f.arbitration_id >> 4
-            if cls == 6:
+            if cls in CAN_EVENT_CLASSES:
                 n = events_in_frame(f, fd)
                 out.append((cls, f, ev[i:i + n]))
                 i += n
@@ -177,6 +192,7 @@ def can_frames(seed: int, fd: bool) -> list[tuple[int, CanFrame, np.ndarray | No
     return out
 
 
+@pytest.mark.parametrize("n_channels", CHANNELS)
 @pytest.mark.parametrize("fd", [False, True])
 @SETTINGS
 @given(seed=st.integers(0, 10_000), drops=st.sets(st.integers(0, 10_000), max_size=12),
@@ -184,10 +200,11 @@ def can_frames(seed: int, fd: bool) -> list[tuple[int, CanFrame, np.ndarray | No
        foreign=st.lists(st.tuples(st.integers(0, 10_000), st.integers(0, 0x7FF),
                                   st.binary(max_size=8)), max_size=6),
        batch=st.integers(1, 50))
-def test_can_lost_duplicated_foreign_frames(fd: bool, seed: int, drops: set[int],
-                                            dups: set[int], foreign: list,
+def test_can_lost_duplicated_foreign_frames(n_channels: int, fd: bool, seed: int,
+                                            drops: set[int], dups: set[int], foreign: list,
                                             batch: int) -> None:
-    frames = can_frames(seed, fd)
+    frames = can_frames(seed, fd, n_channels)
+    top = 7 if n_channels > 338 else 6  # the board's highest frame class
     n_status = 1 if fd else 8
     last_ok = len(frames) - n_status - 2  # the first frame and the final status survive
     drop = set()
@@ -196,7 +213,7 @@ def test_can_lost_duplicated_foreign_frames(fd: bool, seed: int, drops: set[int]
             drop.add(d)
     dup = {d % len(frames) for d in dups} - drop
     extra = {w % len(frames): (ident, data) for w, ident, data in foreign
-             if (ident & 0xF) != 2 or not 1 <= ident >> 4 <= 6}
+             if (ident & 0xF) != 2 or not 1 <= ident >> 4 <= top}
     stream: list[CanFrame] = []
     for i, (_, f, _) in enumerate(frames):
         if i in extra:
@@ -218,7 +235,7 @@ def test_can_lost_duplicated_foreign_frames(fd: bool, seed: int, drops: set[int]
         ok = i not in drop
         if cls == 3:
             sync_ok = ok
-        elif cls == 6:
+        elif cls in CAN_EVENT_CLASSES:
             assert ev is not None
             if ok and sync_ok:
                 expected.append(ev)
