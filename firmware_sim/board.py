@@ -185,7 +185,8 @@ class Board:
     def _make_link(self, transport: Transport[Any]) -> BoardLink:
         link = BoardLink(transport, self.config.board_id,
                          fd=bool(getattr(transport, "fd", False)),
-                         allowance_s=self.config.tick_s, step_us=self._dt_us)
+                         allowance_s=self.config.tick_s, step_us=self._dt_us,
+                         n_channels=self.sensor.model.n_springs)
         self._wire_per_event_s = 0.0
         return link
 

@@ -29,14 +29,18 @@ class BoardLink:
 
     ``allowance_s`` is the transmit buffer in seconds of wire time (see
     :class:`~firmware_sim.pacing.WirePacer`); ``board_id`` and ``fd`` select the CAN layout;
-    ``step_us`` is the timestamp resolution (µs).
+    ``step_us`` is the timestamp resolution (µs); ``n_channels`` the board's channel count
+    (it selects the narrow or the wide format, SPEC.md §9). On a datagram link (UDP) every
+    send holds whole packets only (SPEC.md §10).
     """
 
     def __init__(self, transport: Transport[Any], board_id: int = 0, fd: bool = False,
-                 allowance_s: float = 1e-3, step_us: int = 100) -> None:
+                 allowance_s: float = 1e-3, step_us: int = 100,
+                 n_channels: int = protocols.N_CHANNELS) -> None:
         self.transport = transport
         self.is_can = transport.kind == "can"
-        self._codec_args: dict[str, Any] = {"step_us": step_us}
+        self.whole_packets = transport.kind == "udp"
+        self._codec_args: dict[str, Any] = {"step_us": step_us, "n_channels": n_channels}
         if self.is_can:
             self._codec_args.update(board_id=board_id, fd=fd)
             self.encoder: Any = protocols.CanEncoder(**self._codec_args)
@@ -60,7 +64,7 @@ class BoardLink:
         (:func:`exercise_codecs`); the link's own encoder, decoder and queue are untouched."""
         encoder = type(self.encoder)(**self._codec_args)
         decoder = type(self.decoder)(**{k: v for k, v in self._codec_args.items()
-                                        if k != "step_us"})
+                                        if k not in ("step_us", "n_channels")})
         for payload in exercise_codecs(encoder, decoder, self._codec_args["step_us"], status):
             if self.is_can:
                 for frame in payload:
@@ -138,6 +142,10 @@ class BoardLink:
             if n_bytes <= 0 or not self._bytes:
                 return 0
             chunk = bytes(self._bytes[:n_bytes])
+            if self.whole_packets:
+                chunk = self._whole_packets(chunk, now)
+                if not chunk:
+                    return 0
             n = self.transport.send(chunk, timeout=0)
             del self._bytes[:n]
             used = n * self._byte_s
@@ -145,6 +153,16 @@ class BoardLink:
         self._backlog_s -= used
         self.units_sent += n
         return n
+
+    def _whole_packets(self, chunk: bytes, now: float) -> bytes:
+        """``chunk`` cut after its last packet delimiter; if it holds no whole packet, the
+        first queued packet once the wire is idle (a packet longer than the allowance)."""
+        cut = chunk.rfind(0) + 1
+        if cut:
+            return chunk[:cut]
+        if self.pacer.free_at > now:
+            return b""
+        return bytes(self._bytes[:self._bytes.find(0) + 1])
 
     def drain(self, timeout_s: float) -> bool:
         """Pump until the queue is empty (True) or ``timeout_s`` (s) passed (False)."""

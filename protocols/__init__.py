@@ -15,6 +15,7 @@ from pathlib import Path
 
 from protocols.budget import can_frame_seconds, serial_seconds
 from protocols.can_codec import CanDecoder, CanEncoder
+from protocols.constants import N_CHANNELS
 from protocols.records import (
     Ack,
     CanFrame,
@@ -40,7 +41,8 @@ SPEC_PATH = Path(__file__).with_name("SPEC.md")
 """The normative protocol specification."""
 
 __all__ = [
-    "DBC_FD_PATH", "DBC_PATH", "SPEC_PATH", "Ack", "CanDecoder", "CanEncoder", "CanFrame",
+    "DBC_FD_PATH", "DBC_PATH", "N_CHANNELS", "SPEC_PATH", "Ack", "CanDecoder", "CanEncoder",
+    "CanFrame",
     "Command", "CommandCode", "DecodeResult", "LinkCounters", "Marker", "MarkerPhase",
     "NackReason", "Record", "SerialDecoder", "SerialEncoder", "Status", "can_frame_seconds",
     "serial_seconds",

@@ -1,5 +1,5 @@
 """One contract, every transport of :mod:`skinhil.transports`: loopback URL, pty pair, pty
-master, the fault injector, python-can virtual bus, vcan0 (classic and FD).
+master, the fault injector, python-can virtual bus, UDP on 127.0.0.1, vcan0 (classic and FD).
 
 Each case gives a sending and a receiving :class:`skinhil.transports.Transport` (the
 same object for ``loop://``). The pty case is a linked pair of real ptys made by socat; the
@@ -32,9 +32,10 @@ from skinhil.transports import (
     PtyMasterTransport,
     SerialTransport,
     Transport,
+    UdpTransport,
 )
 
-CASES = ["loop", "pty", "pty-master", "faulty", "virtual",
+CASES = ["loop", "pty", "pty-master", "faulty", "virtual", "udp",
          pytest.param("vcan", marks=pytest.mark.vcan),
          pytest.param("vcan-fd", marks=pytest.mark.vcan)]
 
@@ -69,6 +70,9 @@ def link(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[tuple[Any, 
         master, slave_fd = PtyMasterTransport.open_pair(921600)
         tx, rx = master, SerialTransport(master.slave_path, 921600)
         os.close(slave_fd)  # pyserial holds the slave open from here on
+    elif kind == "udp":
+        rx = UdpTransport("127.0.0.1", 0, listen=True)
+        tx = UdpTransport("127.0.0.1", rx.port)
     elif kind in ("virtual", "faulty"):
         chan = f"contract-{random.getrandbits(32)}"
         tx, rx = CanTransport(chan, "virtual"), CanTransport(chan, "virtual")
@@ -88,7 +92,7 @@ def link(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[tuple[Any, 
 
 def _payloads(tx: Transport[Any], n: int) -> list[Any]:
     rng = random.Random(n)
-    if tx.kind == "serial":
+    if tx.kind != "can":
         return [bytes(rng.getrandbits(8) for _ in range(rng.randint(1, 300))) for _ in range(n)]
     fd = getattr(tx, "fd", False)
     sizes = protocols.budget.CAN_FD_LENGTHS if fd else range(9)
@@ -124,7 +128,7 @@ def test_burst_is_not_lost(link) -> None:
     """A burst larger than a socket's default buffer arrives whole (reader thread, SO_RCVBUF)."""
     tx, rx, kind = link
     n = 1500 if kind.startswith("vcan") else 3000
-    if tx.kind == "serial":
+    if tx.kind != "can":
         frames = bytes(range(256)) * (n // 16)
         done = threading.Event()
         got: list[bytes] = []
@@ -169,6 +173,8 @@ def test_wire_time_and_shutdown(link) -> None:
     link = getattr(tx, "inner", tx)  # the fault injector takes its wire time from its link
     if tx.kind == "serial":
         assert tx.wire_seconds(payload) == pytest.approx(len(payload) * 10 / link.baud)
+    elif tx.kind == "udp":
+        assert tx.wire_seconds(payload) == pytest.approx(len(payload) * 8 / link.bitrate)
     else:
         assert tx.wire_seconds(payload * 3) == pytest.approx(
             3 * protocols.can_frame_seconds(payload[0], link.bitrate, link.data_bitrate))

@@ -30,7 +30,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "stimulus onset from the activity and classify its direction with a "
                     "trained model (skinhil train). Markers in the stream, when present, "
                     "score the decisions: running accuracy, confusion matrix, latency.")
-    add_transport_args(p)
+    add_transport_args(p, udp_listen=True)
     p.add_argument("--model", type=Path, required=True, metavar="NPZ",
                    help="decoder file written by skinhil train")
     p.add_argument("--board-id", type=int, default=0, metavar="N",

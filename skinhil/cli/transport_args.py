@@ -1,8 +1,10 @@
 """Transport options shared by the subcommands that talk over a link (serve, listen).
 
-Exactly one of ``--port PORT`` (serial: a device path or a pyserial URL, with ``--baud``) or
+Exactly one of ``--port PORT`` (serial: a device path or a pyserial URL, with ``--baud``),
 ``--can CHANNEL`` (python-can, with ``--interface``, ``--fd``, ``--bitrate``,
-``--data-bitrate``) selects the link; :func:`open_transport` opens it.
+``--data-bitrate``) or ``--udp [HOST:]PORT`` (the serial packets in UDP datagrams, with
+``--bitrate``: the board sends to HOST:PORT, the host listens on it) selects the link;
+:func:`open_transport` opens it.
 """
 
 from __future__ import annotations
@@ -10,12 +12,15 @@ from __future__ import annotations
 import argparse
 
 from skinhil.errors import ConfigError
-from skinhil.transports import CanTransport, SerialTransport, Transport
+from skinhil.transports import CanTransport, SerialTransport, Transport, UdpTransport
+from skinhil.transports.udp import DEFAULT_UDP_BITRATE, parse_address
 
 DEFAULT_BAUD = 921600
 """Default serial baud rate (bits/s)."""
 DEFAULT_BITRATE = 1_000_000
 """Default CAN (arbitration phase) bitrate (bits/s)."""
+UDP_LISTEN_HOST = "127.0.0.1"
+"""Address a host listens on when ``--udp`` gives only a port (0.0.0.0: every interface)."""
 
 
 def _int_value(text: str) -> int:
@@ -25,23 +30,36 @@ def _int_value(text: str) -> int:
         raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
 
 
-def add_transport_args(parser: argparse.ArgumentParser) -> None:
-    """Add the serial/CAN link options to ``parser`` (one of --port or --can is required)."""
-    group = parser.add_argument_group("link (one of --port or --can)")
+def add_transport_args(parser: argparse.ArgumentParser, udp_listen: bool = False) -> None:
+    """Add the link options to ``parser`` (one of --port, --can or --udp is required).
+
+    ``udp_listen``: this end listens on the ``--udp`` address (the host) instead of sending
+    to it (the board).
+    """
+    group = parser.add_argument_group("link (one of --port, --can or --udp)")
+    parser.set_defaults(udp_listen=udp_listen)
     which = group.add_mutually_exclusive_group(required=True)
     which.add_argument("--port", metavar="PORT",
                        help="serial port: device path (/dev/ttyUSB0, /dev/pts/3) or pyserial "
                             "URL (loop://, socket://host:port)")
     which.add_argument("--can", metavar="CHANNEL",
                        help="CAN channel, e.g. can0 or vcan0 (python-can)")
+    if udp_listen:
+        which.add_argument("--udp", metavar="[HOST:]PORT",
+                           help="listen for boards on this UDP port (host default "
+                                f"{UDP_LISTEN_HOST}; 0.0.0.0:PORT hears other machines)")
+    else:
+        which.add_argument("--udp", metavar="HOST:PORT",
+                           help="send the serial packet stream in UDP datagrams to HOST:PORT")
     group.add_argument("--baud", type=_int_value, default=DEFAULT_BAUD, metavar="N",
                        help=f"serial baud rate, bits/s, 8N1 (default: {DEFAULT_BAUD})")
     group.add_argument("--interface", default="socketcan", metavar="NAME",
                        help="python-can interface: socketcan, virtual, pcan, kvaser, slcan, "
                             "udp_multicast, ... (default: socketcan)")
     group.add_argument("--fd", action="store_true", help="use CAN FD (64-byte frames)")
-    group.add_argument("--bitrate", type=_int_value, default=DEFAULT_BITRATE, metavar="N",
-                       help=f"CAN (arbitration) bitrate, bits/s (default: {DEFAULT_BITRATE})")
+    group.add_argument("--bitrate", type=_int_value, default=None, metavar="N",
+                       help=f"CAN (arbitration) bitrate, bits/s (default: {DEFAULT_BITRATE}); "
+                            f"UDP wire budget (default: {DEFAULT_UDP_BITRATE})")
     group.add_argument("--data-bitrate", type=_int_value, default=None, metavar="N",
                        help="CAN FD data-phase bitrate, bits/s (default: same as --bitrate)")
 
@@ -52,20 +70,29 @@ def open_transport(args: argparse.Namespace) -> Transport[bytes] | Transport[lis
     Raises :class:`skinhil.errors.TransportError` (port or channel unusable) or
     :class:`ConfigError` (options that do not fit together).
     """
-    if args.port is not None:
+    if args.port is not None or args.udp is not None:
         if args.fd or args.data_bitrate is not None:
             raise ConfigError("--fd and --data-bitrate are CAN options; use them with --can")
+    if args.port is not None:
         return SerialTransport(args.port, args.baud)
+    if args.udp is not None:
+        host, port = parse_address(args.udp, UDP_LISTEN_HOST if args.udp_listen else None)
+        return UdpTransport(host, port, listen=args.udp_listen,
+                            bitrate=args.bitrate or DEFAULT_UDP_BITRATE)
     if args.can is None:
-        raise ConfigError("give a link: --port PORT (serial) or --can CHANNEL (CAN)")
-    return CanTransport(args.can, args.interface, fd=args.fd, bitrate=args.bitrate,
-                        data_bitrate=args.data_bitrate)
+        raise ConfigError("give a link: --port PORT (serial), --can CHANNEL (CAN) or "
+                          "--udp HOST:PORT (UDP)")
+    return CanTransport(args.can, args.interface, fd=args.fd,
+                        bitrate=args.bitrate or DEFAULT_BITRATE, data_bitrate=args.data_bitrate)
 
 
 def describe_transport(args: argparse.Namespace) -> str:
     """A short description of the selected link, for status lines."""
     if args.port is not None:
         return f"serial {args.port} @ {args.baud} baud"
-    rate = f"{args.bitrate} bit/s" + (f", data {args.data_bitrate} bit/s"
+    if args.udp is not None:
+        return (f"UDP {'listening on' if args.udp_listen else 'to'} {args.udp} @ "
+                f"{args.bitrate or DEFAULT_UDP_BITRATE} bit/s")
+    rate = f"{args.bitrate or DEFAULT_BITRATE} bit/s" + (f", data {args.data_bitrate} bit/s"
                                       if args.data_bitrate else "")
     return f"CAN{' FD' if args.fd else ''} {args.interface}:{args.can} @ {rate}"

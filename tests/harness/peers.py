@@ -1,7 +1,8 @@
 """The host side of a link under test: decode what the board sends, send it commands.
 
-A peer reads its end of the link on a thread (a pty master, or a CAN bus through
-:class:`skinhil.transports.CanTransport`), feeds the protocols decoder and keeps every
+A peer reads its end of the link on a thread (a pty master, a CAN bus through
+:class:`skinhil.transports.CanTransport`, or a UDP port through
+:class:`skinhil.transports.UdpTransport`), feeds the protocols decoder and keeps every
 event and record in arrival order.
 """
 
@@ -18,7 +19,7 @@ import numpy as np
 
 import protocols
 from skinhil.events import EVENT_DTYPE
-from skinhil.transports import CanTransport
+from skinhil.transports import CanTransport, UdpTransport
 
 
 class Peer:
@@ -147,3 +148,32 @@ class CanPeer(Peer):
         super().close()
         self._thread.join(timeout=1.0)
         self.bus.shutdown()
+
+
+class UdpPeer(Peer):
+    """A host listening on a UDP port of 127.0.0.1, decoding the serial protocol; commands go
+    to the board heard last. ``datagram_ends`` is the last byte of every datagram."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.link = UdpTransport("127.0.0.1", 0, listen=True)
+        self.port = self.link.port
+        self.decoder = protocols.SerialDecoder()
+        self.encoder = protocols.SerialEncoder()
+        self.datagram_ends: list[int] = []
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            for _, data in self.link.recv_from(timeout=0.05):
+                self.datagram_ends.append(data[-1])
+                self._take(self.decoder.feed(data), len(data))
+
+    def _send_command(self, cmd: Any) -> None:
+        self.link.send(self.encoder.command(cmd), timeout=1.0)
+
+    def close(self) -> None:
+        super().close()
+        self._thread.join(timeout=1.0)
+        self.link.shutdown()
