@@ -1,4 +1,5 @@
-"""``skinhil listen``: the reference receiver and online classifier on a serial port or CAN."""
+"""``skinhil listen``: the reference receiver and online classifier on a serial port, CAN or
+UDP; several boards at once on one CAN bus (``--board-id 0,5,9``) or one UDP port."""
 
 from __future__ import annotations
 
@@ -16,7 +17,14 @@ import numpy as np
 
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.errors import ConfigError
-from skinhil.receiver import Receiver, ReceiverListener, ScoredDecision, SessionRecorder
+from skinhil.receiver import (
+    BusReceiver,
+    Receiver,
+    ReceiverListener,
+    ScoredDecision,
+    SessionRecorder,
+)
+from skinhil.receiver.bus import BoardKey
 from skinhil.receiver.model_file import load_window_decoder
 
 STATUS_PERIOD_S = 1.0
@@ -33,8 +41,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     add_transport_args(p, udp_listen=True)
     p.add_argument("--model", type=Path, required=True, metavar="NPZ",
                    help="decoder file written by skinhil train")
-    p.add_argument("--board-id", type=int, default=0, metavar="N",
-                   help="board id on the CAN bus (default: 0)")
+    p.add_argument("--board-id", dest="board_ids", type=_board_ids, default=[0],
+                   metavar="N[,N...]",
+                   help="board id(s) on the CAN bus, e.g. 0,5,9 to decode three boards at "
+                        "once (default: 0); on UDP every board that sends is decoded")
     p.add_argument("--duration", dest="duration_s", type=float, metavar="SECONDS",
                    help="stop after this many seconds (default: until Ctrl-C)")
     p.add_argument("--json", action="store_true",
@@ -43,13 +53,27 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="save events (tonic-compatible) and decisions to this .npz")
 
 
-class LivePrinter(ReceiverListener):
-    """Prints each decision (text or JSON lines) and link problems as they happen."""
+def _board_ids(text: str) -> list[int]:
+    try:
+        ids = [int(v, 0) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: give board ids such as 0 or 0,5,9") \
+            from None
+    if not ids or any(not 0 <= b <= 15 for b in ids) or len(set(ids)) != len(ids):
+        raise argparse.ArgumentTypeError(f"{text!r}: board ids are distinct, 0..15")
+    return ids
 
-    def __init__(self, receiver: Receiver, as_json: bool, names: dict[int, str]) -> None:
+
+class LivePrinter(ReceiverListener):
+    """Prints each decision (text or JSON lines) and link problems as they happen; with
+    ``board`` (several boards on the link) each line says which board."""
+
+    def __init__(self, receiver: Receiver, as_json: bool, names: dict[int, str],
+                 board: BoardKey | None = None) -> None:
         self.receiver = receiver
         self.as_json = as_json
         self.names = names
+        self.board = board
 
     def _name(self, label: int | None) -> str:
         return "-" if label is None else self.names.get(label, str(label))
@@ -59,7 +83,8 @@ class LivePrinter(ReceiverListener):
         sb = self.receiver.scoreboard
         if self.as_json:
             print(json.dumps({
-                "type": "decision", "t_s": p.detect_t_us * 1e-6, "label": p.label,
+                "type": "decision", **({} if self.board is None else {"board": self.board}),
+                "t_s": p.detect_t_us * 1e-6, "label": p.label,
                 "name": self._name(p.label), "true_label": decision.true_label,
                 "correct": decision.correct, "latency_board_ms": _ms(decision.latency_board_s),
                 "latency_host_ms": _ms(decision.latency_host_s),
@@ -70,7 +95,8 @@ class LivePrinter(ReceiverListener):
             f"  latency {1e3 * decision.latency_host_s:5.1f} ms"
         truth = "" if decision.true_label is None else f"  true {self._name(decision.true_label)}"
         acc = "" if sb.scored == 0 else f"  running {100 * sb.accuracy:5.1f}% ({sb.scored})"
-        print(f"{p.detect_t_us * 1e-6:9.3f} s  {self._name(p.label):>13}{truth:>19}  "
+        where = "" if self.board is None else f"board {self.board}  "
+        print(f"{where}{p.detect_t_us * 1e-6:9.3f} s  {self._name(p.label):>13}{truth:>19}  "
               f"{mark:<5}{lat}{acc}", flush=True)
 
     def on_link_error(self, message: str) -> None:
@@ -122,7 +148,11 @@ def print_summary(info: dict[str, Any], names: dict[int, str]) -> None:
         d = info[key]
         if d["p50"] is not None:
             print(f"{label}: p50 {d['p50']:.1f} ms, p99 {d['p99']:.1f} ms")
-    link = info["link"]
+    print_link(info["link"])
+
+
+def print_link(link: dict[str, Any]) -> None:
+    """One line of link and loss counters."""
     print(f"link: {link['events_decoded']} events decoded, {link['frames_ok']} frames ok, "
           f"{link['crc_errors']} CRC errors, {link['seq_gaps']} sequence gaps "
           f"({link['frames_lost']} frames lost), {link['duplicates']} duplicates, "
@@ -131,15 +161,70 @@ def print_summary(info: dict[str, Any], names: dict[int, str]) -> None:
           f"{link['lost_on_link']} lost on the link")
 
 
+def bus_summary(bus: BusReceiver, wall_s: float) -> dict[str, Any]:
+    """Final figures of every board on the link and the combined link counters."""
+    return {"type": "summary", "wall_s": round(wall_s, 3),
+            "boards": {str(k): summary(rx, wall_s) for k, rx in bus.boards.items()},
+            "foreign_frames": bus.foreign_frames, "link": bus.combined_report().as_dict()}
+
+
+def run_bus(args: argparse.Namespace, bus: BusReceiver, names: dict[int, str]) -> int:
+    """``listen`` over several boards: per-board decisions and summaries, a combined view."""
+    stop = threading.Event()
+    old = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
+    if not args.json:
+        print(f"skinhil listen: {describe_transport(args)}, boards "
+              f"{', '.join(map(str, bus.boards)) or 'as they send'}, model {args.model}; "
+              "Ctrl-C stops", file=sys.stderr, flush=True)
+    t0 = time.monotonic()
+    next_line = t0 + STATUS_PERIOD_S
+    try:
+        while not stop.is_set() and not bus.link_down:
+            now = time.monotonic()
+            if args.duration_s is not None and now - t0 >= args.duration_s:
+                break
+            bus.poll(0.02)
+            if args.json and now >= next_line:
+                next_line += STATUS_PERIOD_S
+                print(json.dumps({"type": "link", "boards": {
+                    str(k): r.as_dict() for k, r in bus.link_reports().items()},
+                    "combined": bus.combined_report().as_dict()}), flush=True)
+        bus.flush()
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+        bus.transport.shutdown()
+    info = bus_summary(bus, time.monotonic() - t0)
+    if args.json:
+        print(json.dumps(info), flush=True)
+        return 0
+    for key, board in info["boards"].items():
+        print(f"board {key}:")
+        print_summary(board, names)
+    print(f"all {len(info['boards'])} boards ({info['foreign_frames']} frames of other boards):")
+    print_link(info["link"])
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     if args.duration_s is not None and not (math.isfinite(args.duration_s)
                                             and args.duration_s > 0):
         raise ConfigError(f"--duration must be a positive number of seconds, "
                           f"got {args.duration_s!r}")
+    several = len(args.board_ids) > 1 or args.udp is not None
+    if several and args.port is not None:
+        raise ConfigError("a serial port carries one board: give one --board-id")
+    if several and args.record is not None:
+        raise ConfigError("--record saves one board's session: use it with one board on "
+                          "--port or --can")
     decoder = load_window_decoder(args.model)
     transport = open_transport(args)
     names = class_names()
-    receiver = Receiver(transport, decoder, board_id=args.board_id,
+    if several:
+        bus = BusReceiver(transport, decoder, args.board_ids if args.can else (),
+                          listeners=lambda key, rx: [LivePrinter(rx, args.json, names, key)])
+        return run_bus(args, bus, names)
+    receiver = Receiver(transport, decoder, board_id=args.board_ids[0],
                         reopen=lambda: open_transport(args))
     recorder = SessionRecorder() if args.record is not None else None
     receiver.add_listener(LivePrinter(receiver, args.json, names))

@@ -3,6 +3,7 @@
 See ``docs/receiver.md`` for the pipeline, the onset rule and the measured figures.
 """
 
+from skinhil.receiver.bus import BusReceiver
 from skinhil.receiver.clock import BoardClock
 from skinhil.receiver.decoder_adapter import WindowDecoder
 from skinhil.receiver.online import OnlineClassifier, Prediction
@@ -14,6 +15,7 @@ from skinhil.receiver.scoring import Scoreboard, ScoredDecision
 
 __all__ = [
     "BoardClock",
+    "BusReceiver",
     "LinkReport",
     "OnlineClassifier",
     "OnsetDetector",

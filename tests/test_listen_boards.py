@@ -1,0 +1,76 @@
+"""``skinhil listen --udp`` decodes two ``skinhil serve --udp`` boards on one port of
+127.0.0.1 at once, as a user would run them: per-board summaries and a combined view whose
+counters are exact."""
+
+from __future__ import annotations
+
+import errno
+import json
+import math
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from harness.serve import RUN_DIR, ServeProcess, serve_env
+
+from skinhil.decoding.model_file import save_decoder
+from skinhil.receiver.training import train_decoder
+
+
+def _bound(port: int) -> bool:
+    """Whether something already listens on UDP 127.0.0.1:port."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        try:
+            s.bind(("127.0.0.1", port))
+        except OSError as exc:
+            return exc.errno == errno.EADDRINUSE
+    return False
+
+
+def _free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def test_listen_decodes_two_udp_boards_at_once(tmp_path: Path) -> None:
+    decoder, _ = train_decoder(math.inf, reps=1, seed=0, rest_s=0.05, cross_validation=False)
+    model = tmp_path / "model.npz"
+    save_decoder(decoder, model)
+    port = _free_port()
+    listen = subprocess.Popen(
+        [sys.executable, "-m", "skinhil", "listen", "--udp", f"127.0.0.1:{port}", "--model",
+         str(model), "--json"], cwd=RUN_DIR, env=serve_env(), stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
+    boards = []
+    try:
+        end = time.monotonic() + 60
+        while not _bound(port):
+            assert listen.poll() is None and time.monotonic() < end, listen.stderr
+            time.sleep(0.05)
+        boards = [ServeProcess("--udp", f"127.0.0.1:{port}", "--duration", "1.5", "--seed",
+                               str(seed), "--json") for seed in (1, 2)]
+        for b in boards:
+            assert b.wait(60) == 0, b.stderr
+        time.sleep(0.5)
+        listen.send_signal(signal.SIGINT)
+        out, err = listen.communicate(timeout=30)
+    finally:
+        for b in boards:
+            b.kill()
+        if listen.poll() is None:
+            listen.kill()
+    assert listen.returncode == 0, err
+    summary = [json.loads(line) for line in out.splitlines()
+               if '"summary"' in line][-1]
+    generated = sorted(b.summary()["generated"] for b in boards)
+    per_board = summary["boards"]
+    assert len(per_board) == 2
+    assert sorted(s["link"]["events_decoded"] for s in per_board.values()) == generated
+    assert sorted(s["link"]["board_generated"] for s in per_board.values()) == generated
+    link = summary["link"]
+    assert link["events_decoded"] == sum(generated) > 0
+    assert link["lost_on_link"] == link["frames_lost"] == link["crc_errors"] == 0

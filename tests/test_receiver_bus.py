@@ -1,0 +1,78 @@
+"""Several boards on one link decoded at once. CAN: three emulated boards (ids 0, 5, 9) and a
+fourth the receiver does not listen to (id 3) share a python-can virtual bus (classic and
+FD); UDP: three boards send to one port of 127.0.0.1. Each board's counters are exact, the
+foreign board's frames are counted, the combined view is the sum."""
+
+from __future__ import annotations
+
+import math
+import random
+import threading
+import time
+
+import pytest
+
+from firmware_sim.board import Board, BoardConfig
+from skinhil.receiver import WindowDecoder
+from skinhil.receiver.bus import BusReceiver
+from skinhil.receiver.training import train_decoder
+from skinhil.transports import CanTransport, Transport, UdpTransport
+
+BOARD_IDS = (0, 5, 9)
+OTHER_ID = 3
+DURATION_S = 1.5
+
+
+@pytest.fixture(scope="module")
+def small_decoder() -> WindowDecoder:
+    """A decoder trained without noise on 9 stimuli (the bus test scores nothing)."""
+    decoder, _ = train_decoder(math.inf, reps=1, seed=0, rest_s=0.05, cross_validation=False)
+    return WindowDecoder(decoder)
+
+
+@pytest.mark.parametrize("kind", ["can", "canfd", "udp"])
+def test_three_boards_on_one_link_each_exact(small_decoder: WindowDecoder, kind: str) -> None:
+    chan = f"bus-{random.getrandbits(32)}"
+    fd = kind == "canfd"
+    host: Transport = UdpTransport("127.0.0.1", 0, listen=True) if kind == "udp" else \
+        CanTransport(chan, "virtual", fd=fd)
+
+    def open_link() -> Transport:
+        if kind == "udp":
+            return UdpTransport("127.0.0.1", host.port)  # type: ignore[attr-defined]
+        return CanTransport(chan, "virtual", fd=fd)
+
+    ids = BOARD_IDS if kind == "udp" else (*BOARD_IDS, OTHER_ID)
+    boards = {b: Board(BoardConfig(board_id=b, seed=b, rest_s=0.05), open_link) for b in ids}
+    bus = BusReceiver(host, small_decoder, () if kind == "udp" else BOARD_IDS)
+    key = {b: f"127.0.0.1:{boards[b].link.transport.port}" if kind == "udp" else b  # type: ignore[union-attr]
+           for b in BOARD_IDS}
+    summaries = {}
+    threads = [threading.Thread(target=lambda b=b: summaries.__setitem__(
+        b, boards[b].run(DURATION_S))) for b in boards]
+    for t in threads:
+        t.start()
+    quiet_since = None
+    while quiet_since is None or time.monotonic() - quiet_since < 0.5:
+        parts = bus.receive(0.02)
+        bus.feed(parts)
+        if parts or any(t.is_alive() for t in threads):
+            quiet_since = None
+        elif quiet_since is None:
+            quiet_since = time.monotonic()
+    bus.flush()
+    bus.transport.shutdown()
+    reports = bus.link_reports()
+    assert set(reports) == set(key.values())
+    for b in BOARD_IDS:
+        s, r, rx = summaries[b], reports[key[b]], bus.boards[key[b]]
+        assert s.sent == s.generated > 0 and s.dropped == 0
+        assert r.events_decoded == s.sent
+        assert rx.last_status.events_generated == s.generated
+        assert r.frames_lost == r.lost_on_link == r.untimed_events == r.malformed == 0
+        assert rx.codec.counters.foreign_frames == 0
+    if kind != "udp":
+        assert bus.foreign_frames == summaries[OTHER_ID].units_sent > 0
+    combined = bus.combined_report()
+    assert combined.events_decoded == sum(summaries[b].sent for b in BOARD_IDS)
+    assert combined.frames_ok == sum(r.frames_ok for r in reports.values())
