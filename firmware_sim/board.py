@@ -32,7 +32,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -43,6 +43,7 @@ from firmware_sim.counters import BoardCounters
 from firmware_sim.fifo import EventFifo
 from firmware_sim.link import BoardLink
 from skinhil.errors import ConfigError, TransportError
+from skinhil.neurons import NoiseParams
 from skinhil.sensor import SkinSensor
 from skinhil.skin import SkinModel, SkinParams
 from skinhil.stimuli import Schedule, ScheduledStimulus
@@ -75,6 +76,8 @@ class BoardConfig:
     """Encoded data kept ready in the transmit queue (s of wire time)."""
     snr_db: float = math.inf
     """Neuron noise SNR (dB; inf: none)."""
+    noise: NoiseParams = field(default_factory=NoiseParams)
+    """How the SNR becomes neuron noise (the SET_SNR command changes only the level)."""
     seed: int = 0
     """Seed of the noise and of the default random schedule."""
     board_id: int = 0
@@ -162,7 +165,8 @@ class Board:
             raise ConfigError(f"mechanics must be 'linear' or 'geometric', "
                               f"got {config.mechanics!r}")
         model = SkinModel(SkinParams(mechanics=config.mechanics))  # type: ignore[arg-type]
-        self.sensor = SkinSensor(model, config.dt_s, config.snr_db, config.seed)
+        self.sensor = SkinSensor(model, config.dt_s, config.snr_db, config.seed,
+                                 noise=config.noise)
         self.timeline = Timeline(config.dt_s, file_schedule, config.seed, config.rest_s,
                                  config.schedule_mode)
         self.fifo = EventFifo(config.fifo_events)

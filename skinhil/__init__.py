@@ -8,6 +8,7 @@ from skinhil.events import EVENT_DTYPE, make_events
 from skinhil.neurons import (
     IzhikevichParams,
     NeuronPopulation,
+    NoiseParams,
     events_to_raster,
     raster_to_events,
     simulate_spikes,
@@ -31,6 +32,7 @@ __all__ = [
     "EVENT_DTYPE",
     "IzhikevichParams",
     "NeuronPopulation",
+    "NoiseParams",
     "PSPFilterBank",
     "PSPParams",
     "Schedule",

@@ -9,34 +9,47 @@ Model (Izhikevich 2003; time in ms, v and u in mV, as in the paper)::
 with a = 0.02, b = 0.2, c = −65 mV, d = 9, K = 500 and I the spring's force in newtons,
 signed: tension (I > 0) excites, compression (I < 0) inhibits. Initial state v = c, u = b·c.
 
-Noise: white Gaussian noise added to v and to u every step at a signal-to-noise ratio
-``snr_db``, with the signal power measured from the signal as MATLAB's
-``awgn(x, snr, 'measured')``: ``σ² = mean(x²) / 10^(snr_db/10)`` over the population vector
-``x`` (the 338 values of v, or of u, of one trial) at that step. ``snr_db = inf`` adds
-nothing and the model is deterministic.
+Noise: white Gaussian noise on v and on u, as a diffusion with a reference step so that its
+statistics do not depend on dt (Euler–Maruyama). Every step of dt (ms) adds
+``σ·sqrt(dt/dt_ref)·N(0,1)`` (mV) to v and, independently, to u, with
+
+    σ² = P_ref · 10^(−snr_db/10),   P_ref = 1 mV²,   dt_ref = 1 ms    (:class:`NoiseParams`).
+
+P_ref = 1 mV² is MATLAB ``awgn(x, snr)``'s default signal power (0 dBW): at the paper's 10 dB,
+σ ≈ 0.32 mV per millisecond. dt_ref = 1 ms is the Izhikevich model's canonical step (the
+model's constants are fitted for time in ms and Izhikevich 2003 integrates it at 1 ms), so at
+dt = 1 ms the noise is exactly ``awgn`` applied once per step; at a finer step the variance
+per unit time is the same, so spike counts and ISI statistics do not move with dt.
+``snr_db = inf`` adds nothing and the model is deterministic.
+
+Option ``NoiseParams(definition="measured")`` (never the default) keeps the earlier
+definition, MATLAB's ``awgn(x, snr, 'measured')`` applied at every step whatever dt:
+``σ² = mean(x²) · 10^(−snr_db/10)`` over the population vector ``x`` (the values of v, or of
+u, of one trial) at that step. Because σ is measured from the state it is added to, the
+noise on u feeds itself: u relaxes by ``(1 − a·dt)`` per step, so its mean square grows
+without bound when ``10^(−SNR/10) > 1 − (1 − a·dt)²``, below about 24 dB at dt = 0.1 ms (14
+dB at 1 ms). Left alone it overflows to NaN and the population falls silent for good, so
+under this option, before the noise of a step, a trial whose population RMS of u exceeds
+``BLOWUP_RMS_MV`` (10⁴ mV, a thousand times any physiological value) or whose v is not
+finite is put back at rest (v = c, u = b·c) and counted in ``NeuronPopulation.blowups``.
+The diffusion noise has a fixed σ and needs no such guard.
 
 The per-step order, for every step k of length dt (ms), each trial independently:
 
 1. Euler: ``v ← v + dt·(0.04v² + 5v + 140 − u + K·I[k])``, ``u ← u + dt·a·(b·v_old − u)``;
-2. noise: ``v ← v + σ_v·N(0,1)``, ``u ← u + σ_u·N(0,1)``, σ measured from the updated v, u;
+2. noise: ``v ← v + σ_v·N(0,1)``, ``u ← u + σ_u·N(0,1)``, with ``σ_v = σ_u = σ·sqrt(dt/dt_ref)``
+   (under ``"measured"``: σ_v, σ_u measured from the updated v, u after the run-away guard);
 3. threshold: where ``v ≥ 30``: a spike in step k, ``v ← c``, ``u ← u + d``.
 
 A spike in step k is stamped with the step's start time ``k·dt`` (see
 :func:`raster_to_events`). Noise comes from :mod:`skinhil.rng`, one seeded stream per trial.
-
-Run-away noise: because σ is measured from the state it is added to, the noise on u feeds
-itself. u relaxes by ``(1 − a·dt)`` per step, so its mean square grows without bound when
-``10^(−SNR/10) > 1 − (1 − a·dt)²``: below about 24 dB at dt = 0.1 ms (14 dB at 1 ms). Left
-alone it overflows to NaN and the population falls silent for good. So, before the noise of a
-step, a trial whose population RMS of u exceeds ``BLOWUP_RMS_MV`` (10⁴ mV, a thousand times
-any physiological value) or whose v is not finite is put back at rest (v = c, u = b·c) and
-counted in ``NeuronPopulation.blowups``; at such SNRs the spikes are noise-driven bursts.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal
 
 import numba
 import numpy as np
@@ -45,13 +58,53 @@ from skinhil.errors import ConfigError
 from skinhil.events import make_events
 from skinhil.rng import fill_normal_pairs, seed_states
 
-KernelOperands = tuple[np.ndarray, np.ndarray, float, float, float, float, float, float, float,
-                       np.ndarray, np.ndarray]
-"""``NeuronPopulation.kernel_operands()``: v, u, a, b, c, d, K, v_peak, noise ratio, streams,
-run-away counts."""
+KernelOperands = tuple[np.ndarray, np.ndarray, float, float, float, float, float, float, bool,
+                       float, float, np.ndarray, np.ndarray]
+"""``NeuronPopulation.kernel_operands()``: v, u, a, b, c, d, K, v_peak, measured, noise
+variance, reference step (ms), streams, run-away counts."""
 
 BLOWUP_RMS_MV = 1e4
-"""Population RMS of u (mV) beyond which a trial counts as run away (see module docstring)."""
+"""Population RMS of u (mV) beyond which a trial counts as run away under the measured-power
+noise (see module docstring)."""
+
+NoiseDefinition = Literal["diffusion", "measured"]
+
+
+@dataclass(frozen=True)
+class NoiseParams:
+    """How an SNR becomes neuron noise (module docstring): ``"diffusion"`` (default) adds
+    ``σ·sqrt(dt/ref_step_ms)·N(0,1)`` mV per step with ``σ² = ref_power_mv2·10^(−SNR/10)``;
+    ``"measured"`` is ``awgn(x, snr, 'measured')`` at every step (runs away below ~24 dB at
+    0.1 ms; ``ref_power_mv2`` and ``ref_step_ms`` are then unused)."""
+
+    definition: NoiseDefinition = "diffusion"
+    ref_power_mv2: float = 1.0
+    """Signal power P_ref (mV²) the SNR refers to: 1 mV² is MATLAB ``awgn``'s 0 dBW."""
+    ref_step_ms: float = 1.0
+    """Step (ms) at which σ is the whole per-step noise: the Izhikevich model's 1 ms step."""
+
+    def __post_init__(self) -> None:
+        if self.definition not in ("diffusion", "measured"):
+            raise ConfigError(f"NoiseParams.definition must be 'diffusion' or 'measured', got "
+                              f"{self.definition!r}")
+        for name in ("ref_power_mv2", "ref_step_ms"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+                raise ConfigError(f"NoiseParams.{name} must be a finite number > 0, got "
+                                  f"{value!r}")
+
+    def variance(self, snr_db: float) -> float:
+        """What the kernel scales its normals by at ``snr_db`` (0 for inf): σ² (mV² per
+        reference step) for the diffusion, the power ratio ``10^(−SNR/10)`` if measured."""
+        ratio = noise_power_ratio(snr_db)
+        return ratio if self.definition == "measured" else self.ref_power_mv2 * ratio
+
+    def sigma_per_step_mv(self, snr_db: float, dt_s: float) -> float:
+        """Diffusion noise σ added per step of ``dt_s`` (s), in mV: ``σ·sqrt(dt/dt_ref)``."""
+        if self.definition == "measured":
+            raise ConfigError("the measured-power noise has no fixed σ per step: it is "
+                              "measured from the state at every step")
+        return math.sqrt(self.variance(snr_db) * dt_s * 1e3 / self.ref_step_ms)
 
 
 @dataclass(frozen=True)
@@ -132,30 +185,34 @@ def _noise_and_threshold(v: np.ndarray, u: np.ndarray, zv: np.ndarray, zu: np.nd
 @numba.njit(cache=True, fastmath=False)
 def _izhikevich_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray, v: np.ndarray,
                        u: np.ndarray, a: float, b: float, c: float, d: float, gain: float,
-                       v_peak: float, noise_ratio: float, rng: np.ndarray,
-                       blowups: np.ndarray) -> None:  # pragma: no cover - compiled
+                       v_peak: float, measured: bool, noise_var: float, ref_step_ms: float,
+                       rng: np.ndarray, blowups: np.ndarray) -> None:  # pragma: no cover
     # current (n_steps, 1 or n_batch, n) N over steps of dt_ms (ms) → spikes (n_steps,
     # n_batch, n); the rest are NeuronPopulation.kernel_operands()
     n_steps, n_batch, n = spikes.shape
     shared_input = current.shape[1] == 1
     zv = np.zeros(n)  # this step's normals, drawn before use; zero without noise
     zu = np.zeros(n)
+    sigma_step = math.sqrt(noise_var * dt_ms / ref_step_ms)  # diffusion σ per step (mV)
+    sv = sigma_step
+    su = sigma_step
     for k in range(n_steps):
         for bb in range(n_batch):
             vb = v[bb]
             ub = u[bb]
             _euler_step(vb, ub, current[k, 0 if shared_input else bb], dt_ms, a, b, gain)
-            pv, pu = _power(vb, ub)
-            if not (pu <= n * BLOWUP_RMS_MV * BLOWUP_RMS_MV and pv < math.inf):
-                # the measured-power noise has run away: this trial starts again from rest
-                blowups[bb] += 1
-                vb[:] = c
-                ub[:] = b * c
-                pv = n * c * c
-                pu = n * (b * c) * (b * c)
-            sv = math.sqrt(pv / n * noise_ratio)
-            su = math.sqrt(pu / n * noise_ratio)
-            if noise_ratio > 0.0:
+            if measured:
+                pv, pu = _power(vb, ub)
+                if not (pu <= n * BLOWUP_RMS_MV * BLOWUP_RMS_MV and pv < math.inf):
+                    # the measured-power noise has run away: this trial starts again at rest
+                    blowups[bb] += 1
+                    vb[:] = c
+                    ub[:] = b * c
+                    pv = n * c * c
+                    pu = n * (b * c) * (b * c)
+                sv = math.sqrt(pv / n * noise_var)
+                su = math.sqrt(pu / n * noise_var)
+            if noise_var > 0.0:
                 fill_normal_pairs(rng[bb], zv, zu)
             _noise_and_threshold(vb, ub, zv, zu, sv, su, c, d, v_peak, spikes[k, bb])
 
@@ -163,12 +220,13 @@ def _izhikevich_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray, v:
 class NeuronPopulation:
     """A population of ``n_channels`` noisy Izhikevich neurons, optionally ``batch`` trials.
 
-    ``seed`` makes the noise reproducible (each trial draws from its own stream).
+    ``seed`` makes the noise reproducible (each trial draws from its own stream); ``noise``
+    says how ``snr_db`` becomes noise (default: the step-invariant diffusion).
     """
 
     def __init__(self, n_channels: int, params: IzhikevichParams | None = None,
                  snr_db: float = math.inf, seed: int | np.random.SeedSequence | None = None,
-                 batch: int | None = None) -> None:
+                 batch: int | None = None, noise: NoiseParams | None = None) -> None:
         if not (isinstance(n_channels, int | np.integer) and n_channels > 0):
             raise ConfigError(f"n_channels must be a positive integer, got {n_channels!r}")
         if batch is not None and not (isinstance(batch, int | np.integer) and batch > 0):
@@ -177,11 +235,13 @@ class NeuronPopulation:
         self.n_channels = int(n_channels)
         self.batch = batch
         self._n_batch = 1 if batch is None else int(batch)
+        self.noise = noise or NoiseParams()
         self.snr_db = check_snr_db(snr_db)
-        self._noise_ratio = noise_power_ratio(snr_db)
+        self._noise_var = self.noise.variance(snr_db)
         self._rng = seed_states(seed, self._n_batch)
         self.blowups = np.zeros(self._n_batch, dtype=np.int64)
-        """Per trial: how often the noise ran away and the trial was put back at rest."""
+        """Per trial: how often the measured-power noise ran away and the trial was put back
+        at rest (always 0 under the diffusion noise)."""
         self.v = np.empty((self._n_batch, self.n_channels))
         self.u = np.empty_like(self.v)
         self.reset()
@@ -193,7 +253,7 @@ class NeuronPopulation:
 
     def set_snr(self, snr_db: float) -> None:
         """Change the noise level (dB; inf for none) from the next step on."""
-        self._noise_ratio = noise_power_ratio(snr_db)
+        self._noise_var = self.noise.variance(snr_db)
         self.snr_db = check_snr_db(snr_db)
 
     def step_block(self, current_n: np.ndarray, dt_s: float) -> np.ndarray:
@@ -219,28 +279,30 @@ class NeuronPopulation:
 
     def kernel_operands(self) -> KernelOperands:
         """What the compiled step takes after the current, the step (ms) and the spikes: the
-        membranes v (mV) and u, the parameters a, b, c (mV), d, K, v_peak (mV), the noise
-        power ratio, the noise streams and the run-away counts; the arrays are updated in
-        place."""
+        membranes v (mV) and u, the parameters a, b, c (mV), d, K, v_peak (mV), whether the
+        noise is measured, :meth:`NoiseParams.variance` at the SNR, the reference step (ms),
+        the noise streams and the run-away counts; the arrays are updated in place."""
         p = self.params
-        return (self.v, self.u, p.a, p.b, p.c_mv, p.d, p.gain, p.v_peak_mv, self._noise_ratio,
+        return (self.v, self.u, p.a, p.b, p.c_mv, p.d, p.gain, p.v_peak_mv,
+                self.noise.definition == "measured", self._noise_var, self.noise.ref_step_ms,
                 self._rng, self.blowups)
 
 
 def simulate_spikes(forces_n: np.ndarray, dt_s: float, snr_db: float = math.inf,
                     seed: int | np.random.SeedSequence | None = None,
-                    params: IzhikevichParams | None = None) -> np.ndarray:
+                    params: IzhikevichParams | None = None,
+                    noise: NoiseParams | None = None) -> np.ndarray:
     """Spikes for spring forces (N) of shape (n_steps, n) or (batch, n_steps, n), from rest.
 
     Returns a bool raster of the same shape.
     """
     f = np.asarray(forces_n, dtype=np.float64)
     if f.ndim == 2:
-        pop = NeuronPopulation(f.shape[1], params, snr_db, seed)
+        pop = NeuronPopulation(f.shape[1], params, snr_db, seed, noise=noise)
         return pop.step_block(f, dt_s)
     if f.ndim != 3:
         raise ConfigError(f"forces must be (n_steps, n) or (batch, n_steps, n), got {f.shape}")
-    pop = NeuronPopulation(f.shape[2], params, snr_db, seed, batch=f.shape[0])
+    pop = NeuronPopulation(f.shape[2], params, snr_db, seed, batch=f.shape[0], noise=noise)
     return np.ascontiguousarray(pop.step_block(f.transpose(1, 0, 2), dt_s).transpose(1, 0, 2))
 
 

@@ -22,6 +22,7 @@ from skinhil.mechanics_linear import LinearMechanics, _advance_modal_kernel
 from skinhil.neurons import (
     IzhikevichParams,
     NeuronPopulation,
+    NoiseParams,
     _izhikevich_kernel,
     raster_to_events,
 )
@@ -29,24 +30,21 @@ from skinhil.skin import SkinModel
 from skinhil.stimuli import Schedule, add_schedule_forces
 
 
-# numba keys a cached kernel on its own file only: after editing a kernel these two call (in
-# mechanics_linear, neurons, stimuli, rng), clear skinhil/__pycache__/*.nb[ic] or set
-# NUMBA_CACHE_DIR to a fresh directory, or they keep running the old code
-# (tests/test_core_sensor.py compares them with the callees run one by one and fails then).
 @numba.njit(cache=True)
 def _modal_sensor_kernel(forces: np.ndarray, springs: np.ndarray, spikes: np.ndarray,
                          dt_ms: float, phi: np.ndarray, phi_t: np.ndarray, mad: np.ndarray,
                          mbd: np.ndarray, ke: np.ndarray, ii: np.ndarray, jj: np.ndarray,
                          dofs: np.ndarray, eta: np.ndarray, v: np.ndarray, u: np.ndarray,
                          a: float, b: float, c: float, d: float, gain: float, v_peak: float,
-                         noise_ratio: float, rng: np.ndarray,
-                         blowups: np.ndarray) -> None:  # pragma: no cover - compiled
+                         measured: bool, noise_var: float, ref_step_ms: float,
+                         rng: np.ndarray, blowups: np.ndarray) -> None:  # pragma: no cover
     # forces (n, 77, 3) N → springs (n, 338) N → spikes (n, 338) over steps of dt_ms (ms);
     # phi..eta are LinearMechanics.modal_operands, v..blowups NeuronPopulation.kernel_operands()
     _advance_modal_kernel(forces, springs, phi, phi_t, mad, mbd, ke, ii, jj, dofs, eta)
     n_steps, n = springs.shape
     _izhikevich_kernel(springs.reshape(n_steps, 1, n), dt_ms, spikes.reshape(n_steps, 1, n),
-                       v, u, a, b, c, d, gain, v_peak, noise_ratio, rng, blowups)
+                       v, u, a, b, c, d, gain, v_peak, measured, noise_var, ref_step_ms, rng,
+                       blowups)
 
 
 @numba.njit(cache=True)
@@ -57,8 +55,9 @@ def _scheduled_modal_sensor_kernel(
         pushed_ptr: np.ndarray, pushed: np.ndarray, peaks: np.ndarray, phi: np.ndarray,
         phi_t: np.ndarray, mad: np.ndarray, mbd: np.ndarray, ke: np.ndarray, ii: np.ndarray,
         jj: np.ndarray, dofs: np.ndarray, eta: np.ndarray, v: np.ndarray, u: np.ndarray,
-        a: float, b: float, c: float, d: float, gain: float, v_peak: float, noise_ratio: float,
-        rng: np.ndarray, blowups: np.ndarray) -> None:  # pragma: no cover - compiled
+        a: float, b: float, c: float, d: float, gain: float, v_peak: float, measured: bool,
+        noise_var: float, ref_step_ms: float, rng: np.ndarray,
+        blowups: np.ndarray) -> None:  # pragma: no cover - compiled
     # the schedule's forces (N) for steps first_step.. of dt_s (s), schedule time 0 at
     # t_offset_s (s), then _modal_sensor_kernel; starts..peaks are Schedule.kernel_operands
     n_steps = springs.shape[0]
@@ -67,20 +66,22 @@ def _scheduled_modal_sensor_kernel(
     add_schedule_forces(forces, t, starts, onsets, ends, which, stim_onsets, stim_ends, taus,
                         pushed_ptr, pushed, peaks)
     _modal_sensor_kernel(forces, springs, spikes, dt_s * 1e3, phi, phi_t, mad, mbd, ke, ii,
-                         jj, dofs, eta, v, u, a, b, c, d, gain, v_peak, noise_ratio, rng,
-                         blowups)
+                         jj, dofs, eta, v, u, a, b, c, d, gain, v_peak, measured, noise_var,
+                         ref_step_ms, rng, blowups)
 
 
 class SkinSensor:
-    """Skin mechanics plus one noisy Izhikevich neuron per spring, at step ``dt_s`` (s)."""
+    """Skin mechanics plus one noisy Izhikevich neuron per spring, at step ``dt_s`` (s);
+    ``noise`` as in :class:`~skinhil.neurons.NeuronPopulation`."""
 
     def __init__(self, model: SkinModel | None = None, dt_s: float = 1e-4,
                  snr_db: float = math.inf, seed: int | None = None,
-                 params: IzhikevichParams | None = None) -> None:
+                 params: IzhikevichParams | None = None,
+                 noise: NoiseParams | None = None) -> None:
         self.model = model or SkinModel()
         self.dt_s = float(dt_s)
         self.stepper = self.model.stepper(dt_s)
-        self.neurons = NeuronPopulation(self.model.n_springs, params, snr_db, seed)
+        self.neurons = NeuronPopulation(self.model.n_springs, params, snr_db, seed, noise=noise)
         self.step_index = 0
         """Steps taken since the last reset; step k starts at ``k·dt_s``."""
         self._modal = (self.stepper.modal_operands

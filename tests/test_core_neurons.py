@@ -7,6 +7,7 @@ import pytest
 
 from skinhil import IzhikevichParams, NeuronPopulation, events_to_raster, raster_to_events
 from skinhil.errors import ConfigError
+from skinhil.neurons import NoiseParams
 from skinhil.rng import fill_normal, seed_states
 
 
@@ -52,14 +53,17 @@ def test_reset_rule() -> None:
     assert pop.u[0, 0] == pytest.approx(u_next + 9.0, abs=1e-12)
 
 
-def test_noise_variance_is_measured_awgn() -> None:
-    """One step from a known state: the noise has σ² = mean(x²)/10^(SNR/10) (±3 %)."""
+MEASURED = NoiseParams(definition="measured")
+
+
+def test_measured_noise_variance_is_measured_awgn() -> None:
+    """Option "measured", one step from a known state: σ² = mean(x²)/10^(SNR/10) (±3 %)."""
     snr_db, batch, n = 20.0, 300, 338
     rng = np.random.default_rng(0)
     v0 = rng.uniform(-80, -50, (batch, n))
     u0 = rng.uniform(-20, 0, (batch, n))
-    clean = NeuronPopulation(n, batch=batch)
-    noisy = NeuronPopulation(n, snr_db=snr_db, seed=5, batch=batch)
+    clean = NeuronPopulation(n, batch=batch, noise=MEASURED)
+    noisy = NeuronPopulation(n, snr_db=snr_db, seed=5, batch=batch, noise=MEASURED)
     for pop in (clean, noisy):
         pop.v[:] = v0
         pop.u[:] = u0
@@ -118,13 +122,13 @@ def test_bad_input() -> None:
     assert math.isinf(NeuronPopulation(1).snr_db)
 
 
-def test_runaway_noise_is_reset_and_counted() -> None:
+def test_measured_runaway_noise_is_reset_and_counted() -> None:
     """Below ~24 dB the measured-power noise on u feeds itself; trials restart, never NaN."""
-    low = NeuronPopulation(338, snr_db=10, seed=1)
+    low = NeuronPopulation(338, snr_db=10, seed=1, noise=MEASURED)
     spikes = low.step_block(np.zeros((5000, 338)), 1e-4)
     assert np.isfinite(low.v).all() and np.isfinite(low.u).all()
     assert low.blowups[0] > 0
     assert spikes[-1000:].any()  # still firing at the end: never silent for good
-    high = NeuronPopulation(338, snr_db=30, seed=1)
+    high = NeuronPopulation(338, snr_db=30, seed=1, noise=MEASURED)
     high.step_block(np.zeros((5000, 338)), 1e-4)
     assert high.blowups[0] == 0

@@ -6,13 +6,11 @@ import argparse
 import math
 
 from skinhil.errors import ConfigError
+from skinhil.neurons import NoiseParams
 from skinhil.skin import SkinModel, SkinParams
 
 DECODE_SNR_DB = 40.0
-"""Default noise level (dB) of ``skinhil train`` and ``skinhil demo``: noisy, yet the force,
-not the noise, drives the spikes. Below ~24 dB the measured-power noise of the model runs
-away (``skinhil/neurons.py``) and at 10 dB no stimulus onset can be detected, so no decoder
-can be trained there (see docs/receiver.md)."""
+"""Default noise level (dB) of ``skinhil train`` and ``skinhil demo``."""
 
 
 def snr_value(text: str) -> float:
@@ -27,14 +25,23 @@ def snr_value(text: str) -> float:
 
 
 def add_model_options(parser: argparse.ArgumentParser, snr_default: float = math.inf) -> None:
-    """Add --mechanics, --dt, --snr-db, --seed to ``parser``."""
+    """Add --mechanics, --dt, --snr-db, --noise, --seed to ``parser``."""
     parser.add_argument("--mechanics", choices=("linear", "geometric"), default="linear",
                         help="skin mechanics (default: linear)")
     parser.add_argument("--dt", dest="dt_s", type=float, default=1e-4, metavar="SECONDS",
                         help="simulation step in seconds (default: 1e-4)")
     parser.add_argument("--snr-db", type=snr_value, default=snr_default, metavar="DB",
                         help=f"neuron noise SNR in dB, 'inf' for none (default: {snr_default:g})")
+    parser.add_argument("--noise", choices=("diffusion", "measured"), default="diffusion",
+                        help="how the SNR becomes neuron noise: 'diffusion', sigma^2 = 1 mV^2 x "
+                             "10^(-SNR/10) per ms whatever the step (default), or 'measured', "
+                             "awgn(x, snr, 'measured') every step (runs away below ~24 dB)")
     parser.add_argument("--seed", type=int, default=0, help="noise seed (default: 0)")
+
+
+def noise_from_args(args: argparse.Namespace) -> NoiseParams:
+    """The neuron noise definition selected by :func:`add_model_options`' ``--noise``."""
+    return NoiseParams(definition=args.noise)
 
 
 def model_from_args(args: argparse.Namespace) -> SkinModel:

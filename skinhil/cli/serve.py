@@ -13,7 +13,7 @@ from typing import Any
 
 from firmware_sim.board import Board, BoardConfig, BoardSummary
 from firmware_sim.clock import request_realtime
-from skinhil.cli.options import add_model_options
+from skinhil.cli.options import add_model_options, noise_from_args
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.errors import ConfigError
 from skinhil.stimuli import load_schedule
@@ -84,6 +84,7 @@ def _config(args: argparse.Namespace) -> BoardConfig:
         mode = Timeline.SCHEDULE_RANDOM
     return BoardConfig(dt_s=args.dt_s, tick_s=args.tick_s, fifo_events=args.fifo_events,
                        status_period_s=args.status_period_s, snr_db=args.snr_db,
+                       noise=noise_from_args(args),
                        seed=args.seed, board_id=args.board_id, mechanics=args.mechanics,
                        schedule_mode=mode, rest_s=args.rest_s,
                        start_running=not args.stopped, reconnect=args.reconnect).check()

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
-from skinhil.cli.options import add_model_options, model_from_args
+from skinhil.cli.options import add_model_options, model_from_args, noise_from_args
 from skinhil.errors import ConfigError
 from skinhil.sensor import SkinSensor
 from skinhil.stimuli import Schedule, ScheduledStimulus, builtin_catalog, load_schedule
@@ -54,7 +54,8 @@ def run(args: argparse.Namespace) -> int:
     if not (math.isfinite(duration) and duration > 0):
         raise ConfigError(f"--duration must be a positive number of seconds, got {duration!r}")
     model = model_from_args(args)
-    sensor = SkinSensor(model, args.dt_s, args.snr_db, args.seed)
+    sensor = SkinSensor(model, args.dt_s, args.snr_db, args.seed,
+                        noise=noise_from_args(args))
     n_steps = int(round(duration / args.dt_s))
     block = max(1, int(round(BLOCK_S / args.dt_s)))
     forces = np.empty((n_steps, model.n_springs), dtype=np.float32)
@@ -70,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     ev = np.concatenate(events)
     markers = np.array([(e.onset_s, e.end_s, e.stimulus_id) for e in schedule.entries],
                        dtype=[("onset_s", "<f8"), ("end_s", "<f8"), ("stimulus_id", "<i4")])
-    meta = {"dt_s": args.dt_s, "snr_db": args.snr_db, "seed": args.seed,
+    meta = {"dt_s": args.dt_s, "snr_db": args.snr_db, "noise": args.noise, "seed": args.seed,
             "mechanics": args.mechanics, "duration_s": n_steps * args.dt_s,
             "stimuli": [e.stimulus.name for e in schedule.entries],
             "params": {k: v for k, v in vars(model.params).items()}}
