@@ -1,7 +1,8 @@
 """Several boards on one link decoded at once. CAN: three emulated boards (ids 0, 5, 9) and a
 fourth the receiver does not listen to (id 3) share a python-can virtual bus (classic and
-FD); UDP: three boards send to one port of 127.0.0.1. Each board's counters are exact, the
-foreign board's frames are counted, the combined view is the sum."""
+FD), and a real vcan0 (CAN FD; inside user-mode Linux where the host has none); UDP: three
+boards send to one port of 127.0.0.1. Each board's counters are exact, the foreign board's
+frames are counted, the combined view is the sum."""
 
 from __future__ import annotations
 
@@ -30,17 +31,19 @@ def small_decoder() -> WindowDecoder:
     return WindowDecoder(decoder)
 
 
-@pytest.mark.parametrize("kind", ["can", "canfd", "udp"])
+@pytest.mark.parametrize("kind", ["can", "canfd", "udp",
+                                  pytest.param("vcan-fd", marks=pytest.mark.vcan)])
 def test_three_boards_on_one_link_each_exact(small_decoder: WindowDecoder, kind: str) -> None:
-    chan = f"bus-{random.getrandbits(32)}"
-    fd = kind == "canfd"
+    chan, interface = (("vcan0", "socketcan") if kind.startswith("vcan")
+                       else (f"bus-{random.getrandbits(32)}", "virtual"))
+    fd = kind.endswith("fd")
     host: Transport = UdpTransport("127.0.0.1", 0, listen=True) if kind == "udp" else \
-        CanTransport(chan, "virtual", fd=fd)
+        CanTransport(chan, interface, fd=fd)
 
     def open_link() -> Transport:
         if kind == "udp":
             return UdpTransport("127.0.0.1", host.port)  # type: ignore[attr-defined]
-        return CanTransport(chan, "virtual", fd=fd)
+        return CanTransport(chan, interface, fd=fd)
 
     ids = BOARD_IDS if kind == "udp" else (*BOARD_IDS, OTHER_ID)
     boards = {b: Board(BoardConfig(board_id=b, seed=b, rest_s=0.05), open_link) for b in ids}
