@@ -43,6 +43,7 @@ from firmware_sim.counters import BoardCounters
 from firmware_sim.fifo import EventFifo
 from firmware_sim.link import BoardLink
 from skinhil.errors import ConfigError, TransportError
+from skinhil.geometry import PAPER_SIZE, MeshSize
 from skinhil.neurons import NoiseParams
 from skinhil.sensor import SkinSensor
 from skinhil.skin import SkinModel, SkinParams
@@ -83,6 +84,8 @@ class BoardConfig:
     board_id: int = 0
     """Board id on a CAN bus (in the arbitration ids)."""
     mechanics: str = "linear"
+    size: MeshSize = PAPER_SIZE
+    """The skin's top layer (rows, cols) of masses; 6x6 is the paper's 338-channel skin."""
     schedule_mode: int = Timeline.SCHEDULE_RANDOM
     """0: host-driven only, 1: default random schedule, 2: schedule file."""
     rest_s: float = 0.25
@@ -164,11 +167,12 @@ class Board:
         if config.mechanics not in ("linear", "geometric"):
             raise ConfigError(f"mechanics must be 'linear' or 'geometric', "
                               f"got {config.mechanics!r}")
-        model = SkinModel(SkinParams(mechanics=config.mechanics))  # type: ignore[arg-type]
+        model = SkinModel(SkinParams(mechanics=config.mechanics,  # type: ignore[arg-type]
+                                     size=config.size))
         self.sensor = SkinSensor(model, config.dt_s, config.snr_db, config.seed,
                                  noise=config.noise)
         self.timeline = Timeline(config.dt_s, file_schedule, config.seed, config.rest_s,
-                                 config.schedule_mode)
+                                 config.schedule_mode, model.size)
         self.fifo = EventFifo(config.fifo_events)
         self.counters = BoardCounters()
         self.clock = TickClock(config.tick_s)
@@ -437,7 +441,8 @@ class Board:
         t_s = np.arange(n) * self.config.dt_s
         self.sensor.advance(self.timeline.forces(t_s))
         for entry in self.timeline.schedule.entries[:1]:  # a stimulus while it is active
-            Schedule((ScheduledStimulus(0.0, entry.stimulus, 0),)).force_at(t_s)
+            Schedule((ScheduledStimulus(0.0, entry.stimulus, 0),)).force_at(
+                t_s, entry.stimulus.size)
         self.sensor.events(np.zeros((n, self.sensor.model.n_springs), dtype=bool), 0)
         self.sensor.reset()
         if self.link is not None:

@@ -1,10 +1,11 @@
-"""The paper's 3-layer skin mesh: masses, springs and which masses are fixed.
+"""The 3-layer skin mesh at any size: masses, springs and which masses are fixed.
 
-Layer 1 is a 6x6 grid of masses, layer 2 a 5x5 grid, layer 3 a 4x4 grid; each lower-layer
-mass sits under the centre of a 2x2 cell of the layer above (pyramids). Masses are numbered as
-in the paper, 1-based, layer-major then row-major: layer 1 is M1..M36 (M15 is row 3, column 3),
-layer 2 M37..M61, layer 3 M62..M77. In code, mass index ``i`` (0-based) is the paper's
-M(i+1).
+The top layer (layer 1) is a grid of ``rows x cols`` masses (the paper's is 6x6, the default);
+layer 2 is ``rows-1 x cols-1`` and layer 3 ``rows-2 x cols-2``: each lower-layer mass sits
+under the centre of a 2x2 cell of the layer above (pyramids). The smallest mesh is 3x3 (layer
+3 is then a single mass). Masses are numbered as in the paper, 1-based, layer-major then
+row-major: at 6x6 layer 1 is M1..M36 (M15 is row 3, column 3), layer 2 M37..M61, layer 3
+M62..M77. In code, mass index ``i`` (0-based) is M(i+1).
 
 Coordinates (metres): x grows with the column, y grows towards row 1 (row 1 is the top row of
 the paper's figure), z is 0 on layer 1 and ``-layer_gap_m`` per layer below; every layer is
@@ -19,21 +20,106 @@ Springs (each with a parallel damper), in this order, which is also the sensor o
 2. between layers 1 and 2, then between layers 2 and 3: for each lower mass in number order,
    the springs to its cell's top-left, top-right, bottom-left and bottom-right masses.
 
-Counts: 85 + 56 + 33 in-layer and 100 + 64 between layers = 338 springs. Masses on the edge
-of every layer are fixed, and all of layer 3 is fixed: 25 of the 77 masses are free.
+A layer of ``n x m`` masses has ``n(m-1) + (n-1)m + (n-1)(m-1)`` in-layer springs and sends
+``4(n-1)(m-1)`` springs down. At 6x6: 85 + 56 + 33 in-layer and 100 + 64 between layers = 338
+springs. Masses on the edge of every layer are fixed, and all of layer 3 is fixed: at 6x6, 25
+of the 77 masses are free.
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import numpy as np
 
-LAYER_SIZES: tuple[int, int, int] = (6, 5, 4)
-"""Grid side of layers 1, 2, 3."""
+from skinhil.errors import ConfigError
 
-N_MASSES = sum(n * n for n in LAYER_SIZES)
-N_SPRINGS = 338
+MeshSize = tuple[int, int]
+"""Top-layer size ``(rows, cols)`` in masses."""
+
+PAPER_SIZE: MeshSize = (6, 6)
+"""The paper's top layer: 6x6 masses (77 masses, 338 springs in all)."""
+MIN_SIDE = 3
+"""Smallest rows or cols of the top layer (layer 3 is then one row or column of masses)."""
+
+LAYER_SIZES: tuple[int, int, int] = (6, 5, 4)
+"""Grid side of layers 1, 2, 3 of the paper's mesh."""
+
+
+def check_size(size: object) -> MeshSize:
+    """``size`` as a ``(rows, cols)`` tuple of ints >= 3, or :class:`ConfigError`."""
+    try:
+        sides: list[object] = list(size)  # type: ignore[call-overload]
+    except TypeError:
+        sides = []
+    if len(sides) != 2:
+        raise ConfigError(f"mesh size must be (rows, cols) of the top layer, got {size!r}")
+    out = []
+    for side in sides:
+        if not (isinstance(side, int | np.integer) and not isinstance(side, bool)
+                and side >= MIN_SIDE):
+            raise ConfigError(f"mesh size {size!r}: rows and cols must be whole numbers >= "
+                              f"{MIN_SIDE} (the top layer of a 3-layer pyramid)")
+        out.append(int(side))
+    return out[0], out[1]
+
+
+def parse_size(text: str) -> MeshSize:
+    """``"16x16"`` (or ``"16"``) → ``(16, 16)``; :class:`ConfigError` for anything else."""
+    match = re.fullmatch(r"\s*(\d+)\s*(?:[xX×]\s*(\d+))?\s*", text)
+    if match is None:
+        raise ConfigError(f"mesh size {text!r} is not ROWSxCOLS (e.g. 6x6 or 16x16)")
+    rows = int(match.group(1))
+    return check_size((rows, int(match.group(2) or rows)))
+
+
+def format_size(size: MeshSize) -> str:
+    """``(16, 16)`` → ``"16x16"``."""
+    return f"{size[0]}x{size[1]}"
+
+
+def layer_shapes(size: MeshSize = PAPER_SIZE) -> tuple[MeshSize, MeshSize, MeshSize]:
+    """``(rows, cols)`` of layers 1, 2, 3 under the pyramid rule."""
+    rows, cols = check_size(size)
+    return (rows, cols), (rows - 1, cols - 1), (rows - 2, cols - 2)
+
+
+def mass_count(size: MeshSize = PAPER_SIZE) -> int:
+    """Number of masses of the mesh (77 at 6x6)."""
+    return sum(r * c for r, c in layer_shapes(size))
+
+
+def spring_count(size: MeshSize = PAPER_SIZE) -> int:
+    """Number of springs, i.e. sensors (338 at 6x6)."""
+    shapes = layer_shapes(size)
+    in_layer = sum(r * (c - 1) + (r - 1) * c + (r - 1) * (c - 1) for r, c in shapes)
+    return in_layer + 4 * sum(r * c for r, c in shapes[1:])
+
+
+N_MASSES = mass_count(PAPER_SIZE)
+"""Masses of the paper's mesh (77)."""
+N_SPRINGS = spring_count(PAPER_SIZE)
+"""Springs of the paper's mesh (338)."""
+
+
+def mass_index(layer: int, row: int, col: int, size: MeshSize = PAPER_SIZE) -> int:
+    """0-based index of the mass at 0-based ``layer``, ``row``, ``col``."""
+    shapes = layer_shapes(size)
+    offset = sum(r * c for r, c in shapes[:layer])
+    return offset + row * shapes[layer][1] + col
+
+
+def mass_position(index: int, size: MeshSize = PAPER_SIZE) -> tuple[int, int, int]:
+    """0-based ``(layer, row, col)`` of the 0-based mass ``index`` (inverse of mass_index)."""
+    if not 0 <= index < mass_count(size):
+        raise ConfigError(f"mass M{index + 1} does not exist on a {format_size(size)} skin "
+                          f"(M1..M{mass_count(size)})")
+    for layer, (rows, cols) in enumerate(layer_shapes(size)):
+        if index < rows * cols:
+            return layer, index // cols, index % cols
+        index -= rows * cols
+    raise AssertionError("unreachable")  # pragma: no cover
 
 
 @dataclass(frozen=True)
@@ -41,65 +127,51 @@ class Mesh:
     """The mesh geometry: rest positions (m), springs (0-based mass pairs), fixed masses."""
 
     positions: np.ndarray
-    """(77, 3) rest positions in metres."""
+    """(n_masses, 3) rest positions in metres."""
     springs: np.ndarray
-    """(338, 2) int64 0-based mass indices (index i is the paper's M(i+1))."""
+    """(n_springs, 2) int64 0-based mass indices (index i is M(i+1))."""
     fixed: np.ndarray
-    """(77,) bool, True where the mass is held fixed."""
+    """(n_masses,) bool, True where the mass is held fixed."""
     layer_of_spring: np.ndarray
-    """(338,) int: 1, 2, 3 for in-layer springs, 12 or 23 for springs between layers."""
+    """(n_springs,) int: 1, 2, 3 for in-layer springs, 12 or 23 for springs between layers."""
+    size: MeshSize = PAPER_SIZE
+    """Top-layer ``(rows, cols)``."""
 
     @property
     def free(self) -> np.ndarray:
-        """0-based indices of the free masses, ascending (25 of them)."""
+        """0-based indices of the free masses, ascending (25 of them at 6x6)."""
         return np.flatnonzero(~self.fixed)
 
 
-def _layer_offset(layer: int) -> int:
-    return sum(n * n for n in LAYER_SIZES[:layer])
-
-
-def mass_index(layer: int, row: int, col: int) -> int:
-    """0-based index of the mass at 0-based ``layer``, ``row``, ``col``."""
-    n = LAYER_SIZES[layer]
-    return _layer_offset(layer) + row * n + col
-
-
-def build_mesh(spacing_m: float, layer_gap_m: float) -> Mesh:
-    """Build the paper's mesh with lateral ``spacing_m`` and vertical ``layer_gap_m`` (m)."""
-    positions = np.zeros((N_MASSES, 3))
-    fixed = np.zeros(N_MASSES, dtype=bool)
-    for layer, n in enumerate(LAYER_SIZES):
-        half = (n - 1) / 2.0
-        for r in range(n):
-            for c in range(n):
-                i = mass_index(layer, r, c)
-                positions[i] = ((c - half) * spacing_m, (half - r) * spacing_m,
-                                -layer * layer_gap_m)
-                fixed[i] = layer == 2 or r in (0, n - 1) or c in (0, n - 1)
-
-    springs: list[tuple[int, int]] = []
-    kinds: list[int] = []
-    for layer, n in enumerate(LAYER_SIZES):
-        row_pairs = [(mass_index(layer, r, c), mass_index(layer, r, c + 1))
-                     for r in range(n) for c in range(n - 1)]
-        col_pairs = [(mass_index(layer, r, c), mass_index(layer, r + 1, c))
-                     for r in range(n - 1) for c in range(n)]
-        diag_pairs = [(mass_index(layer, r, c + 1), mass_index(layer, r + 1, c))
-                      for r in range(n - 1) for c in range(n - 1)]
-        for pairs in (row_pairs, col_pairs, diag_pairs):
-            springs.extend(pairs)
-            kinds.extend([layer + 1] * len(pairs))
+def build_mesh(spacing_m: float, layer_gap_m: float, size: MeshSize = PAPER_SIZE) -> Mesh:
+    """The mesh of top-layer ``size`` with lateral ``spacing_m`` and vertical ``layer_gap_m``
+    (m)."""
+    shapes = layer_shapes(size)
+    offsets = np.cumsum([0] + [r * c for r, c in shapes])
+    positions = np.zeros((int(offsets[-1]), 3))
+    fixed = np.zeros(int(offsets[-1]), dtype=bool)
+    grids = []
+    springs: list[np.ndarray] = []
+    kinds: list[np.ndarray] = []
+    for layer, (rows, cols) in enumerate(shapes):
+        grid = offsets[layer] + np.arange(rows * cols).reshape(rows, cols)
+        grids.append(grid)
+        r, c = np.meshgrid(np.arange(rows), np.arange(cols), indexing="ij")
+        positions[grid] = np.stack([(c - (cols - 1) / 2.0) * spacing_m,
+                                    ((rows - 1) / 2.0 - r) * spacing_m,
+                                    np.full(r.shape, -layer * layer_gap_m)], axis=-1)
+        fixed[grid] = (layer == 2) | (r == 0) | (r == rows - 1) | (c == 0) | (c == cols - 1)
+        for a, b in ((grid[:, :-1], grid[:, 1:]), (grid[:-1, :], grid[1:, :]),
+                     (grid[:-1, 1:], grid[1:, :-1])):
+            springs.append(np.stack([a.ravel(), b.ravel()], axis=1))
+            kinds.append(np.full(a.size, layer + 1))
     for upper in (0, 1):
-        n_low = LAYER_SIZES[upper + 1]
-        for r in range(n_low):
-            for c in range(n_low):
-                low = mass_index(upper + 1, r, c)
-                for dr, dc in ((0, 0), (0, 1), (1, 0), (1, 1)):
-                    springs.append((low, mass_index(upper, r + dr, c + dc)))
-                    kinds.append(12 if upper == 0 else 23)
-    spring_arr = np.asarray(springs, dtype=np.int64)
-    if spring_arr.shape != (N_SPRINGS, 2):  # pragma: no cover - geometry is fixed
-        raise RuntimeError(f"mesh has {len(springs)} springs, expected {N_SPRINGS}")
+        top, low = grids[upper], grids[upper + 1]
+        corners = (top[:-1, :-1], top[:-1, 1:], top[1:, :-1], top[1:, 1:])
+        pairs = np.stack([np.repeat(low.ravel(), 4),
+                          np.stack([k.ravel() for k in corners], axis=1).ravel()], axis=1)
+        springs.append(pairs)
+        kinds.append(np.full(len(pairs), 12 if upper == 0 else 23))
+    spring_arr = np.ascontiguousarray(np.concatenate(springs).astype(np.int64))
     return Mesh(positions=positions, springs=spring_arr, fixed=fixed,
-                layer_of_spring=np.asarray(kinds, dtype=np.int64))
+                layer_of_spring=np.concatenate(kinds).astype(np.int64), size=shapes[0])

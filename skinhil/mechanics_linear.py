@@ -20,49 +20,64 @@ from __future__ import annotations
 
 import numba
 import numpy as np
+from scipy import sparse
 from scipy.linalg import expm
 
 from skinhil.geometry import Mesh
 
 
 def spring_frames(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
-    """Rest unit vectors ``e`` (338, 3), from the first mass to the second, and rest lengths (m)."""
+    """Rest unit vectors ``e`` (n_springs, 3), from the first mass to the second, and rest
+    lengths (m)."""
     d = mesh.positions[mesh.springs[:, 1]] - mesh.positions[mesh.springs[:, 0]]
     length = np.linalg.norm(d, axis=1)
     return d / length[:, None], length
 
 
 def assemble(mesh: Mesh, stiffness_n_per_m: float, damping_n_s_per_m: float,
-             tension_n: float) -> tuple[np.ndarray, np.ndarray]:
-    """Global K (N/m) and C (N·s/m), 3·77 square, before removing the fixed masses."""
+             tension_n: float) -> tuple[sparse.csr_array, sparse.csr_array]:
+    """Global K (N/m) and C (N·s/m), sparse (3·n_masses square), before removing the fixed
+    masses: each spring adds its 3x3 blocks ``±(k e eᵀ + T/L (I − e eᵀ))`` and ``±c e eᵀ`` to
+    the blocks of its two masses."""
     e, length = spring_frames(mesh)
     n = 3 * mesh.positions.shape[0]
-    k_glob = np.zeros((n, n))
-    c_glob = np.zeros((n, n))
-    eye = np.eye(3)
-    for s, (i, j) in enumerate(mesh.springs):
-        ee = np.outer(e[s], e[s])
-        kb = stiffness_n_per_m * ee + tension_n / length[s] * (eye - ee)
-        cb = damping_n_s_per_m * ee
-        for glob, blk in ((k_glob, kb), (c_glob, cb)):
-            for a, b, sign in ((i, i, 1.0), (j, j, 1.0), (i, j, -1.0), (j, i, -1.0)):
-                glob[3 * a:3 * a + 3, 3 * b:3 * b + 3] += sign * blk
-    return k_glob, c_glob
+    ee = e[:, :, None] * e[:, None, :]
+    kb = stiffness_n_per_m * ee + (tension_n / length)[:, None, None] * (np.eye(3) - ee)
+    cb = damping_n_s_per_m * ee
+    i, j = mesh.springs[:, 0], mesh.springs[:, 1]
+    ax = np.arange(3)
+    out = []
+    for blocks in (kb, cb):
+        rows, cols, vals = [], [], []
+        for a, b, sign in ((i, i, 1.0), (j, j, 1.0), (i, j, -1.0), (j, i, -1.0)):
+            rows.append((3 * a[:, None, None] + ax[None, :, None]).repeat(3, axis=2).ravel())
+            cols.append((3 * b[:, None, None] + ax[None, None, :]).repeat(3, axis=1).ravel())
+            vals.append((sign * blocks).ravel())
+        out.append(sparse.coo_array((np.concatenate(vals), (np.concatenate(rows),
+                                                            np.concatenate(cols))),
+                                    shape=(n, n)).tocsr())
+    return out[0], out[1]
+
+
+def free_block(matrix: sparse.csr_array, mesh: Mesh) -> sparse.csr_array:
+    """The rows and columns of the free masses' degrees of freedom of a global matrix."""
+    dofs = free_dofs(mesh)
+    return matrix[dofs][:, dofs]
 
 
 def free_dofs(mesh: Mesh) -> np.ndarray:
-    """Indices into the 3·77 coordinate vector of the free masses' x, y, z."""
+    """Indices into the 3·n_masses coordinate vector of the free masses' x, y, z."""
     return (3 * mesh.free[:, None] + np.arange(3)[None, :]).ravel()
 
 
 def state_space(mesh: Mesh, mass_kg: float, stiffness_n_per_m: float,
                 damping_n_s_per_m: float, tension_n: float) -> tuple[np.ndarray, np.ndarray]:
-    """Continuous-time ``A`` (150x150) and ``B`` (150x75) on the free degrees of freedom."""
+    """Continuous-time ``A`` (150x150 at 6x6) and ``B`` (150x75) on the free degrees of
+    freedom, dense (for the exact stepper of small meshes)."""
     k_glob, c_glob = assemble(mesh, stiffness_n_per_m, damping_n_s_per_m, tension_n)
-    dofs = free_dofs(mesh)
-    k = k_glob[np.ix_(dofs, dofs)]
-    c = c_glob[np.ix_(dofs, dofs)]
-    n = dofs.size
+    k = free_block(k_glob, mesh).toarray()
+    c = free_block(c_glob, mesh).toarray()
+    n = k.shape[0]
     a = np.zeros((2 * n, 2 * n))
     a[:n, n:] = np.eye(n)
     a[n:, :n] = -k / mass_kg
@@ -82,19 +97,17 @@ def zoh(a: np.ndarray, b: np.ndarray, dt_s: float) -> tuple[np.ndarray, np.ndarr
     return phi[:n, :n].copy(), phi[:n, n:].copy()
 
 
-def sensor_matrix(mesh: Mesh, stiffness_n_per_m: float) -> np.ndarray:
-    """Dense ``(338, 75)`` map from free displacements (m) to spring forces (N)."""
+def sensor_matrix(mesh: Mesh, stiffness_n_per_m: float) -> sparse.csr_array:
+    """Sparse ``(n_springs, n_free_dofs)`` map (338 x 75 at 6x6) from free displacements (m)
+    to spring forces (N)."""
     e, _ = spring_frames(mesh)
-    dofs = free_dofs(mesh)
-    pos_of = {int(d): p for p, d in enumerate(dofs)}
-    out = np.zeros((mesh.springs.shape[0], dofs.size))
-    for s, (i, j) in enumerate(mesh.springs):
-        for mass, sign in ((j, 1.0), (i, -1.0)):
-            for ax in range(3):
-                col = pos_of.get(3 * int(mass) + ax)
-                if col is not None:
-                    out[s, col] += sign * stiffness_n_per_m * e[s, ax]
-    return out
+    n_masses = mesh.positions.shape[0]
+    n_springs = mesh.springs.shape[0]
+    rows = np.repeat(np.arange(n_springs), 6)
+    cols = (3 * mesh.springs[:, [1, 1, 1, 0, 0, 0]] + np.array([0, 1, 2, 0, 1, 2])).ravel()
+    vals = (stiffness_n_per_m * np.concatenate([e, -e], axis=1)).ravel()
+    full = sparse.coo_array((vals, (rows, cols)), shape=(n_springs, 3 * n_masses)).tocsr()
+    return full[:, free_dofs(mesh)]
 
 
 def spring_slots(mesh: Mesh, stiffness_n_per_m: float) -> tuple[np.ndarray, np.ndarray,
@@ -282,4 +295,5 @@ class LinearMechanics:
         for k in range(n_steps):
             disp[:, k] = x[:, : self.dofs.size]
             x = x @ ad_t + bu[:, k]
-        return disp @ self.cy.T
+        flat = disp.reshape(-1, self.dofs.size)
+        return np.asarray(self.cy @ flat.T).T.reshape(n_stim, n_steps, -1)

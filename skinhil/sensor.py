@@ -4,11 +4,13 @@ This is the model half of the sensor board: per block of steps, external forces 
 spring forces (N) → spikes. The board's real-time loop and the offline ``simulate`` command
 both step it.
 
-With the modal linear stepper (linear mechanics without baseline tension, the default) a
-block, and under a schedule also its forces, is one compiled call that runs the schedule's,
-the stepper's and the population's own kernels in turn: per-block Python work would
-otherwise cost about as much as the arithmetic of a 1 ms block. Other mechanics step
-through ``SkinStepper.advance`` and ``NeuronPopulation.step_block``.
+With the modal linear stepper (linear mechanics without baseline tension on small meshes, the
+default 6x6) or the leapfrog linear stepper (larger meshes) a block, and under a schedule also
+its forces, is one compiled call that runs the schedule's, the stepper's and the population's
+own kernels in turn: per-block Python work would otherwise cost about as much as the
+arithmetic of a 1 ms block. Other mechanics step through ``SkinStepper.advance`` and
+``NeuronPopulation.step_block``. Every step costs O(springs) with the leapfrog and the
+geometric mechanics, and the neurons O(channels).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import math
 import numba
 import numpy as np
 
+from skinhil.mechanics_leapfrog import LeapfrogMechanics, leapfrog_kernel
 from skinhil.mechanics_linear import LinearMechanics, _advance_modal_kernel
 from skinhil.neurons import (
     IzhikevichParams,
@@ -49,7 +52,7 @@ def _modal_sensor_kernel(forces: np.ndarray, springs: np.ndarray, spikes: np.nda
 
 @numba.njit(cache=True)
 def _scheduled_modal_sensor_kernel(
-        first_step: int, dt_s: float, t_offset_s: float, springs: np.ndarray,
+        first_step: int, dt_s: float, t_offset_s: float, n_masses: int, springs: np.ndarray,
         spikes: np.ndarray, starts: np.ndarray, onsets: np.ndarray, ends: np.ndarray,
         which: np.ndarray, stim_onsets: np.ndarray, stim_ends: np.ndarray, taus: np.ndarray,
         pushed_ptr: np.ndarray, pushed: np.ndarray, peaks: np.ndarray, phi: np.ndarray,
@@ -62,12 +65,38 @@ def _scheduled_modal_sensor_kernel(
     # t_offset_s (s), then _modal_sensor_kernel; starts..peaks are Schedule.kernel_operands
     n_steps = springs.shape[0]
     t = (first_step + np.arange(n_steps)) * dt_s - t_offset_s
-    forces = np.zeros((n_steps, peaks.shape[1], 3))
+    forces = np.zeros((n_steps, n_masses, 3))
     add_schedule_forces(forces, t, starts, onsets, ends, which, stim_onsets, stim_ends, taus,
                         pushed_ptr, pushed, peaks)
     _modal_sensor_kernel(forces, springs, spikes, dt_s * 1e3, phi, phi_t, mad, mbd, ke, ii,
                          jj, dofs, eta, v, u, a, b, c, d, gain, v_peak, measured, noise_var,
                          ref_step_ms, rng, blowups)
+
+
+@numba.njit(cache=True)
+def _leapfrog_sensor_kernel(forces: np.ndarray, springs: np.ndarray, spikes: np.ndarray,
+                            dt_s: float, substeps: int, mechanics: tuple,  # type: ignore[type-arg]
+                            neurons: tuple) -> None:  # type: ignore[type-arg] # pragma: no cover
+    # forces (n, n_masses, 3) N → springs (n, n_springs) N → spikes over steps of dt_s (s);
+    # mechanics is LeapfrogMechanics.operands, neurons NeuronPopulation.kernel_operands()
+    leapfrog_kernel(forces, springs, dt_s, substeps, *mechanics)
+    n_steps, n = springs.shape
+    _izhikevich_kernel(springs.reshape(n_steps, 1, n), dt_s * 1e3,
+                       spikes.reshape(n_steps, 1, n), *neurons)
+
+
+@numba.njit(cache=True)
+def _scheduled_leapfrog_sensor_kernel(
+        first_step: int, dt_s: float, t_offset_s: float, n_masses: int, springs: np.ndarray,
+        spikes: np.ndarray, schedule: tuple, substeps: int,  # type: ignore[type-arg]
+        mechanics: tuple, neurons: tuple) -> None:  # type: ignore[type-arg] # pragma: no cover
+    # the schedule's forces (N) for steps first_step.. of dt_s (s), schedule time 0 at
+    # t_offset_s (s), then _leapfrog_sensor_kernel; schedule is Schedule.kernel_operands
+    n_steps = springs.shape[0]
+    t = (first_step + np.arange(n_steps)) * dt_s - t_offset_s
+    forces = np.zeros((n_steps, n_masses, 3))
+    add_schedule_forces(forces, t, *schedule)
+    _leapfrog_sensor_kernel(forces, springs, spikes, dt_s, substeps, mechanics, neurons)
 
 
 class SkinSensor:
@@ -86,6 +115,8 @@ class SkinSensor:
         """Steps taken since the last reset; step k starts at ``k·dt_s``."""
         self._modal = (self.stepper.modal_operands
                        if isinstance(self.stepper, LinearMechanics) else None)
+        self._leapfrog = self.stepper if isinstance(self.stepper, LeapfrogMechanics) else None
+        self._checked: Schedule | None = None
 
     def reset(self) -> None:
         """Mechanics and membranes back to rest, time back to 0 (noise streams continue)."""
@@ -98,16 +129,22 @@ class SkinSensor:
         self.neurons.set_snr(snr_db)
 
     def advance(self, forces_n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Step ``len(forces_n)`` steps with external forces (n, 77, 3) N held per step.
+        """Step ``len(forces_n)`` steps with external forces (n, n_masses, 3) N held per step.
 
-        Returns the spring forces (n, 338) N at the start of each step and the bool spikes
-        (n, 338) fired during each step.
+        Returns the spring forces (n, n_springs) N at the start of each step and the bool
+        spikes (n, n_springs) fired during each step.
         """
-        if self._modal is None:
+        if self._modal is not None:
+            springs, spikes = self._advance_modal(forces_n)
+        elif self._leapfrog is not None:
+            forces = np.ascontiguousarray(forces_n, dtype=np.float64)
+            springs, spikes = self._outputs(forces.shape[0])
+            _leapfrog_sensor_kernel(forces, springs, spikes, self.dt_s,
+                                    self._leapfrog.substeps, self._leapfrog.operands,
+                                    self.neurons.kernel_operands())
+        else:
             springs = self.stepper.advance(forces_n)
             spikes = self.neurons.step_block(springs, self.dt_s)
-        else:
-            springs, spikes = self._advance_modal(forces_n)
         self.step_index += len(forces_n)
         return springs, spikes
 
@@ -123,18 +160,29 @@ class SkinSensor:
     def advance_schedule(self, schedule: Schedule, n_steps: int,
                          t_offset_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """Step ``n_steps`` under ``schedule`` (schedule time 0 at sensor time ``t_offset_s``)."""
-        if self._modal is None:
+        if schedule is not self._checked:
+            self.model.check_schedule(schedule)
+            self._checked = schedule
+        if self._modal is None and self._leapfrog is None:
             t = (self.step_index + np.arange(n_steps)) * self.dt_s - t_offset_s
-            return self.advance(schedule.force_at(t))
+            return self.advance(schedule.force_at(t, self.model.size))
         springs, spikes = self._outputs(n_steps)
-        operands = schedule.kernel_operands + self._modal + self.neurons.kernel_operands()
-        _scheduled_modal_sensor_kernel(self.step_index, self.dt_s, float(t_offset_s), springs,
-                                       spikes, *operands)
+        if self._leapfrog is not None:
+            _scheduled_leapfrog_sensor_kernel(
+                self.step_index, self.dt_s, float(t_offset_s), self.model.n_masses, springs,
+                spikes, schedule.kernel_operands, self._leapfrog.substeps,
+                self._leapfrog.operands, self.neurons.kernel_operands())
+        else:
+            assert self._modal is not None
+            operands = schedule.kernel_operands + self._modal + self.neurons.kernel_operands()
+            _scheduled_modal_sensor_kernel(self.step_index, self.dt_s, float(t_offset_s),
+                                           self.model.n_masses, springs, spikes, *operands)
         self.step_index += n_steps
         return springs, spikes
 
     def _outputs(self, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
-        """Fresh spring-force (N) and bool spike arrays for a block, each (n_steps, 338)."""
+        """Fresh spring-force (N) and bool spike arrays for a block, each (n_steps,
+        n_springs)."""
         shape = (n_steps, self.model.n_springs)
         return np.empty(shape), np.empty(shape, dtype=np.bool_)
 

@@ -1,4 +1,4 @@
-"""The skin model: the paper's mesh, its parameters and its two mechanics.
+"""The skin model: the paper's mesh at any size, its parameters and its two mechanics.
 
 Defaults and their reasoning (the paper gives the structure, not SI values):
 
@@ -17,6 +17,19 @@ Defaults and their reasoning (the paper gives the structure, not SI values):
 - ``mechanics = "linear"``: the paper's stiffness-matrix model, so the reproduction starts
   from the paper's own equations; exact at any step and the cheapest. ``"geometric"`` keeps
   true spring lengths for large deformations; the reproduction reports both.
+- ``size = (6, 6)``: the paper's top layer; any ``rows x cols`` >= 3x3 builds the same
+  pyramid (:mod:`skinhil.geometry`).
+- ``linear_stepper = "auto"``: how the linear mechanics is stepped, one rule: the exact ZOH
+  (:mod:`skinhil.mechanics_linear`: per-mode when there is no tension) while the mesh has at
+  most ``EXACT_MAX_FREE_DOFS`` (200) free degrees of freedom — every top layer up to 8x8,
+  the paper's 6x6 (75) among them, whose results are exact at any step — and the
+  second-order leapfrog of :mod:`skinhil.mechanics_leapfrog` above it, whose step costs
+  O(springs) where the exact one costs O(dof²) per step and O(dof³) to set up (at 16x16,
+  1,095 free degrees of freedom, a dense step would cost ~20x a leapfrog step). ``"exact"``
+  or ``"leapfrog"`` force one regime (the exact one needs dense matrices: fine to a few
+  thousand degrees of freedom offline).
+
+The geometric mechanics is stepped spring by spring (O(springs) per step) at every size.
 """
 
 from __future__ import annotations
@@ -29,12 +42,21 @@ from typing import Literal, Protocol
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.geometry import N_MASSES, N_SPRINGS, build_mesh
+from skinhil.geometry import PAPER_SIZE, MeshSize, build_mesh, check_size, format_size
 from skinhil.mechanics_geometric import GeometricMechanics, max_stable_dt
+from skinhil.mechanics_leapfrog import LeapfrogMechanics
 from skinhil.mechanics_linear import LinearMechanics
-from skinhil.stimuli import Stimulus
+from skinhil.stimuli import Schedule, Stimulus
 
 Mechanics = Literal["linear", "geometric"]
+LinearStepper = Literal["auto", "exact", "leapfrog"]
+
+INPUT_BLOCK_STEPS = 1000
+"""Steps of input forces built at a time by :meth:`SkinModel.simulate_many` for steppers
+that take a stimulus at a time (bounded memory at any mesh size)."""
+EXACT_MAX_FREE_DOFS = 200
+"""Above this many free degrees of freedom the linear mechanics is stepped by the leapfrog
+(``linear_stepper="auto"``, module docstring); 6x6 has 75, 8x8 183, 9x9 258."""
 
 
 @dataclass(frozen=True)
@@ -48,8 +70,16 @@ class SkinParams:
     spacing_m: float = 1e-3
     layer_gap_m: float = 1e-3
     mechanics: Mechanics = "linear"
+    size: MeshSize = PAPER_SIZE
+    """Top layer (rows, cols) in masses; the layers below follow the pyramid rule."""
+    linear_stepper: LinearStepper = "auto"
+    """How the linear mechanics is stepped (module docstring)."""
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "size", check_size(self.size))
+        if self.linear_stepper not in ("auto", "exact", "leapfrog"):
+            raise ConfigError(f"SkinParams.linear_stepper must be 'auto', 'exact' or "
+                              f"'leapfrog', got {self.linear_stepper!r}")
         positive = ("mass_kg", "stiffness_n_per_m", "spacing_m", "layer_gap_m")
         for name in positive:
             value = getattr(self, name)
@@ -73,33 +103,45 @@ class SkinStepper(Protocol):
         """Back to rest."""
 
     def advance(self, forces_n: np.ndarray) -> np.ndarray:
-        """(n, 77, 3) external forces (N) held per step → (n, 338) spring forces (N)."""
+        """(n, n_masses, 3) external forces (N) held per step → (n, n_springs) spring forces
+        (N)."""
         ...
 
     def simulate_batch(self, inputs: np.ndarray) -> np.ndarray:
-        """(n_stim, n_steps, 77, 3) N from rest → (n_stim, n_steps, 338) N; ends at rest."""
+        """(n_stim, n_steps, n_masses, 3) N from rest → (n_stim, n_steps, n_springs) N; ends
+        at rest."""
         ...
 
 
 class SkinModel:
     """The 3-layer mass-spring-damper skin (see :mod:`skinhil.geometry` for the numbering).
 
-    Attributes: ``springs`` (338, 2) 0-based mass indices, ``positions`` (77, 3) m, ``fixed``
-    (77,) bool, ``params``.
+    Attributes: ``springs`` (n_springs, 2) 0-based mass indices, ``positions`` (n_masses, 3)
+    m, ``fixed`` (n_masses,) bool, ``size`` (rows, cols) of the top layer, ``params``; at the
+    default 6x6, 338 springs and 77 masses.
     """
 
     def __init__(self, params: SkinParams | None = None) -> None:
         self.params = params or SkinParams()
         p = self.params
-        self.mesh = build_mesh(p.spacing_m, p.layer_gap_m)
+        self.size: MeshSize = p.size
+        self.mesh = build_mesh(p.spacing_m, p.layer_gap_m, p.size)
         self.springs = self.mesh.springs
         self.positions = self.mesh.positions
         self.fixed = self.mesh.fixed
-        self.n_springs = N_SPRINGS
-        self.n_masses = N_MASSES
+        self.n_springs = int(self.springs.shape[0])
+        self.n_masses = int(self.positions.shape[0])
+
+    @property
+    def linear_regime(self) -> Literal["exact", "leapfrog"]:
+        """How the linear mechanics is stepped at this size (module docstring)."""
+        if self.params.linear_stepper != "auto":
+            return self.params.linear_stepper
+        return "exact" if 3 * self.mesh.free.size <= EXACT_MAX_FREE_DOFS else "leapfrog"
 
     def max_dt_s(self) -> float:
-        """Largest step (s) the chosen mechanics accepts (inf for the exact linear ZOH)."""
+        """Largest step (s) the chosen mechanics accepts (inf for the linear mechanics: exact
+        ZOH, or leapfrog substeps chosen for stability)."""
         if self.params.mechanics == "linear":
             return math.inf
         p = self.params
@@ -117,11 +159,21 @@ class SkinModel:
                 f"below {limit:.3g} s with these parameters); lower dt_s or use "
                 "mechanics='linear'")
         p = self.params
-        cls = LinearMechanics if p.mechanics == "linear" else GeometricMechanics
+        cls: type[LinearMechanics | LeapfrogMechanics | GeometricMechanics] = (
+            GeometricMechanics if p.mechanics == "geometric" else
+            LinearMechanics if self.linear_regime == "exact" else LeapfrogMechanics)
         return cls(self.mesh, p.mass_kg, p.stiffness_n_per_m, p.damping_n_s_per_m,
                    p.tension_n, float(dt_s))
 
-    def _check_stimulus(self, stimulus: Stimulus) -> None:
+    def check_stimulus(self, stimulus: Stimulus) -> None:
+        """:class:`ConfigError` unless ``stimulus`` is defined on this size and pushes only
+        free masses."""
+        if stimulus.size != self.size:
+            raise ConfigError(f"stimulus {stimulus.name!r} is defined on a "
+                              f"{format_size(stimulus.size)} skin, this one is "
+                              f"{format_size(self.size)}: define it for "
+                              f"{format_size(self.size)} (built-ins: "
+                              "skinhil.stimuli.at_size)")
         on_fixed = [m for m in stimulus.forces if self.fixed[m - 1]]
         if on_fixed:
             free = ", ".join(f"M{i + 1}" for i in self.mesh.free)
@@ -129,9 +181,14 @@ class SkinModel:
                               f"{', '.join(f'M{m}' for m in on_fixed)}, which cannot move; "
                               f"use free masses: {free}")
 
+    def check_schedule(self, schedule: Schedule) -> None:
+        """:meth:`check_stimulus` for every distinct stimulus of ``schedule``."""
+        for stim in {id(e.stimulus): e.stimulus for e in schedule.entries}.values():
+            self.check_stimulus(stim)
+
     def simulate_many(self, stimuli: Sequence[Stimulus], duration_s: float,
                       dt_s: float = 1e-4) -> np.ndarray:
-        """Spring forces (N) for each stimulus from rest: (n_stim, n_steps, 338).
+        """Spring forces (N) for each stimulus from rest: (n_stim, n_steps, n_springs).
 
         ``n_steps = round(duration_s / dt_s)``; row ``k`` is the force at ``t = k·dt_s``; the
         stimulus is sampled at the start of each step and held over it (zero-order hold).
@@ -144,11 +201,21 @@ class SkinModel:
         n_steps = max(1, int(round(duration_s / dt_s)))
         t = np.arange(n_steps) * dt_s
         for s in stimuli:
-            self._check_stimulus(s)
-        inputs = np.stack([s.force_at(t) for s in stimuli]) if stimuli else np.zeros(
-            (0, n_steps, N_MASSES, 3))
-        return stepper.simulate_batch(inputs)
+            self.check_stimulus(s)
+        if isinstance(stepper, LinearMechanics):  # all stimuli at once, dense (small meshes)
+            inputs = np.stack([s.force_at(t) for s in stimuli]) if stimuli else np.zeros(
+                (0, n_steps, self.n_masses, 3))
+            return stepper.simulate_batch(inputs)
+        out = np.empty((len(stimuli), n_steps, self.n_springs))
+        for i, s in enumerate(stimuli):  # one stimulus at a time, the input in blocks
+            stepper.reset()
+            for start in range(0, n_steps, INPUT_BLOCK_STEPS):
+                block = t[start:start + INPUT_BLOCK_STEPS]
+                out[i, start:start + block.size] = stepper.advance(s.force_at(block))
+        stepper.reset()
+        return out
 
     def simulate(self, stimulus: Stimulus, duration_s: float, dt_s: float = 1e-4) -> np.ndarray:
-        """Spring forces (N) for one stimulus from rest: (n_steps, 338); see simulate_many."""
+        """Spring forces (N) for one stimulus from rest: (n_steps, n_springs); see
+        simulate_many."""
         return self.simulate_many([stimulus], duration_s, dt_s)[0]

@@ -16,6 +16,17 @@ Built-in stimuli (documented choices; the paper gives the directions, not every 
 
 All use ``onset_s = 0``, ``indentation_s = 0.25`` and ``decay_tau_s = 0.1`` by default.
 
+Mesh sizes: a :class:`Stimulus` names masses by number on a mesh of a given top-layer size
+(``size``, default the paper's 6x6), which validates the numbers; a model takes only stimuli of
+its own size (:meth:`skinhil.skin.SkinModel.check_stimulus`). The built-in stimuli are defined
+on the paper's 6x6 numbering; :func:`at_size` (and
+``builtin_catalog(size)``) moves them to another size keeping each pushed mass's place
+relative to the centre of its layer: layer, row and column are kept and the row (column) is
+shifted by ``trunc((rows − 6)/2)`` (``trunc((cols − 6)/2)``), so M15 (layer 1, row 3, column
+3, beside the centre of the 6x6 patch) becomes row 8, column 8 of a 16x16 skin (M120) and row
+2, column 2 of a 3x3 skin (M5, its only free top mass). A moved stimulus that lands on a
+fixed mass (E, a 2x2 group, at 3x3) is refused by the model with a clear error.
+
 Schedules place stimuli on a timeline (``start_s`` of each), from code, from
 :func:`random_schedule` or from a TOML file (:func:`load_schedule`, format in its docstring).
 """
@@ -33,7 +44,16 @@ import numba
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.geometry import N_MASSES
+from skinhil.geometry import (
+    PAPER_SIZE,
+    MeshSize,
+    check_size,
+    format_size,
+    layer_shapes,
+    mass_count,
+    mass_index,
+    mass_position,
+)
 
 DIRECTION_ANGLES_DEG: tuple[float, ...] = (0.0, 120.0, 240.0)
 DIRECTION_MAGNITUDES_N: tuple[float, ...] = (0.1, 0.3, 0.5)
@@ -45,9 +65,10 @@ USER_STIMULUS_ID_BASE = 100
 
 @dataclass(frozen=True)
 class Stimulus:
-    """A touch: peak force vectors (N) on paper-numbered masses and the Figure 1D profile.
+    """A touch: peak force vectors (N) on numbered masses and the Figure 1D profile.
 
-    ``forces`` maps the paper's 1-based mass number to ``(fx, fy, fz)`` in newtons.
+    ``forces`` maps a 1-based mass number (:mod:`skinhil.geometry`) to ``(fx, fy, fz)`` in
+    newtons, on a mesh whose top layer is ``size`` (rows, cols) masses.
     ``onset_s`` is when the force starts, ``indentation_s`` how long it lasts and
     ``decay_tau_s`` its exponential decay constant during the indentation.
     """
@@ -57,26 +78,32 @@ class Stimulus:
     onset_s: float = 0.0
     indentation_s: float = 0.25
     decay_tau_s: float = 0.1
+    size: MeshSize = PAPER_SIZE
+    """Top-layer (rows, cols) of the mesh the mass numbers refer to."""
     _peak: np.ndarray = field(init=False, repr=False, compare=False)
     _pushed: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        peak = np.zeros((N_MASSES, 3))
+        size = check_size(self.size)
+        n_masses = mass_count(size)
         clean: dict[int, tuple[float, float, float]] = {}
         for mass, vec in self.forces.items():
             try:
                 number = int(mass)
             except (TypeError, ValueError):
                 raise ConfigError(f"stimulus {self.name!r}: mass {mass!r} is not a number; "
-                                  f"use the paper's mass numbers 1..{N_MASSES}") from None
-            if not 1 <= number <= N_MASSES:
+                                  f"use mass numbers 1..{n_masses} of a {format_size(size)} "
+                                  "skin") from None
+            if not 1 <= number <= n_masses:
                 raise ConfigError(f"stimulus {self.name!r}: unknown mass number {number}; "
-                                  f"use the paper's mass numbers 1..{N_MASSES}")
+                                  f"use mass numbers 1..{n_masses} of a {format_size(size)} "
+                                  "skin")
             arr = np.asarray(vec, dtype=float)
             if arr.shape != (3,) or not np.all(np.isfinite(arr)):
                 raise ConfigError(f"stimulus {self.name!r}: force on M{number} must be three "
                                   f"finite numbers (fx, fy, fz) in newtons, got {vec!r}")
-            peak[number - 1] += arr
+            if number in clean:
+                arr = arr + np.asarray(clean[number])
             clean[number] = (float(arr[0]), float(arr[1]), float(arr[2]))
         for label, value, minimum in (("onset_s", self.onset_s, 0.0),
                                       ("indentation_s", self.indentation_s, 0.0)):
@@ -86,14 +113,24 @@ class Stimulus:
         if not (self.decay_tau_s > 0):
             raise ConfigError(f"stimulus {self.name!r}: decay_tau_s must be > 0 "
                               f"(use inf for a constant force), got {self.decay_tau_s!r}")
+        pushed = sorted(m for m, vec in clean.items() if any(x != 0.0 for x in vec))
+        object.__setattr__(self, "size", size)
         object.__setattr__(self, "forces", MappingProxyType(clean))
-        object.__setattr__(self, "_peak", peak)
-        object.__setattr__(self, "_pushed", np.flatnonzero(np.any(peak != 0.0, axis=1)))
+        object.__setattr__(self, "_pushed", np.array([m - 1 for m in pushed], dtype=np.int64))
+        object.__setattr__(self, "_peak", np.array([clean[m] for m in pushed],
+                                                   dtype=float).reshape(-1, 3))
+
+    @property
+    def pushed_masses(self) -> np.ndarray:
+        """0-based indices of the masses with a nonzero peak force, ascending."""
+        return self._pushed.copy()
 
     @property
     def peak_forces_n(self) -> np.ndarray:
-        """(77, 3) peak force per mass (N), 0-based mass index."""
-        return self._peak.copy()
+        """(n_masses, 3) peak force per mass (N), 0-based mass index (77 masses at 6x6)."""
+        out = np.zeros((mass_count(self.size), 3))
+        out[self._pushed] = self._peak
+        return out
 
     @property
     def end_s(self) -> float:
@@ -108,13 +145,17 @@ class Stimulus:
         return out.reshape(np.shape(t_s))
 
     def force_at(self, t_s: np.ndarray) -> np.ndarray:
-        """Force on every mass at times ``t_s`` (s): (len(t_s), 77, 3) N."""
-        out = np.zeros((np.shape(t_s)[0], N_MASSES, 3))
+        """Force on every mass at times ``t_s`` (s): (len(t_s), n_masses, 3) N."""
+        out = np.zeros((np.shape(t_s)[0], mass_count(self.size), 3))
         self.add_force(t_s, out)
         return out
 
     def add_force(self, t_s: np.ndarray, out: np.ndarray) -> None:
-        """Add the force at times ``t_s`` (s) into ``out`` (len(t_s), 77, 3) N, in place."""
+        """Add the force at times ``t_s`` (s) into ``out`` (len(t_s), n_masses, 3) N."""
+        if out.shape[1] != mass_count(self.size):
+            raise ConfigError(f"stimulus {self.name!r} is defined on a {format_size(self.size)}"
+                              f" skin ({mass_count(self.size)} masses), not on one of "
+                              f"{out.shape[1]} masses")
         _add_profiled(out, np.asarray(t_s, dtype=float), 0.0, self._pushed, self._peak,
                       self.onset_s, self.end_s, self.decay_tau_s)
 
@@ -136,13 +177,13 @@ def _profile_into(out: np.ndarray, t: np.ndarray, onset: float, end: float,
 def _add_profiled(out: np.ndarray, t: np.ndarray, t_shift: float, pushed: np.ndarray,
                   peak: np.ndarray, onset: float, end: float,
                   tau: float) -> None:  # pragma: no cover - compiled
-    # out[k] += peak (N) times the profile at t[k] − t_shift (s), on the pushed masses only
+    # out[k, pushed[i]] += peak[i] (N) times the profile at t[k] − t_shift (s)
     for k in range(t.shape[0]):
         scale = _profile_at(t[k] - t_shift, onset, end, tau)
         if scale != 0.0:
-            for m in pushed:
+            for i in range(pushed.shape[0]):
                 for a in range(3):
-                    out[k, m, a] += scale * peak[m, a]
+                    out[k, pushed[i], a] += scale * peak[i, a]
 
 
 @numba.njit(cache=True)
@@ -151,7 +192,7 @@ def add_schedule_forces(out: np.ndarray, t: np.ndarray, starts: np.ndarray,
                         stim_onsets: np.ndarray, stim_ends: np.ndarray, taus: np.ndarray,
                         pushed_ptr: np.ndarray, pushed: np.ndarray,
                         peaks: np.ndarray) -> None:  # pragma: no cover - compiled
-    """Add into ``out`` (len(t), 77, 3) the force (N) at times ``t`` (s) of every entry whose
+    """Add into ``out`` (len(t), n_masses, 3) the force (N) at times ``t`` (s) of every entry whose
     [onset, end) (s) meets [min t, max t], in entry order; entry ``e`` plays stimulus
     ``which[e]``. The arrays after ``t`` are a :attr:`Schedule.kernel_operands`."""
     if t.shape[0] == 0:
@@ -161,7 +202,9 @@ def add_schedule_forces(out: np.ndarray, t: np.ndarray, starts: np.ndarray,
     for e in range(starts.shape[0]):
         if onsets[e] <= hi and ends[e] > lo:
             s = which[e]
-            _add_profiled(out, t, starts[e], pushed[pushed_ptr[s]:pushed_ptr[s + 1]], peaks[s],
+            lo_i = pushed_ptr[s]
+            hi_i = pushed_ptr[s + 1]
+            _add_profiled(out, t, starts[e], pushed[lo_i:hi_i], peaks[lo_i:hi_i],
                           stim_onsets[s], stim_ends[s], taus[s])
 
 
@@ -188,11 +231,34 @@ def direction_conditions() -> list[Stimulus]:
     return out
 
 
-def builtin_catalog() -> dict[str, tuple[int, Stimulus]]:
-    """Every built-in stimulus by name, with its stimulus id (0..8 and 10..14)."""
-    cat = {s.name: (i, s) for i, s in enumerate(direction_conditions())}
+def at_size(stimulus: Stimulus, size: MeshSize) -> Stimulus:
+    """``stimulus`` moved to a mesh of top-layer ``size``, each pushed mass keeping its layer
+    and its place relative to the layer's centre (module docstring); itself if the size is
+    already ``size``."""
+    size = check_size(size)
+    if stimulus.size == size:
+        return stimulus
+    shift_r = int((size[0] - stimulus.size[0]) / 2)
+    shift_c = int((size[1] - stimulus.size[1]) / 2)
+    moved: dict[int, tuple[float, float, float]] = {}
+    for number, vec in stimulus.forces.items():
+        layer, row, col = mass_position(number - 1, stimulus.size)
+        rows, cols = layer_shapes(size)[layer]
+        r, c = row + shift_r, col + shift_c
+        if not (0 <= r < rows and 0 <= c < cols):
+            raise ConfigError(f"stimulus {stimulus.name!r}: M{number} has no place on a "
+                              f"{format_size(size)} skin; define the stimulus for that size")
+        moved[mass_index(layer, r, c, size) + 1] = vec
+    return Stimulus(stimulus.name, moved, stimulus.onset_s, stimulus.indentation_s,
+                    stimulus.decay_tau_s, size)
+
+
+def builtin_catalog(size: MeshSize = PAPER_SIZE) -> dict[str, tuple[int, Stimulus]]:
+    """Every built-in stimulus by name, with its stimulus id (0..8 and 10..14), on a mesh of
+    top-layer ``size`` (moved by :func:`at_size`)."""
+    cat = {s.name: (i, at_size(s, size)) for i, s in enumerate(direction_conditions())}
     for i, s in enumerate(paper_stimuli()):
-        cat[s.name] = (PAPER_STIMULUS_ID_BASE + i, s)
+        cat[s.name] = (PAPER_STIMULUS_ID_BASE + i, at_size(s, size))
     return cat
 
 
@@ -235,6 +301,11 @@ class Schedule:
             if not (math.isfinite(e.start_s) and e.start_s >= 0):
                 raise ConfigError(f"schedule: start_s must be a finite number >= 0, "
                                   f"got {e.start_s!r} for {e.stimulus.name!r}")
+        sizes = {e.stimulus.size for e in ordered}
+        if len(sizes) > 1:
+            raise ConfigError(f"schedule mixes stimuli of skins of sizes "
+                              f"{', '.join(sorted(format_size(z) for z in sizes))}: define "
+                              "every stimulus for one size")
         object.__setattr__(self, "entries", ordered)
         object.__setattr__(self, "kernel_operands", _pack_entries(ordered))
 
@@ -243,10 +314,24 @@ class Schedule:
         """Time (s) at which the last stimulus ends."""
         return max((e.end_s for e in self.entries), default=0.0)
 
-    def force_at(self, t_s: np.ndarray) -> np.ndarray:
-        """Total force on every mass at absolute times ``t_s`` (s): (len, 77, 3) N."""
+    @property
+    def size(self) -> MeshSize | None:
+        """Top-layer size of its stimuli's mesh (None for an empty schedule)."""
+        return self.entries[0].stimulus.size if self.entries else None
+
+    def check_size(self, size: MeshSize) -> None:
+        """:class:`ConfigError` unless every stimulus is defined on a mesh of ``size``."""
+        if self.entries and self.size != size:
+            raise ConfigError(f"the schedule's stimuli are defined on a "
+                              f"{format_size(self.entries[0].stimulus.size)} skin, not "
+                              f"{format_size(size)}: define them for {format_size(size)}")
+
+    def force_at(self, t_s: np.ndarray, size: MeshSize = PAPER_SIZE) -> np.ndarray:
+        """Total force on every mass of a mesh of ``size`` at absolute times ``t_s`` (s):
+        (len, n_masses, 3) N."""
+        self.check_size(size)
         t = np.asarray(t_s, dtype=float)
-        out = np.zeros((t.shape[0], N_MASSES, 3))
+        out = np.zeros((t.shape[0], mass_count(size), 3))
         add_schedule_forces(out, t, *self.kernel_operands)
         return out
 
@@ -254,7 +339,8 @@ class Schedule:
 def _pack_entries(entries: Sequence[ScheduledStimulus]) -> ScheduleOperands:
     """The arrays :func:`add_schedule_forces` reads after ``out`` and ``t``: per entry its start,
     onset and end (s) and stimulus index; per distinct stimulus its onset, end and decay
-    constant (s), its pushed masses (CSR: pointers, indices) and peak forces (n, 77, 3) N."""
+    constant (s), its pushed masses and their peak forces (N) in CSR form: pointers, 0-based
+    mass indices, and (n_pushed, 3) peak forces aligned with the indices."""
     index: dict[int, int] = {}
     stims: list[Stimulus] = []
     for e in entries:
@@ -272,7 +358,7 @@ def _pack_entries(entries: Sequence[ScheduledStimulus]) -> ScheduleOperands:
             np.concatenate([[0], np.cumsum(counts, dtype=np.int64)]).astype(np.int64),
             np.concatenate([s._pushed for s in stims] + [np.zeros(0, np.int64)]).astype(
                 np.int64),
-            np.stack([s._peak for s in stims]) if stims else np.zeros((0, N_MASSES, 3)))
+            np.concatenate([s._peak for s in stims] + [np.zeros((0, 3))]))
 
 
 def random_schedule(stimuli: Sequence[Stimulus], n: int, rest_s: float = 0.25,
@@ -297,7 +383,7 @@ def random_schedule(stimuli: Sequence[Stimulus], n: int, rest_s: float = 0.25,
     return Schedule(tuple(entries))
 
 
-def _stimulus_from_table(table: Mapping[str, object], where: str) -> Stimulus:
+def _stimulus_from_table(table: Mapping[str, object], where: str, size: MeshSize) -> Stimulus:
     known = {"name", "forces", "onset_s", "indentation_s", "decay_tau_s", "id"}
     unknown = set(table) - known
     if unknown:
@@ -308,17 +394,18 @@ def _stimulus_from_table(table: Mapping[str, object], where: str) -> Stimulus:
         raise ConfigError(f"{where}: needs name = \"...\" and forces = {{ 15 = [fx, fy, fz] }}")
     kwargs = {k: float(table[k]) for k in ("onset_s", "indentation_s", "decay_tau_s")  # type: ignore[arg-type]
               if k in table}
-    return Stimulus(name, forces, **kwargs)  # type: ignore[arg-type]
+    return Stimulus(name, forces, size=size, **kwargs)  # type: ignore[arg-type]
 
 
-def load_schedule(path: str | Path) -> Schedule:
-    """Read a schedule from a TOML file.
+def load_schedule(path: str | Path, size: MeshSize = PAPER_SIZE) -> Schedule:
+    """Read a schedule from a TOML file for a skin of top-layer ``size`` (mass numbers of that
+    size; built-in stimuli moved to it by :func:`at_size`).
 
     Format::
 
         [[stimulus]]                 # optional user stimuli (ids 100, 101, ... in file order)
         name = "poke"
-        forces = { 15 = [0.0, 0.0, -0.4], 16 = [0.0, 0.0, -0.1] }   # N, paper mass numbers
+        forces = { 15 = [0.0, 0.0, -0.4], 16 = [0.0, 0.0, -0.1] }   # N, mass numbers
         indentation_s = 0.2          # optional: onset_s, indentation_s, decay_tau_s
         decay_tau_s = 0.05
 
@@ -341,9 +428,9 @@ def load_schedule(path: str | Path) -> Schedule:
     if unknown:
         raise ConfigError(f"schedule file {str(p)!r}: unknown section(s) {sorted(unknown)}; "
                           "use [[stimulus]] and [[event]]")
-    catalog = builtin_catalog()
+    catalog = builtin_catalog(size)
     for i, table in enumerate(doc.get("stimulus", [])):
-        stim = _stimulus_from_table(table, f"{p.name}: [[stimulus]] #{i + 1}")
+        stim = _stimulus_from_table(table, f"{p.name}: [[stimulus]] #{i + 1}", size)
         catalog[stim.name] = (USER_STIMULUS_ID_BASE + i, stim)
     events = doc.get("event", [])
     if not isinstance(events, list) or not events:

@@ -19,10 +19,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from skinhil.geometry import PAPER_SIZE, MeshSize
 from skinhil.stimuli import (
     Schedule,
     ScheduledStimulus,
     Stimulus,
+    at_size,
     builtin_catalog,
     direction_conditions,
     random_schedule,
@@ -53,6 +55,8 @@ class Timeline:
 
     ``dt_s`` is the simulation step (s): marker times are rounded up to the first step at
     or after the phase change, which is where the force changes in the stepped model.
+    ``size`` is the skin's top layer (rows, cols): the built-in stimuli are moved to it
+    (:func:`skinhil.stimuli.at_size`) and a file schedule must be defined for it.
     """
 
     SCHEDULE_NONE = 0
@@ -60,13 +64,18 @@ class Timeline:
     SCHEDULE_FILE = 2
 
     def __init__(self, dt_s: float, file_schedule: Schedule | None = None, seed: int = 0,
-                 rest_s: float = DEFAULT_REST_S, mode: int = SCHEDULE_RANDOM) -> None:
+                 rest_s: float = DEFAULT_REST_S, mode: int = SCHEDULE_RANDOM,
+                 size: MeshSize = PAPER_SIZE) -> None:
         self.dt_s = float(dt_s)
         self.file_schedule = file_schedule
         self.seed = int(seed)
         self.rest_s = float(rest_s)
-        self.catalog: dict[int, Stimulus] = {sid: s for sid, s in builtin_catalog().values()}
+        self.size = size
+        self.catalog: dict[int, Stimulus] = {
+            sid: s for sid, s in builtin_catalog(size).values()}
+        self._conditions = [at_size(s, size) for s in direction_conditions()]
         if file_schedule is not None:
+            file_schedule.check_size(size)
             for e in file_schedule.entries:
                 self.catalog.setdefault(e.stimulus_id, e.stimulus)
         self._entries: list[ScheduledStimulus] = []
@@ -126,7 +135,7 @@ class Timeline:
         return True
 
     def _extend_random(self) -> None:
-        block = random_schedule(direction_conditions(), _BLOCK, self.rest_s,
+        block = random_schedule(self._conditions, _BLOCK, self.rest_s,
                                 seed=self.seed + self._random_block,
                                 lead_s=0.1 if self._random_block == 0 else 0.0)
         t0 = self._random_end_s
@@ -167,12 +176,12 @@ class Timeline:
             self._schedule = Schedule(tuple(keep))
 
     def forces(self, t_s: np.ndarray) -> np.ndarray:
-        """External force on every mass at board times ``t_s`` (s): (len, 77, 3) N."""
+        """External force on every mass at board times ``t_s`` (s): (len, n_masses, 3) N."""
         if (self.mode == self.SCHEDULE_RANDOM and t_s.size
                 and t_s[-1] > self._random_end_s - _EXTEND_LATE_S):
             self._forget_before(float(t_s[0]))
             self._extend_random()
-        return self._schedule.force_at(t_s)
+        return self._schedule.force_at(t_s, self.size)
 
     def markers_before(self, t_end_us: int) -> list[MarkerEvent]:
         """Remove and return the markers with ``t_us < t_end_us``, in time order."""

@@ -27,7 +27,7 @@ from scipy.signal import lfilter
 
 from skinhil.errors import ConfigError
 from skinhil.geometry import Mesh, build_mesh
-from skinhil.mechanics_linear import assemble, free_dofs, modal_form, sensor_matrix
+from skinhil.mechanics_linear import assemble, free_block, free_dofs, modal_form, sensor_matrix
 from skinhil.skin import SkinParams
 from skinhil.stimuli import Stimulus
 
@@ -50,7 +50,7 @@ def _unit_structure(spacing_m: float, layer_gap_m: float) -> tuple[Mesh, np.ndar
     mesh = build_mesh(spacing_m, layer_gap_m)
     k_glob, _ = assemble(mesh, 1.0, 0.0, 0.0)
     dofs = free_dofs(mesh)
-    return mesh, k_glob[np.ix_(dofs, dofs)], dofs
+    return mesh, free_block(k_glob, mesh).toarray(), dofs
 
 
 def supports(params: SkinParams) -> bool:

@@ -6,6 +6,7 @@ import argparse
 import math
 
 from skinhil.errors import ConfigError
+from skinhil.geometry import PAPER_SIZE, MeshSize, parse_size
 from skinhil.neurons import NoiseParams
 from skinhil.skin import SkinModel, SkinParams
 
@@ -24,8 +25,25 @@ def snr_value(text: str) -> float:
     return value
 
 
+def size_value(text: str) -> MeshSize:
+    """argparse type: a mesh size ROWSxCOLS (>= 3x3)."""
+    try:
+        return parse_size(text)
+    except ConfigError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def add_size_option(parser: argparse.ArgumentParser) -> None:
+    """Add --size ROWSxCOLS (the skin's top layer; default the paper's 6x6) to ``parser``."""
+    parser.add_argument("--size", type=size_value, default=PAPER_SIZE, metavar="ROWSxCOLS",
+                        help="top layer of the skin in masses, e.g. 16x16; the layers below "
+                             "follow the pyramid rule; built-in stimuli keep their place "
+                             "relative to the centre (default: 6x6, the paper's 338 sensors)")
+
+
 def add_model_options(parser: argparse.ArgumentParser, snr_default: float = math.inf) -> None:
-    """Add --mechanics, --dt, --snr-db, --noise, --seed to ``parser``."""
+    """Add --size, --mechanics, --dt, --snr-db, --noise, --seed to ``parser``."""
+    add_size_option(parser)
     parser.add_argument("--mechanics", choices=("linear", "geometric"), default="linear",
                         help="skin mechanics (default: linear)")
     parser.add_argument("--dt", dest="dt_s", type=float, default=1e-4, metavar="SECONDS",
@@ -48,4 +66,4 @@ def model_from_args(args: argparse.Namespace) -> SkinModel:
     """The skin model selected by :func:`add_model_options`' options."""
     if not (math.isfinite(args.dt_s) and args.dt_s > 0):
         raise ConfigError(f"--dt must be a positive number of seconds, got {args.dt_s!r}")
-    return SkinModel(SkinParams(mechanics=args.mechanics))
+    return SkinModel(SkinParams(mechanics=args.mechanics, size=args.size))

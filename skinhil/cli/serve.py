@@ -29,9 +29,9 @@ MAX_BOARD_ID = 15
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
         "serve", help="run the emulated sensor board in real time over serial or CAN",
-        description="Run the emulated e-skin board in real time: the skin, its 338 neurons "
-                    "and the AER link, paced to the baud rate or CAN bitrate. By default it "
-                    "plays a seeded random sequence of the 9 direction conditions with rests, "
+        description="Run the emulated e-skin board in real time: the skin, its neurons (338 "
+                    "at 6x6) and the AER link, paced to the baud rate or CAN bitrate. By default "
+                    "it plays a seeded random sequence of the 9 direction conditions with rests, "
                     "each announced by a ground-truth marker. Ctrl-C stops it cleanly.")
     add_transport_args(p)
     src = p.add_mutually_exclusive_group()
@@ -86,7 +86,7 @@ def _config(args: argparse.Namespace) -> BoardConfig:
                        status_period_s=args.status_period_s, snr_db=args.snr_db,
                        noise=noise_from_args(args),
                        seed=args.seed, board_id=args.board_id, mechanics=args.mechanics,
-                       schedule_mode=mode, rest_s=args.rest_s,
+                       size=args.size, schedule_mode=mode, rest_s=args.rest_s,
                        start_running=not args.stopped, reconnect=args.reconnect).check()
 
 
@@ -116,7 +116,8 @@ def _summary_text(s: BoardSummary) -> str:
 
 def run(args: argparse.Namespace) -> int:
     config = _config(args)
-    schedule = load_schedule(args.schedule) if args.schedule is not None else None
+    schedule = (load_schedule(args.schedule, args.size) if args.schedule is not None
+                else None)
     tty = sys.stderr.isatty() and not args.quiet and not args.json
     where = describe_transport(args)
 

@@ -23,8 +23,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
         "simulate", help="simulate a stimulus or schedule offline and save forces and spikes",
         description="Simulate the skin and its neurons offline and write an .npz file with "
-                    "spring forces (N, float32, n_steps x 338), spike events (t µs, addr, p) "
-                    "and the stimulus markers; numpy reads it with np.load(path).")
+                    "spring forces (N, float32, n_steps x n_springs, 338 at 6x6), spike "
+                    "events (t µs, addr, p) and the stimulus markers; numpy reads it with "
+                    "np.load(path).")
     src = p.add_mutually_exclusive_group()
     src.add_argument("--stimulus", default="A", metavar="NAME",
                      help="built-in stimulus: A..E (Fig 3) or e.g. 0deg_0.5N (Fig 4) "
@@ -39,8 +40,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def _schedule(args: argparse.Namespace) -> Schedule:
     if args.schedule is not None:
-        return load_schedule(args.schedule)
-    catalog = builtin_catalog()
+        return load_schedule(args.schedule, args.size)
+    catalog = builtin_catalog(args.size)
     if args.stimulus not in catalog:
         raise ConfigError(f"unknown stimulus {args.stimulus!r}; choose one of "
                           f"{', '.join(catalog)} or give --schedule FILE")

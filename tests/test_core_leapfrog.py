@@ -1,0 +1,104 @@
+"""The leapfrog stepper of the linear mechanics (large meshes): against solve_ivp on the same
+equations at 16x16, second order, stable, and the compiled sensor block at 16x16."""
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from skinhil import SkinModel, SkinParams
+from skinhil.mechanics_leapfrog import LeapfrogMechanics
+from skinhil.mechanics_linear import assemble, free_block, free_dofs, sensor_matrix
+from skinhil.neurons import NeuronPopulation
+from skinhil.sensor import SkinSensor
+from skinhil.stimuli import at_size, direction_conditions, paper_stimuli, random_schedule
+
+
+def _solve_ivp_reference(model: SkinModel, force: np.ndarray, dt: float) -> np.ndarray:
+    """Spring forces (N) at each step start of ``M q'' + C q' + K q = f``, assembled sparse,
+    integrated by solve_ivp (DOP853, tight) step by step with ``force`` (n, n_masses, 3) N
+    held over each step."""
+    p = model.params
+    k_glob, c_glob = assemble(model.mesh, p.stiffness_n_per_m, p.damping_n_s_per_m,
+                              p.tension_n)
+    k = free_block(k_glob, model.mesh) / p.mass_kg
+    c = free_block(c_glob, model.mesh) / p.mass_kg
+    dofs = free_dofs(model.mesh)
+    sense = sensor_matrix(model.mesh, p.stiffness_n_per_m)
+    n = dofs.size
+    x = np.zeros(2 * n)
+    rows = []
+    for f in force:
+        rows.append(sense @ x[:n])
+        acc = f.ravel()[dofs] / p.mass_kg
+
+        def rhs(_t: float, y: np.ndarray, acc: np.ndarray = acc) -> np.ndarray:
+            return np.concatenate([y[n:], acc - k @ y[:n] - c @ y[n:]])
+
+        x = solve_ivp(rhs, (0.0, dt), x, method="DOP853", rtol=1e-10, atol=1e-16).y[:, -1]
+    return np.array(rows)
+
+
+def test_leapfrog_16x16_matches_solve_ivp() -> None:
+    model = SkinModel(SkinParams(size=(16, 16)))
+    assert model.linear_regime == "leapfrog" and model.n_springs == 3538
+    stim = at_size(paper_stimuli()[0], (16, 16))
+    dt, n = 1e-4, 150
+    force = stim.force_at(np.arange(n) * dt)
+    ours = model.stepper(dt).advance(force)
+    ref = _solve_ivp_reference(model, force, dt)
+    err = np.abs(ours - ref).max() / np.abs(ref).max()
+    print(f"16x16 leapfrog vs solve_ivp: max error {err:.2e} of the peak force")
+    assert err < 5e-3, err  # second order at ω·dt ≈ 0.2 (module docstring of the stepper)
+    assert np.abs(ref).max() > 0.05  # the press moves the skin (N)
+
+
+def _error_vs_exact(dt: float, tension_n: float) -> float:
+    """Largest leapfrog error against the exact ZOH of the same 8x8 mesh, of the peak force."""
+    stim = at_size(paper_stimuli()[3], (8, 8))
+    exact, leap = (SkinModel(SkinParams(size=(8, 8), tension_n=tension_n, linear_stepper=how))
+                   .simulate(stim, 0.05, dt) for how in ("exact", "leapfrog"))
+    return float(np.abs(exact - leap).max() / np.abs(exact).max())
+
+
+def test_leapfrog_is_second_order() -> None:
+    coarse, fine = _error_vs_exact(1e-4, 0.0), _error_vs_exact(5e-5, 0.0)
+    assert coarse < 5e-3
+    assert 3.0 < coarse / fine < 5.0, (coarse, fine)
+
+
+def test_leapfrog_substeps_keep_tension_accurate() -> None:
+    # a 0.5 N tension makes the fastest mode 3.7x faster: substeps keep ω·h <= 0.25
+    assert _error_vs_exact(1e-4, 0.5) < 5e-3
+
+
+@pytest.mark.parametrize("damping, tension, dt", [(0.05, 0.0, 1e-4), (0.2, 0.0, 1e-4),
+                                                  (0.05, 1.0, 3e-4), (0.0, 0.0, 1e-3)])
+def test_leapfrog_substeps_keep_it_stable(damping: float, tension: float, dt: float) -> None:
+    # spectral radius of the step map with zero input (state q, v, w of the free masses)
+    model = SkinModel(SkinParams(damping_n_s_per_m=damping, tension_n=tension))
+    mech = LeapfrogMechanics(model.mesh, 1e-4, 50.0, damping, tension, dt)
+    free = model.mesh.free
+    n = 3 * free.size
+    step = np.zeros((3 * n, 3 * n))
+    zero = np.zeros((1, model.n_masses, 3))
+    for col in range(3 * n):
+        mech.reset()
+        state = (mech.q, mech.v, mech.w)[col // n]
+        state[free[(col % n) // 3], col % 3] = 1.0
+        mech.advance(zero)
+        step[:, col] = np.concatenate([a[free].ravel() for a in (mech.q, mech.v, mech.w)])
+    assert np.abs(np.linalg.eigvals(step)).max() <= 1.0 + 1e-9
+
+
+def test_sensor_block_16x16_equals_stepper_then_neurons() -> None:
+    model = SkinModel(SkinParams(size=(16, 16)))
+    schedule = random_schedule([at_size(s, (16, 16)) for s in direction_conditions()], 3,
+                               seed=2, lead_s=0.0)
+    sensor = SkinSensor(model, 1e-4, snr_db=20.0, seed=5)
+    springs, spikes = sensor.advance_schedule(schedule, 3000)
+    stepper = model.stepper(1e-4)
+    ref = stepper.advance(schedule.force_at(np.arange(3000) * 1e-4, (16, 16)))
+    pop = NeuronPopulation(model.n_springs, snr_db=20.0, seed=5)
+    np.testing.assert_allclose(springs, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+    assert np.array_equal(spikes, pop.step_block(ref, 1e-4))
+    assert spikes.sum() > 0
