@@ -4,6 +4,9 @@ The model (skin mechanics → spring forces → noisy Izhikevich neurons → spi
 importable from here; see the submodules for the equations.
 """
 
+# isort: off
+import skinhil.kernel_cache  # noqa: F401  (keys numba's cache on the sources: first of all)
+# isort: on
 from skinhil.events import EVENT_DTYPE, make_events
 from skinhil.neurons import (
     IzhikevichParams,
