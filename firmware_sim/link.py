@@ -48,7 +48,7 @@ class BoardLink:
             self._frames: collections.deque[Any] = collections.deque()
             self._frame_s: collections.deque[float] = collections.deque()
         else:
-            self.encoder = protocols.SerialEncoder(step_us=step_us)
+            self.encoder = protocols.SerialEncoder(**self._codec_args)
             self.decoder = protocols.SerialDecoder()
             self._bytes = bytearray()
             self._byte_s = transport.wire_seconds(b"x")

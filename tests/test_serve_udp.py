@@ -1,24 +1,29 @@
 """``skinhil serve --udp`` on loopback (127.0.0.1): whole packets in every datagram, every
-event and marker arrives, commands are answered, and the loss accounting is exact."""
+event and marker arrives, commands are answered, and the loss accounting is exact; the 6x6
+skin in the narrow format (version 1) and a 32x32 skin (15,730 channels) in the wide one."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from harness.peers import UdpPeer
 from harness.serve import ServeProcess
 
 import protocols
 
 
-def test_serve_udp_stream_is_complete_and_exact() -> None:
-    peer = UdpPeer()
-    serve = ServeProcess("--udp", f"127.0.0.1:{peer.port}", "--duration", "2.5", "--seed",
-                         "4", "--json")
+@pytest.mark.parametrize(("size", "version", "duration_s"),
+                         [("6x6", 1, 2.5), ("32x32", 2, 1.0)])
+def test_serve_udp_stream_is_complete_and_exact(size: str, version: int,
+                                                duration_s: float) -> None:
+    peer = UdpPeer(versions=(version,))  # the other version would raise ProtocolError
+    serve = ServeProcess("--udp", f"127.0.0.1:{peer.port}", "--size", size, "--duration",
+                         str(duration_s), "--seed", "4", "--rest", "0.05", "--json")
     try:
-        assert peer.wait_for(lambda p: p.of(protocols.Status) or serve.exited, 30)
+        assert peer.wait_for(lambda p: p.of(protocols.Status) or serve.exited, 60)
         assert not serve.exited, serve.stderr
         token = peer.command(protocols.CommandCode.PING)
-        assert serve.wait(40) == 0, serve.stderr
+        assert serve.wait(120) == 0, serve.stderr
         assert peer.wait_for(lambda p: p.decoder.counters.frames_ok > 0, 1)
     finally:
         serve.kill()
@@ -29,6 +34,8 @@ def test_serve_udp_stream_is_complete_and_exact() -> None:
     final = peer.of(protocols.Status)[-1]
     c = peer.decoder.counters
     assert len(ev) > 0 and np.all(np.diff(ev["t"]) >= 0)
+    if version == 2:
+        assert ev["addr"].max() >= protocols.N_CHANNELS  # addresses only the wide words carry
     assert summary["generated"] == final.events_generated == final.events_sent == len(ev)
     assert c.frames_lost == 0 and c.events_lost == 0 and c.crc_errors == 0
     assert len(peer.of(protocols.Marker)) == summary["markers_sent"] > 0

@@ -151,14 +151,15 @@ class CanPeer(Peer):
 
 
 class UdpPeer(Peer):
-    """A host listening on a UDP port of 127.0.0.1, decoding the serial protocol; commands go
-    to the board heard last. ``datagram_ends`` is the last byte of every datagram."""
+    """A host listening on a UDP port of 127.0.0.1, decoding the serial protocol (of the
+    given ``versions``); commands go to the board heard last. ``datagram_ends`` is the last
+    byte of every datagram."""
 
-    def __init__(self) -> None:
+    def __init__(self, versions: tuple[int, ...] = (1, 2)) -> None:
         super().__init__()
         self.link = UdpTransport("127.0.0.1", 0, listen=True)
         self.port = self.link.port
-        self.decoder = protocols.SerialDecoder()
+        self.decoder = protocols.SerialDecoder(versions)
         self.encoder = protocols.SerialEncoder()
         self.datagram_ends: list[int] = []
         self._thread = threading.Thread(target=self._run, daemon=True)
