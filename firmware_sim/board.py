@@ -86,6 +86,9 @@ class BoardConfig:
     mechanics: str = "linear"
     size: MeshSize = PAPER_SIZE
     """The skin's top layer (rows, cols) of masses; 6x6 is the paper's 338-channel skin."""
+    threads: int = 1
+    """Threads the neurons run on (:class:`skinhil.neurons.NeuronPopulation`); more than one
+    pays off from a few thousand channels, where one core cannot keep real time."""
     schedule_mode: int = Timeline.SCHEDULE_RANDOM
     """0: host-driven only, 1: default random schedule, 2: schedule file."""
     rest_s: float = 0.25
@@ -170,7 +173,9 @@ class Board:
         model = SkinModel(SkinParams(mechanics=config.mechanics,  # type: ignore[arg-type]
                                      size=config.size))
         self.sensor = SkinSensor(model, config.dt_s, config.snr_db, config.seed,
-                                 noise=config.noise)
+                                 noise=config.noise, threads=config.threads)
+        log.info("board %d: %dx%d skin, %d channels, model on %d thread(s)", config.board_id,
+                 model.size[0], model.size[1], model.n_springs, self.sensor.threads)
         self.timeline = Timeline(config.dt_s, file_schedule, config.seed, config.rest_s,
                                  config.schedule_mode, model.size)
         self.fifo = EventFifo(config.fifo_events)

@@ -27,7 +27,7 @@ from skinhil.stimuli import (
     paper_stimuli,
     random_schedule,
 )
-from skinhil.trials import simulate_trials
+from skinhil.trials import simulate_trial_events, simulate_trials
 
 __version__ = "0.1.0"
 
@@ -53,5 +53,6 @@ __all__ = [
     "random_schedule",
     "raster_to_events",
     "simulate_spikes",
+    "simulate_trial_events",
     "simulate_trials",
 ]

@@ -173,12 +173,3 @@ class GeometricMechanics:
         elastic = float(np.sum(0.5 * self.k * ext**2 + self.t * ext))
         moved = (self.p - self.rest_positions)[self.free]
         return kinetic + elastic + float(np.sum(self.preload[self.free] * moved))
-
-    def simulate_batch(self, inputs: np.ndarray) -> np.ndarray:
-        """Offline: (n_stim, n_steps, 77, 3) N inputs from rest → (n_stim, n_steps, 338) N."""
-        out = np.empty(inputs.shape[:2] + (self.springs.shape[0],))
-        for s in range(inputs.shape[0]):
-            self.reset()
-            out[s] = self.advance(inputs[s])
-        self.reset()
-        return out

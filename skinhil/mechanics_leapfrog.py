@@ -179,13 +179,3 @@ class LeapfrogMechanics:
         out = np.empty((forces.shape[0], self.n_springs))
         leapfrog_kernel(forces, out, self.dt_s, self.substeps, *self.operands)
         return out
-
-    def simulate_batch(self, inputs: np.ndarray) -> np.ndarray:
-        """Offline: (n_stim, n_steps, n_masses, 3) N from rest → (n_stim, n_steps, n_springs)
-        N; ends at rest."""
-        out = np.empty(inputs.shape[:2] + (self.n_springs,))
-        for s in range(inputs.shape[0]):
-            self.reset()
-            out[s] = self.advance(inputs[s])
-        self.reset()
-        return out

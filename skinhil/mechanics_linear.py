@@ -226,11 +226,10 @@ def modal_form(k_free: np.ndarray, mass_kg: float, damping_per_stiffness_s: floa
 class LinearMechanics:
     """Exact-ZOH stepper of the linear mechanics at a fixed ``dt_s`` (see module docstring).
 
-    Offline (:meth:`simulate_batch`) it steps the full state space. In real time
-    (:meth:`advance`) it steps the modal form (:func:`modal_form`) when the damping is
-    proportional to the stiffness, i.e. without baseline tension: the same exact
-    discretisation, a quarter of the arithmetic (the dense 150x150 product was the bottleneck);
-    with tension it steps the full state space.
+    :meth:`advance` (compiled; offline and in real time) steps the modal form
+    (:func:`modal_form`) when the damping is proportional to the stiffness, i.e. without
+    baseline tension: the same exact discretisation, a quarter of the arithmetic (the dense
+    150x150 product was the bottleneck); with tension it steps the full state space.
     """
 
     def __init__(self, mesh: Mesh, mass_kg: float, stiffness_n_per_m: float,
@@ -284,16 +283,3 @@ class LinearMechanics:
             _advance_kernel(self.ad, self.bd_t, self.ke, self.ii, self.jj, self.x, forces,
                             self.dofs, out)
         return out
-
-    def simulate_batch(self, inputs: np.ndarray) -> np.ndarray:
-        """Offline: (n_stim, n_steps, 77, 3) N inputs from rest → (n_stim, n_steps, 338) N."""
-        n_stim, n_steps = inputs.shape[:2]
-        bu = inputs.reshape(n_stim, n_steps, -1)[:, :, self.dofs] @ self.bd.T
-        x = np.zeros((n_stim, self.ad.shape[0]))
-        disp = np.empty((n_stim, n_steps, self.dofs.size))
-        ad_t = self.ad.T.copy()
-        for k in range(n_steps):
-            disp[:, k] = x[:, : self.dofs.size]
-            x = x @ ad_t + bu[:, k]
-        flat = disp.reshape(-1, self.dofs.size)
-        return np.asarray(self.cy @ flat.T).T.reshape(n_stim, n_steps, -1)

@@ -42,7 +42,8 @@ The per-step order, for every step k of length dt (ms), each trial independently
 3. threshold: where ``v ≥ 30``: a spike in step k, ``v ← c``, ``u ← u + d``.
 
 A spike in step k is stamped with the step's start time ``k·dt`` (see
-:func:`raster_to_events`). Noise comes from :mod:`skinhil.rng`, one seeded stream per trial.
+:func:`raster_to_events`). Noise comes from :mod:`skinhil.rng`, one seeded stream per trial
+and block of 1,024 channels (:data:`CHANNEL_BLOCK`).
 """
 
 from __future__ import annotations
@@ -62,6 +63,11 @@ KernelOperands = tuple[np.ndarray, np.ndarray, float, float, float, float, float
                        float, float, np.ndarray, np.ndarray]
 """``NeuronPopulation.kernel_operands()``: v, u, a, b, c, d, K, v_peak, measured, noise
 variance, reference step (ms), streams, run-away counts."""
+
+CHANNEL_BLOCK = 1024
+"""Channels per noise stream: each trial's channels 0..1023 draw from one stream, 1024..2047
+from the next, and so on (one stream per trial up to 1,024 channels, as the 6x6 skin's 338),
+so that blocks can run on several threads with the same draws."""
 
 BLOWUP_RMS_MV = 1e4
 """Population RMS of u (mV) beyond which a trial counts as run away under the measured-power
@@ -213,20 +219,68 @@ def _izhikevich_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray, v:
                 sv = math.sqrt(pv / n * noise_var)
                 su = math.sqrt(pu / n * noise_var)
             if noise_var > 0.0:
-                fill_normal_pairs(rng[bb], zv, zu)
+                for j in range(rng.shape[1]):  # each channel block from its own stream
+                    lo = j * CHANNEL_BLOCK
+                    hi = min(n, lo + CHANNEL_BLOCK)
+                    fill_normal_pairs(rng[bb, j], zv[lo:hi], zu[lo:hi])
             _noise_and_threshold(vb, ub, zv, zu, sv, su, c, d, v_peak, spikes[k, bb])
+
+
+@numba.njit(cache=True, fastmath=False, parallel=True)
+def _izhikevich_parallel_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray,
+                                v: np.ndarray, u: np.ndarray, a: float, b: float, c: float,
+                                d: float, gain: float, v_peak: float, measured: bool,
+                                noise_var: float, ref_step_ms: float, rng: np.ndarray,
+                                blowups: np.ndarray) -> None:  # pragma: no cover - compiled
+    # _izhikevich_kernel for the diffusion noise (measured is False), the channel blocks of
+    # every trial shared among numba's threads: the same arithmetic and draws per channel,
+    # so the same spikes; blowups stays untouched (the diffusion never runs away)
+    n_steps, n_batch, n = spikes.shape
+    n_blocks = rng.shape[1]
+    shared_input = current.shape[1] == 1
+    sigma_step = math.sqrt(noise_var * dt_ms / ref_step_ms)
+    for job in numba.prange(n_batch * n_blocks):
+        bb = job // n_blocks
+        j = job % n_blocks
+        lo = j * CHANNEL_BLOCK
+        hi = min(n, lo + CHANNEL_BLOCK)
+        zv = np.zeros(hi - lo)
+        zu = np.zeros(hi - lo)
+        vb = v[bb, lo:hi]
+        ub = u[bb, lo:hi]
+        for k in range(n_steps):
+            _euler_step(vb, ub, current[k, 0 if shared_input else bb, lo:hi], dt_ms, a, b,
+                        gain)
+            if noise_var > 0.0:
+                fill_normal_pairs(rng[bb, j], zv, zu)
+            _noise_and_threshold(vb, ub, zv, zu, sigma_step, sigma_step, c, d, v_peak,
+                                 spikes[k, bb, lo:hi])
+
+
+def check_threads(threads: int) -> int:
+    """Validate a thread count for the compiled kernels (1 .. numba's thread count, the
+    machine's cores unless NUMBA_NUM_THREADS says otherwise) and return it."""
+    limit = int(numba.config.NUMBA_NUM_THREADS)  # type: ignore[attr-defined]
+    if not (isinstance(threads, int | np.integer) and 1 <= threads <= limit):
+        raise ConfigError(f"threads must be a whole number from 1 to {limit} (the cores numba "
+                          f"may use; set NUMBA_NUM_THREADS for more), got {threads!r}")
+    return int(threads)
 
 
 class NeuronPopulation:
     """A population of ``n_channels`` noisy Izhikevich neurons, optionally ``batch`` trials.
 
-    ``seed`` makes the noise reproducible (each trial draws from its own stream); ``noise``
-    says how ``snr_db`` becomes noise (default: the step-invariant diffusion).
+    ``seed`` makes the noise reproducible (each trial, and within it each block of
+    ``CHANNEL_BLOCK`` channels, draws from its own stream); ``noise`` says how ``snr_db``
+    becomes noise (default: the step-invariant diffusion). ``threads`` > 1 shares the
+    channel blocks of every trial among that many threads (diffusion noise only): the same
+    spikes as one thread, in less time once there are a few thousand channels.
     """
 
     def __init__(self, n_channels: int, params: IzhikevichParams | None = None,
                  snr_db: float = math.inf, seed: int | np.random.SeedSequence | None = None,
-                 batch: int | None = None, noise: NoiseParams | None = None) -> None:
+                 batch: int | None = None, noise: NoiseParams | None = None,
+                 threads: int = 1) -> None:
         if not (isinstance(n_channels, int | np.integer) and n_channels > 0):
             raise ConfigError(f"n_channels must be a positive integer, got {n_channels!r}")
         if batch is not None and not (isinstance(batch, int | np.integer) and batch > 0):
@@ -238,7 +292,14 @@ class NeuronPopulation:
         self.noise = noise or NoiseParams()
         self.snr_db = check_snr_db(snr_db)
         self._noise_var = self.noise.variance(snr_db)
-        self._rng = seed_states(seed, self._n_batch)
+        self.threads = check_threads(threads)
+        if self.threads > 1 and self.noise.definition == "measured":
+            raise ConfigError("the measured-power noise needs the whole population's power at "
+                              "every step and runs on one thread: use threads=1 or the "
+                              "diffusion noise")
+        n_blocks = -(-self.n_channels // CHANNEL_BLOCK)
+        self._rng = seed_states(seed, self._n_batch * n_blocks).reshape(
+            self._n_batch, n_blocks, 4)
         self.blowups = np.zeros(self._n_batch, dtype=np.int64)
         """Per trial: how often the measured-power noise ran away and the trial was put back
         at rest (always 0 under the diffusion noise)."""
@@ -273,8 +334,13 @@ class NeuronPopulation:
                               f"(n_steps, {self.n_channels}) or "
                               f"(n_steps, {self._n_batch}, {self.n_channels})")
         spikes = np.empty((cur.shape[0], self._n_batch, self.n_channels), dtype=np.bool_)
-        _izhikevich_kernel(np.ascontiguousarray(cur), dt_s * 1e3, spikes,
-                           *self.kernel_operands())
+        if self.threads > 1:
+            numba.set_num_threads(self.threads)
+            _izhikevich_parallel_kernel(np.ascontiguousarray(cur), dt_s * 1e3, spikes,
+                                        *self.kernel_operands())
+        else:
+            _izhikevich_kernel(np.ascontiguousarray(cur), dt_s * 1e3, spikes,
+                               *self.kernel_operands())
         return spikes[:, 0, :] if self.batch is None else spikes
 
     def kernel_operands(self) -> KernelOperands:

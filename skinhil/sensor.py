@@ -8,7 +8,8 @@ With the modal linear stepper (linear mechanics without baseline tension on smal
 default 6x6) or the leapfrog linear stepper (larger meshes) a block, and under a schedule also
 its forces, is one compiled call that runs the schedule's, the stepper's and the population's
 own kernels in turn: per-block Python work would otherwise cost about as much as the
-arithmetic of a 1 ms block. Other mechanics step through ``SkinStepper.advance`` and
+arithmetic of a 1 ms block. Other mechanics, and any stepper when the neurons run on several
+threads (``threads``), step through ``SkinStepper.advance`` and
 ``NeuronPopulation.step_block``. Every step costs O(springs) with the leapfrog and the
 geometric mechanics, and the neurons O(channels).
 """
@@ -101,21 +102,26 @@ def _scheduled_leapfrog_sensor_kernel(
 
 class SkinSensor:
     """Skin mechanics plus one noisy Izhikevich neuron per spring, at step ``dt_s`` (s);
-    ``noise`` as in :class:`~skinhil.neurons.NeuronPopulation`."""
+    ``noise`` and ``threads`` as in :class:`~skinhil.neurons.NeuronPopulation`."""
 
     def __init__(self, model: SkinModel | None = None, dt_s: float = 1e-4,
                  snr_db: float = math.inf, seed: int | None = None,
                  params: IzhikevichParams | None = None,
-                 noise: NoiseParams | None = None) -> None:
+                 noise: NoiseParams | None = None, threads: int = 1) -> None:
         self.model = model or SkinModel()
         self.dt_s = float(dt_s)
         self.stepper = self.model.stepper(dt_s)
-        self.neurons = NeuronPopulation(self.model.n_springs, params, snr_db, seed, noise=noise)
+        self.neurons = NeuronPopulation(self.model.n_springs, params, snr_db, seed, noise=noise,
+                                        threads=threads)
+        self.threads = self.neurons.threads
+        """Threads the neurons of a block run on (the mechanics step on one)."""
         self.step_index = 0
         """Steps taken since the last reset; step k starts at ``k·dt_s``."""
+        fused = self.threads == 1  # one compiled call per block; else stepper, then neurons
         self._modal = (self.stepper.modal_operands
-                       if isinstance(self.stepper, LinearMechanics) else None)
-        self._leapfrog = self.stepper if isinstance(self.stepper, LeapfrogMechanics) else None
+                       if fused and isinstance(self.stepper, LinearMechanics) else None)
+        self._leapfrog = (self.stepper if fused and isinstance(self.stepper, LeapfrogMechanics)
+                          else None)
         self._checked: Schedule | None = None
 
     def reset(self) -> None:

@@ -52,8 +52,8 @@ Mechanics = Literal["linear", "geometric"]
 LinearStepper = Literal["auto", "exact", "leapfrog"]
 
 INPUT_BLOCK_STEPS = 1000
-"""Steps of input forces built at a time by :meth:`SkinModel.simulate_many` for steppers
-that take a stimulus at a time (bounded memory at any mesh size)."""
+"""Steps of input forces built at a time by :meth:`SkinModel.simulate_many` (bounded memory
+at any mesh size)."""
 EXACT_MAX_FREE_DOFS = 200
 """Above this many free degrees of freedom the linear mechanics is stepped by the leapfrog
 (``linear_stepper="auto"``, module docstring); 6x6 has 75, 8x8 183, 9x9 258."""
@@ -95,7 +95,7 @@ class SkinParams:
 
 
 class SkinStepper(Protocol):
-    """Fixed-step mechanics for real time: both mechanics provide this."""
+    """Fixed-step mechanics, compiled: every stepper provides this (offline and real time)."""
 
     dt_s: float
 
@@ -107,10 +107,6 @@ class SkinStepper(Protocol):
         (N)."""
         ...
 
-    def simulate_batch(self, inputs: np.ndarray) -> np.ndarray:
-        """(n_stim, n_steps, n_masses, 3) N from rest → (n_stim, n_steps, n_springs) N; ends
-        at rest."""
-        ...
 
 
 class SkinModel:
@@ -202,10 +198,6 @@ class SkinModel:
         t = np.arange(n_steps) * dt_s
         for s in stimuli:
             self.check_stimulus(s)
-        if isinstance(stepper, LinearMechanics):  # all stimuli at once, dense (small meshes)
-            inputs = np.stack([s.force_at(t) for s in stimuli]) if stimuli else np.zeros(
-                (0, n_steps, self.n_masses, 3))
-            return stepper.simulate_batch(inputs)
         out = np.empty((len(stimuli), n_steps, self.n_springs))
         for i, s in enumerate(stimuli):  # one stimulus at a time, the input in blocks
             stepper.reset()

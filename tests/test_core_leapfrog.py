@@ -1,6 +1,7 @@
 """The leapfrog stepper of the linear mechanics (large meshes): against solve_ivp on the same
 equations at 16x16, second order, stable, and the compiled sensor block at 16x16."""
 
+import numba
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -102,3 +103,19 @@ def test_sensor_block_16x16_equals_stepper_then_neurons() -> None:
     np.testing.assert_allclose(springs, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
     assert np.array_equal(spikes, pop.step_block(ref, 1e-4))
     assert spikes.sum() > 0
+
+
+@pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="one core")
+def test_two_threads_give_the_same_spikes() -> None:
+    # 3,538 channels: four noise blocks shared by two threads, the same draws per channel
+    model = SkinModel(SkinParams(size=(16, 16)))
+    schedule = random_schedule([at_size(s, (16, 16)) for s in direction_conditions()], 2,
+                               seed=1, lead_s=0.0)
+    one = SkinSensor(model, 1e-4, snr_db=10.0, seed=3)
+    two = SkinSensor(model, 1e-4, snr_db=10.0, seed=3, threads=2)
+    assert (one.threads, two.threads) == (1, 2)
+    for _ in range(3):
+        f1, s1 = one.advance_schedule(schedule, 700)
+        f2, s2 = two.advance_schedule(schedule, 700)
+        np.testing.assert_allclose(f1, f2, rtol=0, atol=1e-15)
+        assert np.array_equal(s1, s2) and s1.any()

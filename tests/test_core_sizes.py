@@ -95,3 +95,17 @@ def test_schedule_of_another_size_is_refused() -> None:
     timeline = Timeline(1e-4, size=(8, 8))
     with pytest.raises(ConfigError, match="8x8 skin, this one is 6x6"):
         SkinSensor().advance_schedule(timeline.schedule, 10)
+
+
+def test_trial_events_are_the_raster_s_spikes() -> None:
+    from skinhil.neurons import raster_to_events
+    from skinhil.stimuli import direction_conditions
+    from skinhil.trials import simulate_trial_events, simulate_trials
+
+    stims = direction_conditions()[7:9]
+    raster = simulate_trials(stims, 3, duration_s=0.12, snr_db=10.0, seed=4)
+    events = simulate_trial_events(stims, 3, duration_s=0.12, snr_db=10.0, seed=4)
+    assert raster.any()
+    for i in range(2):
+        for r in range(3):
+            assert np.array_equal(events[i][r], raster_to_events(raster[i, r], 1e-4))

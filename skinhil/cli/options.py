@@ -42,7 +42,7 @@ def add_size_option(parser: argparse.ArgumentParser) -> None:
 
 
 def add_model_options(parser: argparse.ArgumentParser, snr_default: float = math.inf) -> None:
-    """Add --size, --mechanics, --dt, --snr-db, --noise, --seed to ``parser``."""
+    """Add --size, --mechanics, --dt, --snr-db, --noise, --seed, --threads to ``parser``."""
     add_size_option(parser)
     parser.add_argument("--mechanics", choices=("linear", "geometric"), default="linear",
                         help="skin mechanics (default: linear)")
@@ -55,6 +55,9 @@ def add_model_options(parser: argparse.ArgumentParser, snr_default: float = math
                              "10^(-SNR/10) per ms whatever the step (default), or 'measured', "
                              "awgn(x, snr, 'measured') every step (runs away below ~24 dB)")
     parser.add_argument("--seed", type=int, default=0, help="noise seed (default: 0)")
+    parser.add_argument("--threads", type=int, default=1, metavar="N",
+                        help="threads for the neurons (diffusion noise; the same spikes as one "
+                             "thread); worth it from a few thousand channels (default: 1)")
 
 
 def noise_from_args(args: argparse.Namespace) -> NoiseParams:

@@ -16,6 +16,7 @@ from firmware_sim.clock import request_realtime
 from skinhil.cli.options import add_model_options, noise_from_args
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.errors import ConfigError
+from skinhil.geometry import format_size
 from skinhil.stimuli import load_schedule
 from skinhil.timeline import Timeline
 
@@ -86,7 +87,7 @@ def _config(args: argparse.Namespace) -> BoardConfig:
                        status_period_s=args.status_period_s, snr_db=args.snr_db,
                        noise=noise_from_args(args),
                        seed=args.seed, board_id=args.board_id, mechanics=args.mechanics,
-                       size=args.size, schedule_mode=mode, rest_s=args.rest_s,
+                       size=args.size, threads=args.threads, schedule_mode=mode, rest_s=args.rest_s,
                        start_running=not args.stopped, reconnect=args.reconnect).check()
 
 
@@ -154,7 +155,10 @@ def run(args: argparse.Namespace) -> int:
 
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     if not args.quiet and not args.json:
-        print(f"skinhil serve: board {args.board_id} on {where}; Ctrl-C stops",
+        model = board.sensor.model
+        print(f"skinhil serve: board {args.board_id} on {where}; skin {format_size(model.size)}"
+              f" ({model.n_springs} channels), model on {board.sensor.threads} thread"
+              f"{'s' if board.sensor.threads > 1 else ''}; Ctrl-C stops",
               file=sys.stderr, flush=True)
     try:
         summary = board.run(args.duration_s, stop,

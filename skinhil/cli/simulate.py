@@ -35,6 +35,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="simulated time (default: until 0.25 s after the last stimulus ends)")
     p.add_argument("--out", type=Path, default=Path("run.npz"), help="output file (run.npz)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-forces", dest="forces", action="store_false",
+                   help="do not keep the spring forces (n_steps x n_springs floats: 14 GB for "
+                        "10 s of a 48x48 skin); the file then holds an empty forces_n")
     add_model_options(p)
 
 
@@ -56,24 +59,28 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--duration must be a positive number of seconds, got {duration!r}")
     model = model_from_args(args)
     sensor = SkinSensor(model, args.dt_s, args.snr_db, args.seed,
-                        noise=noise_from_args(args))
+                        noise=noise_from_args(args), threads=args.threads)
     n_steps = int(round(duration / args.dt_s))
     block = max(1, int(round(BLOCK_S / args.dt_s)))
-    forces = np.empty((n_steps, model.n_springs), dtype=np.float32)
+    forces = np.empty((n_steps if args.forces else 0, model.n_springs), dtype=np.float32)
+    peak = 0.0
     events = []
     with tqdm(total=n_steps * args.dt_s, unit="sim-s", disable=args.no_progress,
               bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} sim-s [{elapsed}<{remaining}]") as bar:
         for start in range(0, n_steps, block):
             n = min(block, n_steps - start)
             f, spikes = sensor.advance_schedule(schedule, n)
-            forces[start:start + n] = f
+            peak = max(peak, float(np.abs(f).max()))
+            if args.forces:
+                forces[start:start + n] = f
             events.append(sensor.events(spikes, start))
             bar.update(n * args.dt_s)
     ev = np.concatenate(events)
     markers = np.array([(e.onset_s, e.end_s, e.stimulus_id) for e in schedule.entries],
                        dtype=[("onset_s", "<f8"), ("end_s", "<f8"), ("stimulus_id", "<i4")])
     meta = {"dt_s": args.dt_s, "snr_db": args.snr_db, "noise": args.noise, "seed": args.seed,
-            "mechanics": args.mechanics, "duration_s": n_steps * args.dt_s,
+            "mechanics": args.mechanics, "size": list(model.size),
+            "duration_s": n_steps * args.dt_s,
             "stimuli": [e.stimulus.name for e in schedule.entries],
             "params": {k: v for k, v in vars(model.params).items()}}
     args.out.parent.mkdir(parents=True, exist_ok=True)
@@ -81,5 +88,5 @@ def run(args: argparse.Namespace) -> int:
                         meta=np.array(json.dumps(meta)))
     rate = len(ev) / (n_steps * args.dt_s) / model.n_springs
     print(f"wrote {args.out}: {n_steps} steps of {args.dt_s * 1e3:g} ms, {len(ev)} spikes "
-          f"({rate:.1f} Hz per sensor), peak |force| {np.abs(forces).max():.3g} N")
+          f"({rate:.1f} Hz per sensor), peak |force| {peak:.3g} N")
     return 0
