@@ -6,10 +6,25 @@ otherwise: abrupt onset, exponential decay during the indentation phase, nothing
 
 Built-in stimuli (documented choices; the paper gives the directions, not every value):
 
-- :func:`paper_stimuli` — Figure 3 A-E, 0.5 N in total each:
-  A normal press on M15 (0, 0, −0.5); B tangential +x on M15 (0.5, 0, 0); C tangential +y on
-  M15 (0, 0.5, 0); D oblique on M15 (0.3536, 0, −0.3536); E normal press spread over the
-  2x2 group M15, M16, M21, M22, (0, 0, −0.125) each.
+- :func:`paper_stimuli` — Figure 3's five inputs (panels A-E, names "A".."E"), 0.5 N each.
+  The paper's text fixes inputs 1-3: input 1 is Figure 1's normal press on M15; inputs 2 and
+  3 are the same push on the same mass, differing only in the push's angle against the z axis
+  (one perpendicular, one oblique). Inputs 4 and 5 are ours. The set is one factor at a
+  time: each input after the first differs from one earlier input in one thing only.
+
+  ===== ===================== ==== ============================================
+  input force (N)             mass differs from
+  ===== ===================== ==== ============================================
+  1 (A) (0, 0, −0.5)          M15  —
+  2 (B) (0, 0, −0.5)          M16  input 1 in place (the neighbour at +x)
+  3 (C) (0.3536, 0, −0.3536)  M16  input 2 in angle: 45° from −z, tilted to +x
+  4 (D) (0.5, 0, 0)           M15  input 1 in direction: tangential (shear), +x
+  5 (E) (0, 0.5, 0)           M15  input 4 in shear direction: +y
+  ===== ===================== ==== ============================================
+
+  Inputs 2 and 3 push M16, M15's nearest free neighbour in the same row, because a
+  perpendicular push on M15 itself would be input 1 again; the oblique angle, 45°, splits
+  the push equally into normal and tangential parts, tilted along +x (the row direction).
 - :func:`direction_conditions` — Figure 4's 9 indentation conditions: a force in the x-y plane
   on M15 at angles 0°, 120°, 240° (from +x towards +y) and magnitudes 0.1, 0.3, 0.5 N,
   condition index ``3·i_angle + i_magnitude``; these are the classes the decoder learns.
@@ -209,14 +224,14 @@ def add_schedule_forces(out: np.ndarray, t: np.ndarray, starts: np.ndarray,
 
 
 def paper_stimuli() -> list[Stimulus]:
-    """The 5 stimuli of the paper's Figure 3 A-E (see module docstring)."""
+    """Figure 3's five inputs A-E (inputs 1-5; see the module docstring)."""
     s = 0.5 / math.sqrt(2.0)
     return [
         Stimulus("A", {15: (0.0, 0.0, -0.5)}),
-        Stimulus("B", {15: (0.5, 0.0, 0.0)}),
-        Stimulus("C", {15: (0.0, 0.5, 0.0)}),
-        Stimulus("D", {15: (s, 0.0, -s)}),
-        Stimulus("E", {m: (0.0, 0.0, -0.125) for m in (15, 16, 21, 22)}),
+        Stimulus("B", {16: (0.0, 0.0, -0.5)}),
+        Stimulus("C", {16: (s, 0.0, -s)}),
+        Stimulus("D", {15: (0.5, 0.0, 0.0)}),
+        Stimulus("E", {15: (0.0, 0.5, 0.0)}),
     ]
 
 

@@ -50,9 +50,13 @@ def _spike_blocks(stimuli: Sequence[Stimulus], reps: int, duration_s: float, dt_
 def simulate_trials(stimuli: Sequence[Stimulus], reps: int, duration_s: float = 0.5,
                     dt_s: float = 1e-4, snr_db: float = math.inf, seed: int | None = 0,
                     model: SkinModel | None = None, params: IzhikevichParams | None = None,
-                    progress: bool = False, noise: NoiseParams | None = None) -> np.ndarray:
+                    progress: bool = False, noise: NoiseParams | None = None,
+                    channels: Sequence[int] | None = None) -> np.ndarray:
     """Bool spike raster (n_stim, reps, n_steps, n_channels) of ``reps`` noisy trials per
     stimulus (n_channels = the model's springs, 338 at 6x6).
+
+    ``channels`` (0-based sensor indices) keeps only those columns of the raster (the last
+    axis then has ``len(channels)`` entries); the trials are the same as without it.
 
     Every trial starts from rest; stimulus ``i`` repetition ``r`` draws noise from its own
     stream derived from ``seed``, so results are reproducible and independent of ``reps``
@@ -61,10 +65,16 @@ def simulate_trials(stimuli: Sequence[Stimulus], reps: int, duration_s: float = 
     reps = _check_reps(reps)
     model = model or SkinModel()
     n_steps = max(1, int(round(duration_s / dt_s))) if duration_s > 0 else 0
-    out = np.empty((len(stimuli), reps, n_steps, model.n_springs), dtype=np.bool_)
+    n_ch = model.n_springs
+    keep = np.arange(n_ch) if channels is None else np.asarray(channels, dtype=np.int64)
+    if keep.ndim != 1 or keep.size == 0 or keep.min() < 0 or keep.max() >= n_ch:
+        raise ConfigError(f"channels must be 0-based sensor indices in 0..{n_ch - 1}, "
+                          f"got {channels!r}")
+    out = np.empty((len(stimuli), reps, n_steps, keep.size), dtype=np.bool_)
     for i, start, spikes in _spike_blocks(stimuli, reps, duration_s, dt_s, snr_db, seed, model,
                                           params, progress, noise):
-        out[i, :, start:start + spikes.shape[0]] = spikes.transpose(1, 0, 2)
+        kept = spikes if channels is None else spikes[:, :, keep]
+        out[i, :, start:start + spikes.shape[0]] = kept.transpose(1, 0, 2)
     return out
 
 

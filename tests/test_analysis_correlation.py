@@ -7,6 +7,7 @@ import pytest
 
 from skinhil import SkinModel
 from skinhil.analysis import sensors_of_mass, similarity_matrix, zero_lag_ncc
+from skinhil.analysis.correlation import correlation_index
 
 
 def test_identical_orthogonal_opposite_proportional() -> None:
@@ -20,18 +21,22 @@ def test_identical_orthogonal_opposite_proportional() -> None:
     assert math.isnan(float(zero_lag_ncc(s, np.zeros_like(s))))
 
 
-def test_similarity_matrix_means_over_sensors() -> None:
+def test_similarity_index_over_all_sensors_clipped_at_zero() -> None:
     t = np.linspace(0, 1, 400, endpoint=False)
     s, c = np.sin(2 * np.pi * 3 * t), np.cos(2 * np.pi * 3 * t)
-    # sensor 0: stim 1 equals stim 0; sensor 1: stim 1 orthogonal to stim 0; sensor 2 silent
-    r = np.zeros((3, t.size, 3))
-    r[0, :, 0], r[0, :, 1] = s, s
-    r[1, :, 0], r[1, :, 1] = s, c
-    r[2, :, 0], r[2, :, 1] = -s, -s
+    r = np.zeros((5, t.size, 2))
+    r[0, :, 0] = s               # stim 0: sensor 0 only
+    r[1, :, 0] = 3.0 * s         # stim 1: the same pattern, three times stronger
+    r[2, :, 0] = -s              # stim 2: the opposite pattern
+    r[3, :, 1] = s               # stim 3: another sensor: uncorrelated with stim 0
+    r[4, :, 0], r[4, :, 1] = s, c  # stim 4: stim 0 plus an orthogonal part of equal energy
     m = similarity_matrix(r)
     np.testing.assert_allclose(np.diag(m), 1.0)
-    assert m[0, 1] == pytest.approx(0.5) and m[1, 0] == pytest.approx(0.5)
-    assert m[0, 2] == pytest.approx(-1.0)
+    np.testing.assert_allclose(m, m.T)
+    assert m[0, 1] == pytest.approx(1.0)
+    assert m[0, 2] == 0.0 and m[0, 3] == pytest.approx(0.0, abs=1e-12)
+    assert m[0, 4] == pytest.approx(1 / math.sqrt(2))
+    assert math.isnan(correlation_index(r[0], np.zeros_like(r[0])))
 
 
 def test_sensors_of_m15() -> None:

@@ -1,11 +1,22 @@
-"""Similarity of responses across stimuli: zero-lag normalised cross-correlation (Figure 3F).
+"""Similarity of responses across stimuli: the correlation index of Figure 3F.
 
-For two signals ``a(t)``, ``b(t)`` of one sensor (spring force, N, over the simulated steps)
-the zero-lag normalised cross-correlation is ``ρ = Σ_t a b / sqrt(Σ_t a² · Σ_t b²)``
-(MATLAB ``xcorr(a, b, 0, 'coeff')``: no mean removal): 1 for identical (or proportional)
-signals, 0 for orthogonal ones, −1 for opposite ones; undefined (NaN) when either is silent.
-The **similarity** of two stimuli over a set of sensors is the mean of ρ over the sensors
-where it is defined; Figure 3F uses the sensors of M15, the springs attached to M15.
+For two signals ``a(t)``, ``b(t)`` the zero-lag normalised cross-correlation is
+``ρ = Σ_t a b / sqrt(Σ_t a² · Σ_t b²)`` (MATLAB ``xcorr(a, b, 0, 'coeff')``: no mean
+removal): 1 for identical (or proportional) signals, 0 for orthogonal ones, −1 for opposite
+ones; undefined (NaN) when either is silent (:func:`zero_lag_ncc`).
+
+The **correlation index** of two stimuli at a set of sensors (Figure 3F: the 10 springs
+attached to M15) is on 0..1, "0 uncorrelated, 1 identical" as the paper describes it:
+
+- ρ is taken over the whole response at those sensors, all sensors and all steps together
+  (the spring forces in N, a (n_steps, n_sensors) block treated as one vector): it compares
+  which sensors respond, how strongly and when. Averaging a per-sensor ρ instead would
+  weigh a barely loaded sensor as much as the most loaded one, and in a skin that follows
+  the force quasi-statically every sensor's trace has the force's time course, so per-sensor
+  ρ would report little more than the signs;
+- the index is ``max(ρ, 0)``: 1 for identical responses, 0 for uncorrelated ones. Opposite
+  responses (ρ < 0) also get 0: the neurons read the force's sign (tension excites,
+  compression inhibits), so opposite forces evoke unrelated spikes, not similar ones.
 """
 
 from __future__ import annotations
@@ -15,8 +26,10 @@ import numpy as np
 from skinhil.errors import ConfigError
 
 
-def zero_lag_ncc(a: np.ndarray, b: np.ndarray, axis: int = 0) -> np.ndarray:
-    """ρ along ``axis`` (time) of same-shape arrays; NaN where either has zero energy."""
+def zero_lag_ncc(a: np.ndarray, b: np.ndarray, axis: int | tuple[int, ...] | None = 0
+                 ) -> np.ndarray:
+    """ρ over ``axis`` (time; ``None``: all axes) of same-shape arrays; NaN where either has
+    zero energy."""
     x = np.asarray(a, dtype=np.float64)
     y = np.asarray(b, dtype=np.float64)
     if x.shape != y.shape:
@@ -28,12 +41,15 @@ def zero_lag_ncc(a: np.ndarray, b: np.ndarray, axis: int = 0) -> np.ndarray:
     return np.asarray(out)
 
 
-def similarity_matrix(responses: np.ndarray) -> np.ndarray:
-    """Responses (n_stim, n_steps, n_sensors) → (n_stim, n_stim) mean ρ over the sensors.
+def correlation_index(a: np.ndarray, b: np.ndarray) -> float:
+    """``max(ρ, 0)`` of two responses (n_steps, n_sensors), ρ over all their entries; NaN if
+    either is silent."""
+    rho = float(zero_lag_ncc(a, b, axis=None))
+    return rho if np.isnan(rho) else max(rho, 0.0)
 
-    Entry (i, j) averages ρ of stimulus i's and j's signal on each sensor, over the sensors
-    where both are non-silent (NaN if none).
-    """
+
+def similarity_matrix(responses: np.ndarray) -> np.ndarray:
+    """Responses (n_stim, n_steps, n_sensors) → (n_stim, n_stim) correlation indices."""
     r = np.asarray(responses, dtype=np.float64)
     if r.ndim != 3:
         raise ConfigError(f"responses must be (n_stimuli, n_steps, n_sensors), got {r.shape}")
@@ -41,15 +57,13 @@ def similarity_matrix(responses: np.ndarray) -> np.ndarray:
     out = np.full((n, n), np.nan)
     for i in range(n):
         for j in range(i, n):
-            rho = zero_lag_ncc(r[i], r[j], axis=0)
-            if np.any(~np.isnan(rho)):
-                out[i, j] = out[j, i] = float(np.nanmean(rho))
+            out[i, j] = out[j, i] = correlation_index(r[i], r[j])
     return out
 
 
 def sensors_of_mass(springs: np.ndarray, mass_number: int) -> np.ndarray:
     """Indices of the sensors (springs, rows of ``springs`` (n, 2) 0-based mass indices)
-    attached to the paper's mass ``mass_number`` (1-based, e.g. 15 for M15)."""
+    attached to the paper's mass ``mass_number`` (1-based, e.g. 15 for M15), ascending."""
     s = np.asarray(springs)
     idx = np.flatnonzero(np.any(s == int(mass_number) - 1, axis=1))
     if idx.size == 0:

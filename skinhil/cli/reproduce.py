@@ -13,9 +13,10 @@ from skinhil.reproduce import ReproduceConfig, reproduce
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
         "reproduce", help="regenerate the paper's figures and a report of its claims",
-        description="Simulate, analyse and plot Figures 1E-F, 2A-C, 3A-F and 4A-G for the "
-                    "linear and the geometric mechanics, and write REPORT.md saying which "
-                    "claims of the paper the model reproduces (needs matplotlib).")
+        description="Simulate, analyse and plot Figures 1E-F, 2A-C (and the tension axis), "
+                    "3A-F and 4A-G for the linear and the geometric mechanics, and write "
+                    "REPORT.md saying which claims of the paper the model reproduces (needs "
+                    "matplotlib).")
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
     p.add_argument("--quick", action="store_true",
                    help="small grids and few repeats (under a minute), for tests")
@@ -25,9 +26,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                    help="run the sweeps on this Dask distributed scheduler")
     p.add_argument("--grid", type=int, metavar="N",
-                   help="N x N sweep grid for both mechanics (default: 20, --quick: 5 and 3)")
+                   help="N x N stiffness x damping grid for both mechanics (default: 15, "
+                        "--quick: 5 and 3)")
     p.add_argument("--repeats", type=int, metavar="R",
-                   help="cross-validation repeats (default: 100, --quick: 2)")
+                   help="cross-validation repeats (default: 10, --quick: 2)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
 
 
@@ -53,5 +55,6 @@ def run(args: argparse.Namespace) -> int:
         from skinhil.reproduce.report import verdicts
 
         for v, _ in verdicts(r):
-            print(f"  {r.mechanics:9s} {'yes' if v.reproduced else 'NO ':3s}  {v.claim}")
+            print(f"  {r.mechanics:9s} {v.key:4s} {'yes' if v.reproduced else 'NO ':3s}  "
+                  f"{v.claim}")
     return 0

@@ -2,7 +2,8 @@
 
 Nothing here is tuned to a figure: the model is :class:`skinhil.SkinParams` with its defaults
 (only ``mechanics`` changes), the stimuli are the built-in paper stimuli, and every analysis
-choice is the documented default of its module.
+choice is the documented default of its module. The rules that pick what a figure shows are
+fixed here, before any run: the sensors of M15, the paper's "sensor #5", the operating SNR.
 """
 
 from __future__ import annotations
@@ -18,13 +19,14 @@ from skinhil.analysis.correlation import sensors_of_mass, similarity_matrix
 from skinhil.analysis.decoding_snr import (
     PAPER_SNRS_DB,
     DecodingSetup,
-    accuracy_vs_snr,
+    FeatureSet,
+    decode_feature_sets,
 )
 from skinhil.analysis.information import InformationMeasures, measures_from_pcas, phase_pcas
 from skinhil.analysis.pca import PhasePCA
 from skinhil.analysis.phases import PhaseWindows
-from skinhil.analysis.sweep import SweepResult, SweepSpec, run_sweep
-from skinhil.decoding import CVResult
+from skinhil.analysis.sweep import SweepResult, SweepSpec, log_values, run_sweep
+from skinhil.decoding import CVResult, FeatureSpec
 from skinhil.skin import Mechanics, SkinModel, SkinParams
 from skinhil.stimuli import direction_conditions, paper_stimuli
 from skinhil.trials import simulate_trials
@@ -32,23 +34,43 @@ from skinhil.trials import simulate_trials
 logger = logging.getLogger(__name__)
 
 FOCUS_MASS = 15
-"""Figure 3F and 4D look at the sensors of M15, where the stimuli are applied."""
+"""Figures 3F and 4D-G look at the sensors of M15 (the springs attached to it), where the
+Figure 4 forces are applied."""
+PAPER_SENSOR_RANK = 5
+"""The paper decodes from "sensor #5" of the ten springs attached to M15. Rule, fixed in
+advance: the 5th of the ten in ascending spring number (the paper's numbering, which the
+mesh follows; the rank is the same 0- or 1-based)."""
+FIGURE_SNR_DB = 10.0
+"""The paper's operating point (dB): the rasters (4C-D), PSP traces (4E) and the confusion
+matrix (4F)."""
 FOCUS_CONDITION = 2
-"""Figure 4B-E show direction condition 2 (0°, 0.5 N: the strongest along +x)."""
-FIGURE_SNR_DB = 20.0
-"""SNR (dB) of the rasters (4C-D) and the confusion matrix (4F): the middle of 4G's range."""
+"""Figure 4B-C show direction condition 2 (0°, 0.5 N: the strongest along +x)."""
+FIGURE_TRIAL_S = 0.3
+"""Length (s) of the trials shown in 4B-E: the 0.25 s indentation and 50 ms after it."""
+TENSION_N: tuple[float, ...] = (0.0, 0.005, 0.0158, 0.05, 0.158, 0.5)
+"""Baseline tensions (N) of the tension sweep: none, then log-spaced 5 mN..0.5 N, whose
+transverse stiffness T/L on the 1 mm mesh (5..500 N/m) spans the stiffness sweep's range."""
 
 
 @dataclass(frozen=True)
 class ReproduceConfig:
-    """Sizes of one run: sweep grids (n_stiffness, n_damping) per mechanics, decoding setup,
-    SNRs, raster repetitions, response step ``dt_s`` (s), and where to run the sweeps."""
+    """Sizes of one run: K x C sweep grids (n_stiffness, n_damping) per mechanics, points
+    per axis of the tension sweeps per mechanics, decoding setup (trials, folds, repeats;
+    the rasters of 4D-E are the decoding's own trials), SNRs, response step ``dt_s`` (s),
+    and where to run the sweeps.
 
-    sweep_linear: tuple[int, int] = (20, 20)
-    sweep_geometric: tuple[int, int] = (20, 20)
-    decoding: DecodingSetup = field(default_factory=DecodingSetup)
+    Defaults: 15 x 15 grids (odd, so the default K and C lie on the grid; terciles of 5
+    values and 2A's extremes exactly 3 values), 7 values per tension slice (the default in
+    the middle), 50 trials per condition and 10 repeats of 5-fold CV (at 10 dB the split
+    standard error is about a twentieth of the finite trials' error, which more repeats
+    cannot reduce; REPORT.md prints both)."""
+
+    sweep_linear: tuple[int, int] = (15, 15)
+    sweep_geometric: tuple[int, int] = (15, 15)
+    tension_linear: int = 7
+    tension_geometric: int = 7
+    decoding: DecodingSetup = field(default_factory=lambda: DecodingSetup(repeats=10))
     snrs_db: tuple[float, ...] = PAPER_SNRS_DB
-    raster_reps: int = 50
     dt_s: float = 1e-4
     workers: int | None = None
     scheduler: str | None = None
@@ -56,15 +78,22 @@ class ReproduceConfig:
 
     @classmethod
     def quick(cls, **kwargs: object) -> ReproduceConfig:
-        """Small grids and few repeats: every figure in well under a minute."""
-        base = cls(sweep_linear=(5, 5), sweep_geometric=(2, 2),
-                   decoding=DecodingSetup(reps=8, repeats=2), raster_reps=10)
+        """Small grids and few repeats: every figure in about a minute."""
+        base = cls(sweep_linear=(5, 5), sweep_geometric=(3, 3), tension_linear=3,
+                   tension_geometric=1, decoding=DecodingSetup(reps=10, repeats=2))
         return replace(base, **kwargs)  # type: ignore[arg-type]
 
 
 @dataclass
 class MechanicsResults:
-    """All numbers of one mechanics (arrays for the figures, scalars for the report)."""
+    """All numbers of one mechanics (arrays for the figures, scalars for the report).
+
+    Figure 4 arrays, over :data:`FIGURE_TRIAL_S` at ``dt_s``: ``focus_forces`` (9 conditions,
+    n_steps, 10) N at M15's sensors; ``condition_forces`` (n_steps, 338) N of
+    :data:`FOCUS_CONDITION`; ``population_raster`` (n_steps, 338) one trial of it;
+    ``sensor_trials`` (9, reps, n_steps, 10) the decoding's trials at the figure SNR, M15's
+    sensors only.
+    """
 
     mechanics: str
     responses: np.ndarray
@@ -74,18 +103,77 @@ class MechanicsResults:
     focus_sensors: np.ndarray
     similarity: np.ndarray
     sweep: SweepResult
+    tension_k: SweepResult
+    tension_c: SweepResult
     snrs_db: tuple[float, ...]
-    decoding: list[CVResult]
-    direction_forces: np.ndarray
-    raster_sensor: int
-    rasters: np.ndarray
+    feature_spec: FeatureSpec
+    feature_sets: list[FeatureSet]
+    decoding: dict[str, list[CVResult]]
+    focus_forces: np.ndarray
+    condition_forces: np.ndarray
+    population_raster: np.ndarray
+    sensor_trials: np.ndarray
     seconds: dict[str, float] = field(default_factory=dict)
 
     @property
-    def confusion_index(self) -> int:
-        """Index into ``decoding`` of the SNR the confusion matrix is shown at."""
-        return int(np.argmin([abs(s - FIGURE_SNR_DB) if math.isfinite(s) else math.inf
-                              for s in self.snrs_db]))
+    def paper_sensor(self) -> int:
+        """The sensor shown as the paper's "sensor #5" (see :data:`PAPER_SENSOR_RANK`)."""
+        return int(self.focus_sensors[PAPER_SENSOR_RANK - 1])
+
+    @property
+    def paper_set(self) -> str:
+        """Name of the feature set of the paper's sensor."""
+        return sensor_set_name(self.paper_sensor)
+
+    @property
+    def paper_label(self) -> str:
+        """The paper's set as figures and the report label it."""
+        return f"{self.paper_set} (#{PAPER_SENSOR_RANK})"
+
+    @property
+    def figure_index(self) -> int:
+        """Index into ``snrs_db`` (and each decoding list) of :data:`FIGURE_SNR_DB`."""
+        return figure_snr_index(self.snrs_db)
+
+    def at_figure_snr(self) -> dict[str, CVResult]:
+        """Every feature set's result at :data:`FIGURE_SNR_DB`."""
+        return {name: res[self.figure_index] for name, res in self.decoding.items()}
+
+
+def sensor_set_name(sensor: int) -> str:
+    """Feature set name of one sensor."""
+    return f"sensor {sensor}"
+
+
+TEN_SET = f"M{FOCUS_MASS}'s 10 sensors"
+ALL_SET = "all 338 sensors"
+
+
+def feature_sets(focus: np.ndarray) -> list[FeatureSet]:
+    """Each sensor of M15 alone, the ten together, all 338 (Figure 4G's feature sets)."""
+    sets = [FeatureSet(sensor_set_name(int(s)), (int(s),)) for s in focus]
+    return sets + [FeatureSet(TEN_SET, tuple(int(s) for s in focus)), FeatureSet(ALL_SET)]
+
+
+def figure_snr_index(snrs_db: tuple[float, ...]) -> int:
+    """Index of the SNR nearest :data:`FIGURE_SNR_DB`."""
+    return int(np.argmin([abs(s - FIGURE_SNR_DB) if math.isfinite(s) else math.inf
+                          for s in snrs_db]))
+
+
+def _tension_sweeps(mechanics: Mechanics, n: int, config: ReproduceConfig
+                    ) -> tuple[SweepResult, SweepResult]:
+    """Tension x K at the default C, and tension x C at the default K."""
+    base = SkinParams()
+    full = SweepSpec.log_grid(n, n, mechanics=mechanics)
+    specs = (SweepSpec(log_values(full.stiffness_n_per_m[0], full.stiffness_n_per_m[-1], n),
+                       (base.damping_n_s_per_m,), TENSION_N, mechanics),
+             SweepSpec((base.stiffness_n_per_m,),
+                       log_values(full.damping_n_s_per_m[0], full.damping_n_s_per_m[-1], n),
+                       TENSION_N, mechanics))
+    k_sweep, c_sweep = (run_sweep(s, workers=config.workers, scheduler=config.scheduler,
+                                  progress=config.progress) for s in specs)
+    return k_sweep, c_sweep
 
 
 def compute_mechanics(mechanics: Mechanics, config: ReproduceConfig) -> MechanicsResults:
@@ -105,26 +193,32 @@ def compute_mechanics(mechanics: Mechanics, config: ReproduceConfig) -> Mechanic
     sweep = run_sweep(SweepSpec.log_grid(*grid, mechanics=mechanics), workers=config.workers,
                       scheduler=config.scheduler, progress=config.progress)
     seconds["sweep"] = sweep.seconds
+    n_t = config.tension_linear if mechanics == "linear" else config.tension_geometric
+    tension_k, tension_c = _tension_sweeps(mechanics, n_t, config)
+    seconds["tension sweeps"] = tension_k.seconds + tension_c.seconds
 
     t0 = time.perf_counter()
     d = config.decoding
-    # worker processes pay off only for many folds (starting them costs seconds)
-    n_jobs = 1 if d.folds * d.repeats <= 50 else (config.workers or -1)
-    decoding = accuracy_vs_snr(config.snrs_db, config.decoding, model, n_jobs=n_jobs,
-                               progress=config.progress)
+    sets = feature_sets(focus)
+    decoding = decode_feature_sets(sets, config.snrs_db, d, model, n_jobs=config.workers or -1,
+                                   progress=config.progress)
     seconds["decoding"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
     conditions = direction_conditions()
-    direction_forces = model.simulate_many(conditions, windows.duration_s, config.dt_s)
-    focus_forces = direction_forces[FOCUS_CONDITION][:, focus]
-    raster_sensor = int(focus[np.argmax(focus_forces.max(axis=0))])
-    rasters = simulate_trials([conditions[FOCUS_CONDITION]], config.raster_reps,
-                              duration_s=windows.duration_s, dt_s=config.dt_s,
-                              snr_db=FIGURE_SNR_DB, seed=config.decoding.seed, model=model)[0]
+    forces = model.simulate_many(conditions, FIGURE_TRIAL_S, config.dt_s)
+    # the decoding's own trials at the figure SNR (same seed, reps and step), run longer
+    i_fig = figure_snr_index(config.snrs_db)
+    sensor_trials = simulate_trials(conditions, d.reps, duration_s=FIGURE_TRIAL_S,
+                                    dt_s=config.dt_s, snr_db=config.snrs_db[i_fig],
+                                    seed=d.seed + i_fig, model=model,
+                                    channels=[int(s) for s in focus])
+    population = simulate_trials([conditions[FOCUS_CONDITION]], 1, duration_s=FIGURE_TRIAL_S,
+                                 dt_s=config.dt_s, snr_db=config.snrs_db[i_fig],
+                                 seed=d.seed + len(config.snrs_db), model=model)[0, 0]
     seconds["rasters"] = time.perf_counter() - t0
     logger.info("%s mechanics done: %s", mechanics, seconds)
-    return MechanicsResults(mechanics, responses, pca_ind, pca_post,
-                            measures_from_pcas(pca_ind, pca_post), focus, similarity, sweep,
-                            tuple(config.snrs_db), decoding, direction_forces, raster_sensor,
-                            rasters, seconds)
+    return MechanicsResults(
+        mechanics, responses, pca_ind, pca_post, measures_from_pcas(pca_ind, pca_post), focus,
+        similarity, sweep, tension_k, tension_c, tuple(config.snrs_db), d.spec, sets, decoding,
+        forces[:, :, focus], forces[FOCUS_CONDITION], population, sensor_trials, seconds)
