@@ -40,7 +40,7 @@ relative to the centre of its layer: layer, row and column are kept and the row 
 shifted by ``trunc((rows − 6)/2)`` (``trunc((cols − 6)/2)``), so M15 (layer 1, row 3, column
 3, beside the centre of the 6x6 patch) becomes row 8, column 8 of a 16x16 skin (M120) and row
 2, column 2 of a 3x3 skin (M5, its only free top mass). A moved stimulus that lands on a
-fixed mass (E, a 2x2 group, at 3x3) is refused by the model with a clear error.
+fixed mass (B and C, on M16, at 3x3) is refused by the model with a clear error.
 
 Schedules place stimuli on a timeline (``start_s`` of each), from code, from
 :func:`random_schedule` or from a TOML file (:func:`load_schedule`, format in its docstring).

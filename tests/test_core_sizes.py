@@ -71,9 +71,9 @@ def test_builtins_keep_their_place_relative_to_the_centre() -> None:
     assert at_size(a, (6, 6)) is a
     assert list(at_size(a, (16, 16)).forces) == [mass_index(0, 7, 7, (16, 16)) + 1]
     assert list(at_size(a, (3, 3)).forces) == [5]
-    e = builtin_catalog((3, 3))["E"][1]  # a 2x2 group: on the fixed edge of a 3x3 skin
+    b = builtin_catalog((3, 3))["B"][1]  # M15's neighbour: on the fixed edge of a 3x3 skin
     with pytest.raises(ConfigError, match="fixed mass"):
-        SkinModel(SkinParams(size=(3, 3))).simulate(e, 0.01)
+        SkinModel(SkinParams(size=(3, 3))).simulate(b, 0.01)
     # the moved press deflects the 16x16 skin as the 6x6 one, near its centre
     f16 = SkinModel(SkinParams(size=(16, 16))).simulate(at_size(a, (16, 16)), 0.05)
     f6 = SkinModel().simulate(a, 0.05)
