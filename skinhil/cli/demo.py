@@ -34,7 +34,7 @@ DEMO_REST_S = DEFAULT_REST_S
 """Rest (s) after each stimulus: the board's default."""
 DEMO_REPS = 15
 """Training stimuli per condition for the cached demo model."""
-MODEL_FORMAT_TAG = "v2"
+MODEL_FORMAT_TAG = "v3"
 """Bumped when the cached model must be retrained."""
 
 

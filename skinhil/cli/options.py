@@ -10,8 +10,9 @@ from skinhil.geometry import PAPER_SIZE, MeshSize, parse_size
 from skinhil.neurons import NoiseParams
 from skinhil.skin import SkinModel, SkinParams
 
-DECODE_SNR_DB = 40.0
-"""Default noise level (dB) of ``skinhil train`` and ``skinhil demo``."""
+DECODE_SNR_DB = 10.0
+"""Default noise level (dB) of ``skinhil train`` and ``skinhil demo``: the paper's operating
+point (Figure 4)."""
 
 
 def snr_value(text: str) -> float:

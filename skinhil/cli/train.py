@@ -29,8 +29,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=Path, required=True, metavar="NPZ", help="decoder file")
     p.add_argument("--snr-db", type=snr_value, default=DECODE_SNR_DB, metavar="DB",
                    help="neuron noise SNR in dB, 'inf' for none (default: "
-                        f"{DECODE_SNR_DB:g}; below ~24 dB the model's noise hides the "
-                        "stimulus onsets)")
+                        f"{DECODE_SNR_DB:g}, the paper's)")
     p.add_argument("--reps", type=int, default=50,
                    help="stimuli per condition on average (9 x reps in all; default: 50)")
     p.add_argument("--rest", dest="rest_s", type=float, default=DEFAULT_REST_S,

@@ -18,7 +18,7 @@ Protocol (what the board does, simulated offline and faster than real time):
 
 The offline **accuracy** is the cross-validated window accuracy times the fraction of scored
 markers that got a window (misses count as wrong): the same definition as the online
-accuracy. A class with fewer than ``CV_FOLDS`` detected windows (at 40 dB the weakest,
+accuracy. A class with fewer than ``CV_FOLDS`` detected windows (possible when the weakest,
 0.1 N, stimuli are rarely detected) is left out of the decoder; its windows count as wrong
 offline, as they must be online. The training stream's seed is ``TRAIN_SEED_BASE + seed``
 so it never coincides with a board run at a small seed.
