@@ -163,11 +163,14 @@ def board_stream(duration_s: float, snr_db: float, rest_s: float, seed: int,
 
 def stream_windows(n_stimuli: int, snr_db: float, rest_s: float, seed: int,
                    dt_s: float = 1e-4, params: ReceiverParams | None = None,
-                   progress: bool = False, balanced: bool = True) -> StreamWindows:
+                   progress: bool = False, balanced: bool = True,
+                   board_seed: int | None = None) -> StreamWindows:
     """Cut a simulated board stream into the receiver's windows and label them.
 
     ``balanced``: the stimuli are :func:`balanced_schedule` (``n_stimuli`` a multiple of 9),
-    else the board's own random schedule for the stream seed.
+    else the board's own random schedule for the stream seed. The stream seed is
+    ``TRAIN_SEED_BASE + seed``, or ``board_seed`` to replay exactly what ``skinhil serve
+    --seed board_seed --rest rest_s`` plays (with ``balanced=False``).
     """
     p = params or ReceiverParams()
     spec = feature_spec(dt_s)
@@ -177,7 +180,7 @@ def stream_windows(n_stimuli: int, snr_db: float, rest_s: float, seed: int,
     xs: list[np.ndarray] = []
     ys: list[int] = []
     duration = stream_duration_s(n_stimuli, rest_s)
-    stream_seed = TRAIN_SEED_BASE + seed
+    stream_seed = TRAIN_SEED_BASE + seed if board_seed is None else board_seed
     n_cond = len(direction_conditions())
     if balanced and n_stimuli % n_cond:
         raise ConfigError(f"a balanced stream needs a multiple of {n_cond} stimuli, "
@@ -203,6 +206,16 @@ def stream_windows(n_stimuli: int, snr_db: float, rest_s: float, seed: int,
     return StreamWindows(x, np.array(ys, dtype=np.int64), len(ys) + board.misses,
                          board.misses, board.false_alarms, spec, snr_db, rest_s, n_stimuli,
                          seed)
+
+
+def stream_accuracy(decoder: DirectionDecoder, sw: StreamWindows) -> float:
+    """Accuracy of a fitted ``decoder`` on the windows of one stream by the scoring rule:
+    correct windows / scored markers (missed markers count as wrong)."""
+    if sw.markers == 0:
+        return math.nan
+    if sw.labels.size == 0:
+        return 0.0
+    return int(np.sum(decoder.predict(sw.features) == sw.labels)) / sw.markers
 
 
 def fit_windows(sw: StreamWindows, cross_validation: bool = True
