@@ -5,7 +5,13 @@ Run: ``python benchmarks/bench_core.py`` (pinned to one core). Reports
   board steps it, in 1 ms blocks of 0.1 ms steps, for both mechanics (targets ≥ 20x linear,
   ≥ 5x geometric);
 - the wall time to simulate 450 trials (9 conditions x 50 repetitions) of 0.5 s with spikes
-  at 10 dB (target ≤ 10 s).
+  at 10 dB (target ≤ 10 s);
+- ``SkinModel.simulate`` of paper stimulus A (0.5 s on the 0.1 ms grid) against scipy's
+  ``solve_ivp`` RK45 at its default tolerances on the same equations (``x' = A x + B u(t)``,
+  the stimulus profile evaluated at any t, output on the same 0.1 ms grid) (target ≥ 2x);
+- the same 450 trials kept as events (:func:`skinhil.trials.simulate_trial_events`): wall
+  time, events, and the peak of the memory allocated while they run (tracemalloc: numpy's
+  and Python's allocations; target ≤ 250 MB), beside the dense raster's.
 """
 
 from __future__ import annotations
@@ -13,15 +19,26 @@ from __future__ import annotations
 import os
 import sys
 import time
+import tracemalloc
 
 sys.path.insert(0, os.path.dirname(__file__))
 from machine import describe, load_average, pin_one_core  # noqa: E402
 
 pin_one_core()
 
-from skinhil import SkinModel, SkinParams, direction_conditions, random_schedule  # noqa: E402
+import numpy as np  # noqa: E402
+from scipy.integrate import solve_ivp  # noqa: E402
+
+from skinhil import (  # noqa: E402
+    SkinModel,
+    SkinParams,
+    direction_conditions,
+    paper_stimuli,
+    random_schedule,
+)
+from skinhil.mechanics_linear import free_dofs, state_space  # noqa: E402
 from skinhil.sensor import SkinSensor  # noqa: E402
-from skinhil.trials import simulate_trials  # noqa: E402
+from skinhil.trials import simulate_trial_events, simulate_trials  # noqa: E402
 
 REPEATS = 3
 """Each figure is the best of this many runs: the machine is a shared VM whose speed varies."""
@@ -57,6 +74,60 @@ def trials_wall_s() -> float:
     return min(walls)
 
 
+def simulate_vs_solve_ivp() -> tuple[float, float, float]:
+    """Best wall s of ``SkinModel.simulate`` and of solve_ivp RK45 (default tolerances) on
+    paper stimulus A over 0.5 s, output on the 0.1 ms grid; and their largest difference
+    relative to the peak force."""
+    model = SkinModel()
+    stim = paper_stimuli()[0]
+    dt, n = 1e-4, 5000
+    model.simulate(stim, 0.01, dt)  # compile
+    p = model.params
+    a, b = state_space(model.mesh, p.mass_kg, p.stiffness_n_per_m, p.damping_n_s_per_m,
+                       p.tension_n)
+    dofs = free_dofs(model.mesh)
+    push = b @ stim.peak_forces_n.ravel()[dofs]
+    sense = model.stepper(dt).cy  # type: ignore[attr-defined]
+    t_eval = np.arange(n) * dt
+
+    def rhs(t: float, y: np.ndarray) -> np.ndarray:
+        return a @ y + push * float(stim.profile(t))
+
+    ours_s, ref_s = [], []
+    for _ in range(REPEATS):
+        t0 = time.perf_counter()
+        ours = model.simulate(stim, n * dt, dt)
+        ours_s.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        sol = solve_ivp(rhs, (0.0, t_eval[-1]), np.zeros(a.shape[0]), method="RK45",
+                        t_eval=t_eval)
+        ref = np.asarray(sense @ sol.y[:dofs.size]).T
+        ref_s.append(time.perf_counter() - t0)
+    return min(ours_s), min(ref_s), float(np.abs(ours - ref).max() / np.abs(ours).max())
+
+
+def trial_events_memory() -> tuple[float, int, float, float]:
+    """450 trials x 0.5 s at 10 dB as events: best wall s, events, and the peak MB allocated
+    (tracemalloc) by the events run and by the dense raster run."""
+    simulate_trial_events(direction_conditions()[:1], 1, duration_s=0.01, snr_db=10.0)
+    walls = []
+    for _ in range(REPEATS):
+        t0 = time.perf_counter()
+        ev = simulate_trial_events(direction_conditions(), 50, duration_s=0.5, snr_db=10.0,
+                                   seed=0)
+        walls.append(time.perf_counter() - t0)
+        n_events = sum(len(e) for trial in ev for e in trial)
+        del ev
+    peaks = []
+    for fn in (simulate_trial_events, simulate_trials):
+        tracemalloc.start()
+        out = fn(direction_conditions(), 50, duration_s=0.5, snr_db=10.0, seed=0)
+        peaks.append(tracemalloc.get_traced_memory()[1] / 1e6)
+        tracemalloc.stop()
+        del out
+    return min(walls), n_events, peaks[0], peaks[1]
+
+
 def main() -> None:
     print(describe())
     print(f"best of {REPEATS} runs each; {load_average()}", flush=True)
@@ -65,7 +136,17 @@ def main() -> None:
     geo = real_time_factor("geometric")
     print(f"real-time factor, geometric mechanics: {geo:6.1f}x  (target >= 5x)", flush=True)
     wall = trials_wall_s()
-    print(f"450 trials x 0.5 s at dt 0.1 ms with spikes: {wall:5.2f} s  (target <= 10 s)")
+    print(f"450 trials x 0.5 s at dt 0.1 ms with spikes: {wall:5.2f} s  (target <= 10 s)",
+          flush=True)
+    ours, ref, err = simulate_vs_solve_ivp()
+    print(f"SkinModel.simulate, paper stimulus A, 0.5 s on the 0.1 ms grid: {1e3 * ours:6.1f} ms;"
+          f" solve_ivp RK45 (default tolerances, same equations and grid): {1e3 * ref:6.1f} ms;"
+          f" {ref / ours:5.1f}x faster (target >= 2x); largest difference {err:.1e} of the peak"
+          " force (RK45's own tolerance)", flush=True)
+    ev_wall, n_ev, ev_mb, raster_mb = trial_events_memory()
+    print(f"450 trials x 0.5 s kept as events: {ev_wall:5.2f} s, {n_ev} events; peak memory "
+          f"allocated {ev_mb:6.1f} MB (target <= 250 MB; tracemalloc), dense raster "
+          f"{raster_mb:6.1f} MB")
     print(load_average())
 
 

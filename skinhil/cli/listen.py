@@ -15,8 +15,10 @@ from typing import Any
 
 import numpy as np
 
+from skinhil.cli.options import add_size_option
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.errors import ConfigError
+from skinhil.geometry import spring_count
 from skinhil.receiver import (
     BusReceiver,
     Receiver,
@@ -51,6 +53,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="one JSON object per line: decisions, link counters, summary")
     p.add_argument("--record", type=Path, metavar="FILE",
                    help="save events (tonic-compatible) and decisions to this .npz")
+    add_size_option(p)
 
 
 def _board_ids(text: str) -> list[int]:
@@ -217,7 +220,7 @@ def run(args: argparse.Namespace) -> int:
     if several and args.record is not None:
         raise ConfigError("--record saves one board's session: use it with one board on "
                           "--port or --can")
-    decoder = load_window_decoder(args.model)
+    decoder = load_window_decoder(args.model, n_channels=spring_count(args.size))
     transport = open_transport(args)
     names = class_names()
     if several:

@@ -7,7 +7,7 @@ import math
 import time
 from pathlib import Path
 
-from skinhil.cli.options import DECODE_SNR_DB, snr_value
+from skinhil.cli.options import DECODE_SNR_DB, add_size_option, snr_value
 from skinhil.errors import ConfigError
 from skinhil.receiver.training import BIN_S, WINDOW_S, TrainingReport, train_decoder
 from skinhil.timeline import DEFAULT_REST_S
@@ -20,7 +20,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "direction conditions of the paper's Figure 4, 9 x reps stimuli with "
                     "rests, at the given SNR), cut it into windows with the receiver's own "
                     "onset detector, label each window by the ground-truth marker it matches, "
-                    "take the PSP activity of all 338 sensors in "
+                    "take the PSP activity of all sensors (338 at 6x6) in "
                     f"{1e3 * BIN_S:g} ms bins over {1e3 * WINDOW_S:g} ms, fit a linear SVM, "
                     "print its repeated 5-fold cross-validated accuracy (missed onsets count "
                     "as wrong, as online) and confusion matrix, and save it as plain data "
@@ -37,6 +37,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                                            f"(default: {DEFAULT_REST_S:g})")
     p.add_argument("--seed", type=int, default=0, help="noise and schedule seed (default: 0)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_size_option(p)
 
 
 def print_report(report: TrainingReport, names: dict[int, str]) -> None:
@@ -67,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"--rest must be >= 0 seconds, got {args.rest_s!r}")
     t0 = time.monotonic()
     decoder, report = train_decoder(args.snr_db, args.reps, args.seed, rest_s=args.rest_s,
-                                    progress=not args.no_progress)
+                                    progress=not args.no_progress, size=args.size)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     decoder.save(args.out)
     print_report(report, class_names())

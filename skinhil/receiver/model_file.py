@@ -8,10 +8,11 @@ from skinhil.decoding import DirectionDecoder
 from skinhil.receiver.decoder_adapter import WindowDecoder
 
 
-def load_window_decoder(path: str | Path) -> WindowDecoder:
-    """Load a decoder file written by ``skinhil train``.
+def load_window_decoder(path: str | Path, n_channels: int | None = None) -> WindowDecoder:
+    """Load a decoder file written by ``skinhil train`` (for a stream of ``n_channels``
+    channels, when given).
 
     Raises :class:`skinhil.errors.ModelFileError` for a missing, corrupted, pickled or
     mismatched file (the decoding package's loader checks it).
     """
-    return WindowDecoder(DirectionDecoder.load(path))
+    return WindowDecoder(DirectionDecoder.load(path, n_channels=n_channels))

@@ -13,7 +13,7 @@ Protocol (what the board does, simulated offline and faster than real time):
 3. each window is labelled by the ground-truth marker it matches under the scoring rule of
    :mod:`skinhil.receiver.scoring` (false alarms give no window, missed markers are counted);
 4. features and classifier are :mod:`skinhil.decoding`'s (time-binned PSP activity of all
-   338 sensors, linear SVM); repeated stratified cross-validation on the labelled windows
+   sensors — 338 at 6x6 — linear SVM); repeated stratified cross-validation on the labelled windows
    gives the window accuracy and confusion matrix.
 
 The offline **accuracy** is the cross-validated window accuracy times the fraction of scored
@@ -36,11 +36,13 @@ from tqdm.auto import tqdm
 
 from skinhil.decoding import DirectionDecoder, FeatureSpec, cross_validate
 from skinhil.errors import ConfigError
+from skinhil.geometry import PAPER_SIZE, MeshSize, spring_count
 from skinhil.receiver.online import OnsetWindows
 from skinhil.receiver.params import ReceiverParams
 from skinhil.receiver.scoring import scoreboard_for
 from skinhil.sensor import SkinSensor
-from skinhil.stimuli import Schedule, ScheduledStimulus, direction_conditions
+from skinhil.skin import SkinModel, SkinParams
+from skinhil.stimuli import Schedule, ScheduledStimulus, at_size, direction_conditions
 from skinhil.timeline import DEFAULT_REST_S, MarkerEvent, Timeline
 
 log = logging.getLogger(__name__)
@@ -113,9 +115,11 @@ class TrainingReport:
         return self.window_accuracy * self.decodable_windows / self.markers
 
 
-def feature_spec(dt_s: float = 1e-4) -> FeatureSpec:
-    """The receiver's feature definition: all sensors, ``WINDOW_S`` in ``BIN_S`` bins."""
-    return FeatureSpec(dt_s=dt_s, window_s=WINDOW_S, bin_s=BIN_S)
+def feature_spec(dt_s: float = 1e-4, size: MeshSize = PAPER_SIZE) -> FeatureSpec:
+    """The receiver's feature definition: all sensors of a skin of top-layer ``size`` (338 at
+    6x6), ``WINDOW_S`` in ``BIN_S`` bins."""
+    return FeatureSpec(dt_s=dt_s, window_s=WINDOW_S, bin_s=BIN_S,
+                       n_channels=spring_count(size))
 
 
 def stream_duration_s(n_stimuli: int, rest_s: float) -> float:
@@ -123,10 +127,12 @@ def stream_duration_s(n_stimuli: int, rest_s: float) -> float:
     return LEAD_S + n_stimuli * (direction_conditions()[0].end_s + rest_s)
 
 
-def balanced_schedule(reps: int, rest_s: float, seed: int) -> Schedule:
+def balanced_schedule(reps: int, rest_s: float, seed: int,
+                      size: MeshSize = PAPER_SIZE) -> Schedule:
     """Each direction condition ``reps`` times in a seeded random order, ``rest_s`` (s) of
-    rest after each, the first at ``LEAD_S`` (as the board's random schedule)."""
-    conditions = direction_conditions()
+    rest after each, the first at ``LEAD_S`` (as the board's random schedule), on a skin of
+    top-layer ``size``."""
+    conditions = [at_size(c, size) for c in direction_conditions()]
     order = np.random.default_rng(seed).permutation(np.repeat(np.arange(len(conditions)),
                                                                reps))
     entries, t = [], LEAD_S
@@ -138,18 +144,19 @@ def balanced_schedule(reps: int, rest_s: float, seed: int) -> Schedule:
 
 
 def board_stream(duration_s: float, snr_db: float, rest_s: float, seed: int,
-                 dt_s: float = 1e-4, schedule: Schedule | None = None
+                 dt_s: float = 1e-4, schedule: Schedule | None = None,
+                 size: MeshSize = PAPER_SIZE
                  ) -> Iterator[tuple[np.ndarray, list[MarkerEvent], int]]:
     """The board's stream simulated offline: per block (events, markers, block end µs).
 
     Same schedule (the board's :class:`Timeline`: its random one for ``seed`` and
     ``rest_s``, or ``schedule`` played once) and same sensor (:class:`SkinSensor` seeded
-    ``seed``) as ``skinhil serve --seed seed --rest rest_s [--schedule ...]``.
+    ``seed``) as ``skinhil serve --seed seed --rest rest_s --size size [--schedule ...]``.
     """
-    sensor = SkinSensor(dt_s=dt_s, snr_db=snr_db, seed=seed)
+    sensor = SkinSensor(SkinModel(SkinParams(size=size)), dt_s=dt_s, snr_db=snr_db, seed=seed)
     timeline = Timeline(dt_s, schedule, seed=seed, rest_s=rest_s,
                         mode=Timeline.SCHEDULE_RANDOM if schedule is None
-                        else Timeline.SCHEDULE_FILE)
+                        else Timeline.SCHEDULE_FILE, size=size)
     dt_us = int(round(dt_s * 1e6))
     n_total = int(round(duration_s / dt_s))
     block = max(1, int(round(BLOCK_S / dt_s)))
@@ -164,7 +171,8 @@ def board_stream(duration_s: float, snr_db: float, rest_s: float, seed: int,
 def stream_windows(n_stimuli: int, snr_db: float, rest_s: float, seed: int,
                    dt_s: float = 1e-4, params: ReceiverParams | None = None,
                    progress: bool = False, balanced: bool = True,
-                   board_seed: int | None = None) -> StreamWindows:
+                   board_seed: int | None = None,
+                   size: MeshSize = PAPER_SIZE) -> StreamWindows:
     """Cut a simulated board stream into the receiver's windows and label them.
 
     ``balanced``: the stimuli are :func:`balanced_schedule` (``n_stimuli`` a multiple of 9),
@@ -173,7 +181,7 @@ def stream_windows(n_stimuli: int, snr_db: float, rest_s: float, seed: int,
     --seed board_seed --rest rest_s`` plays (with ``balanced=False``).
     """
     p = params or ReceiverParams()
-    spec = feature_spec(dt_s)
+    spec = feature_spec(dt_s, size)
     windows = OnsetWindows(dt_s, spec.n_channels, spec.psp, spec.n_steps, p.onset)
     board = scoreboard_for(tuple(range(len(direction_conditions()))), windows,
                            p.match_window_s)
@@ -185,8 +193,9 @@ def stream_windows(n_stimuli: int, snr_db: float, rest_s: float, seed: int,
     if balanced and n_stimuli % n_cond:
         raise ConfigError(f"a balanced stream needs a multiple of {n_cond} stimuli, "
                           f"got {n_stimuli}")
-    schedule = balanced_schedule(n_stimuli // n_cond, rest_s, stream_seed) if balanced else None
-    blocks = board_stream(duration, snr_db, rest_s, stream_seed, dt_s, schedule)
+    schedule = (balanced_schedule(n_stimuli // n_cond, rest_s, stream_seed, size) if balanced
+                else None)
+    blocks = board_stream(duration, snr_db, rest_s, stream_seed, dt_s, schedule, size)
     bar = tqdm(total=round(duration, 1), desc="simulating the board stream", unit="s",
                disable=not progress, bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s board time")
     for events, markers, end_us in blocks:
@@ -254,14 +263,15 @@ def fit_windows(sw: StreamWindows, cross_validation: bool = True
 
 def train_decoder(snr_db: float = 10.0, reps: int = 50, seed: int = 0, dt_s: float = 1e-4,
                   rest_s: float = DEFAULT_REST_S, progress: bool = False,
-                  cross_validation: bool = True) -> tuple[DirectionDecoder, TrainingReport]:
-    """Simulate ``9·reps`` board stimuli (each condition ``reps`` times), cut and label
-    windows, cross-validate and fit (:func:`fit_windows`).
+                  cross_validation: bool = True,
+                  size: MeshSize = PAPER_SIZE) -> tuple[DirectionDecoder, TrainingReport]:
+    """Simulate ``9·reps`` board stimuli (each condition ``reps`` times) on a skin of
+    top-layer ``size``, cut and label windows, cross-validate and fit (:func:`fit_windows`).
 
     Raises ConfigError when the onset detector matched too few windows to fit a decoder (at
     such a noise level nothing can be decoded online either).
     """
-    sw = stream_windows(9 * reps, snr_db, rest_s, seed, dt_s, progress=progress)
+    sw = stream_windows(9 * reps, snr_db, rest_s, seed, dt_s, progress=progress, size=size)
     decoder, report = fit_windows(sw, cross_validation)
     if decoder is None:
         classes, counts = np.unique(sw.labels, return_counts=True)

@@ -1,0 +1,230 @@
+"""How the board's work grows with the skin: a size benchmark (a script, not a test).
+
+For each top-layer size (default 6x6, 16x16, 26x26, 32x32, 48x48) it steps the board's loop
+as :meth:`firmware_sim.board.Board.tick` does, without pacing and without a transport: per
+1 ms tick of ten 0.1 ms steps, the default random schedule's forces
+(:class:`skinhil.timeline.Timeline`), the model (mechanics and neurons, noise at ``--snr-db``,
+default 10 dB), spikes to events, and the events encoded for the wire
+(:class:`protocols.SerialEncoder`, wide format above 338 channels). It reports
+
+- per step: mechanics (µs and ns per spring), neurons (µs and ns per channel), each timed
+  alone on the same forces, and per tick the events and encoding (µs);
+- memory: the peak of the bytes allocated (tracemalloc, kernels compiled beforehand) while
+  the model, the timeline and the encoder are built and run for 20 ticks;
+- the real-time factor of the whole loop (simulated s per wall s; >= 1 keeps real time),
+  on one thread and, with ``--threads 2``, with the neurons on two;
+- the growth: the time per step of the whole loop against the springs, as the exponent of a
+  least-squares fit of log(time) on log(springs) over the leapfrog sizes (1 = linear).
+
+With ``--find-largest`` it then bisects the square sizes for the largest that keeps real
+time (factor >= 1) on one thread and on two.
+
+Usage::
+
+    python benchmarks/bench_size.py [--sizes 6,16,26,32,48] [--threads 1,2] [--snr-db 10]
+                                    [--seconds 2] [--find-largest]
+
+Every figure is the best of ``--repeats`` runs (the machine is shared): the load average is
+printed before and after.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import time
+import tracemalloc
+from dataclasses import dataclass
+
+sys.path.insert(0, os.path.dirname(__file__))
+for _var in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+import numpy as np  # noqa: E402
+from machine import describe, load_average  # noqa: E402
+
+import protocols  # noqa: E402
+from skinhil.geometry import format_size, parse_size  # noqa: E402
+from skinhil.sensor import SkinSensor  # noqa: E402
+from skinhil.skin import SkinModel, SkinParams  # noqa: E402
+from skinhil.timeline import Timeline  # noqa: E402
+
+DT_S = 1e-4
+STEPS_PER_TICK = 10
+
+
+@dataclass
+class SizeResult:
+    size: tuple[int, int]
+    threads: int
+    springs: int
+    regime: str
+    mech_us: float
+    neur_us: float
+    events_us: float
+    encode_us: float
+    loop_us: float
+    """Per tick (10 steps) of the whole loop."""
+    memory_mb: float
+    events_per_s: float
+
+    @property
+    def rtf(self) -> float:
+        return STEPS_PER_TICK * DT_S / (self.loop_us * 1e-6)
+
+
+def _best_per_tick(fn, seconds: float, repeats: int) -> float:  # type: ignore[no-untyped-def]
+    """Best over ``repeats`` runs of the mean wall µs per call of ``fn`` (each run at least
+    ``seconds`` of wall time)."""
+    best = math.inf
+    for _ in range(repeats):
+        calls = 0
+        t0 = time.perf_counter()
+        while True:
+            fn()
+            calls += 1
+            elapsed = time.perf_counter() - t0
+            if elapsed >= seconds:
+                break
+        best = min(best, elapsed / calls * 1e6)
+    return best
+
+
+def measure(size: tuple[int, int], threads: int, snr_db: float, seconds: float,
+            repeats: int) -> SizeResult:
+    warm = SkinSensor(SkinModel(SkinParams(size=(3, 3))), DT_S, snr_db=snr_db, threads=threads)
+    warm.advance_schedule(Timeline(DT_S, size=(3, 3)).schedule, 10)  # kernels compiled first
+    tracemalloc.start()
+    model = SkinModel(SkinParams(size=size))
+    sensor = SkinSensor(model, DT_S, snr_db=snr_db, seed=0, threads=threads)
+    timeline = Timeline(DT_S, size=size)
+    encoder = protocols.SerialEncoder(step_us=int(round(DT_S * 1e6)), n_channels=model.n_springs)
+    counts = {"events": 0}
+
+    def tick() -> tuple[np.ndarray, np.ndarray]:
+        first = sensor.step_index
+        t_s = (first + np.arange(STEPS_PER_TICK)) * DT_S
+        forces = timeline.forces(t_s)
+        _, spikes = sensor.advance(forces)
+        events = sensor.events(spikes, first)
+        encoder.events(events, int(round((first + STEPS_PER_TICK) * DT_S * 1e6)))
+        counts["events"] += len(events)
+        return forces, spikes
+
+    for _ in range(20):  # compile, and let the random schedule start
+        tick()
+    _, memory = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    counts["events"] = 0
+    start = sensor.step_index
+    loop_us = _best_per_tick(tick, seconds, repeats)
+    events_per_s = counts["events"] / ((sensor.step_index - start) * DT_S)
+
+    # the parts, each alone on a block the loop produced while a stimulus pressed
+    forces, spikes = tick()
+    while not forces.any():
+        forces, spikes = tick()
+    stepper = model.stepper(DT_S)
+    springs = stepper.advance(forces)
+    mech_us = _best_per_tick(lambda: stepper.advance(forces), seconds / 4, repeats)
+    neurons = sensor.neurons
+    neur_us = _best_per_tick(lambda: neurons.step_block(springs, DT_S), seconds / 4, repeats)
+    first = sensor.step_index
+    events = sensor.events(spikes, first)
+    events_us = _best_per_tick(lambda: sensor.events(spikes, first), seconds / 8, repeats)
+    enc = protocols.SerialEncoder(step_us=int(round(DT_S * 1e6)), n_channels=model.n_springs)
+    t_end = [int(round((first + STEPS_PER_TICK) * DT_S * 1e6))]
+
+    def encode() -> None:
+        shifted = events.copy()
+        shifted["t"] += t_end[0] - int(round((first + STEPS_PER_TICK) * DT_S * 1e6))
+        enc.events(shifted, t_end[0])
+        t_end[0] += STEPS_PER_TICK * int(round(DT_S * 1e6))
+
+    encode_us = _best_per_tick(encode, seconds / 8, repeats)
+    return SizeResult(size, sensor.threads, model.n_springs, model.linear_regime,
+                      mech_us / STEPS_PER_TICK, neur_us / STEPS_PER_TICK, events_us, encode_us,
+                      loop_us, memory / 1e6, events_per_s)
+
+
+def _row(r: SizeResult) -> str:
+    return (f"{format_size(r.size):>6} {r.threads:>2} {r.springs:>7} {r.regime:>8} "
+            f"{r.mech_us:8.1f} {1e3 * r.mech_us / r.springs:6.2f} "
+            f"{r.neur_us:8.1f} {1e3 * r.neur_us / r.springs:6.2f} "
+            f"{r.events_us:7.1f} {r.encode_us:7.1f} {r.loop_us / STEPS_PER_TICK:8.1f} "
+            f"{1e3 * r.loop_us / STEPS_PER_TICK / r.springs:6.2f} {r.memory_mb:7.1f} "
+            f"{r.events_per_s / 1e3:8.1f} {r.rtf:6.2f}")
+
+
+HEADER = (f"{'size':>6} {'th':>2} {'springs':>7} {'stepper':>8} "
+          f"{'mech µs':>8} {'ns/sp':>6} {'neur µs':>8} {'ns/ch':>6} "
+          f"{'ev µs':>7} {'enc µs':>7} {'loop µs':>8} {'ns/sp':>6} {'mem MB':>7} "
+          f"{'kev/s':>8} {'RTF':>6}\n"
+          "(mech, neur and loop per 0.1 ms step; ev and enc per 1 ms tick; mem: model bytes "
+          "allocated, tracemalloc; RTF: real-time factor of the loop)")
+
+
+def growth_exponent(results: list[SizeResult]) -> float:
+    """Slope of log(loop time per step) on log(springs) over the leapfrog sizes."""
+    pts = [(math.log(r.springs), math.log(r.loop_us)) for r in results
+           if r.regime == "leapfrog"]
+    if len(pts) < 2:
+        return math.nan
+    x, y = np.array(pts).T
+    return float(np.polyfit(x, y, 1)[0])
+
+
+def find_largest(threads: int, snr_db: float, seconds: float, repeats: int,
+                 lo: int, hi: int) -> tuple[int, SizeResult | None]:
+    """Largest square side in [lo, hi] whose loop keeps real time (lo is assumed to)."""
+    best: SizeResult | None = None
+    while lo < hi:
+        mid = (lo + hi + 1) // 2
+        r = measure((mid, mid), threads, snr_db, seconds, repeats)
+        print(_row(r), flush=True)
+        if r.rtf >= 1.0:
+            lo, best = mid, r
+        else:
+            hi = mid - 1
+    return lo, best
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", default="6,16,26,32,48",
+                    help="top-layer sizes, comma-separated (N or RxC)")
+    ap.add_argument("--threads", default="1,2", help="thread counts, comma-separated")
+    ap.add_argument("--snr-db", type=float, default=10.0)
+    ap.add_argument("--seconds", type=float, default=2.0, help="wall s per timed run")
+    ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--find-largest", action="store_true")
+    args = ap.parse_args()
+    sizes = [parse_size(s) for s in args.sizes.split(",")]
+    thread_counts = [int(t) for t in args.threads.split(",")]
+    print(describe())
+    print(f"noise {args.snr_db:g} dB (diffusion), dt 0.1 ms, 1 ms ticks; best of "
+          f"{args.repeats} runs of >= {args.seconds:g} s; {load_average()}", flush=True)
+    print(HEADER, flush=True)
+    for threads in thread_counts:
+        results = []
+        for size in sizes:
+            r = measure(size, threads, args.snr_db, args.seconds, args.repeats)
+            results.append(r)
+            print(_row(r), flush=True)
+        print(f"threads {threads}: loop time per step ~ springs^{growth_exponent(results):.2f} "
+              "over the leapfrog sizes (1.00 = linear)", flush=True)
+        if args.find_largest:
+            keeps = [r.size[0] for r in results if r.rtf >= 1.0 and r.size[0] == r.size[1]]
+            fails = [r.size[0] for r in results if r.rtf < 1.0 and r.size[0] == r.size[1]]
+            lo = max(keeps, default=6)
+            hi = min([f - 1 for f in fails if f > lo], default=64)
+            side, _ = find_largest(threads, args.snr_db, args.seconds, args.repeats, lo, hi)
+            print(f"threads {threads}: largest square skin in real time: "
+                  f"{side}x{side} ({SkinModel(SkinParams(size=(side, side))).n_springs} "
+                  "sensors)", flush=True)
+    print(load_average())
+
+
+if __name__ == "__main__":
+    main()
