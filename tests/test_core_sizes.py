@@ -109,3 +109,13 @@ def test_trial_events_are_the_raster_s_spikes() -> None:
     for i in range(2):
         for r in range(3):
             assert np.array_equal(events[i][r], raster_to_events(raster[i, r], 1e-4))
+
+
+def test_sweep_point_at_another_size() -> None:
+    # the information measures of one K x C point on a 7x7 skin (exact modal path)
+    from dataclasses import replace
+
+    from skinhil.analysis.sweep import evaluate_point
+
+    measures = evaluate_point(replace(SkinParams(), size=(7, 7)))
+    assert all(np.isfinite(v) for v in vars(measures).values())

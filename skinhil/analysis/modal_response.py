@@ -26,7 +26,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from skinhil.errors import ConfigError
-from skinhil.geometry import Mesh, build_mesh
+from skinhil.geometry import Mesh, build_mesh, format_size
 from skinhil.mechanics_linear import assemble, free_block, free_dofs, modal_form, sensor_matrix
 from skinhil.skin import SkinParams
 from skinhil.stimuli import Stimulus
@@ -45,9 +45,9 @@ class ReducedResponses:
 
 
 @functools.lru_cache(maxsize=8)
-def _unit_structure(spacing_m: float, layer_gap_m: float) -> tuple[Mesh, np.ndarray,
-                                                                    np.ndarray]:
-    mesh = build_mesh(spacing_m, layer_gap_m)
+def _unit_structure(spacing_m: float, layer_gap_m: float,
+                    size: tuple[int, int]) -> tuple[Mesh, np.ndarray, np.ndarray]:
+    mesh = build_mesh(spacing_m, layer_gap_m, size)
     k_glob, _ = assemble(mesh, 1.0, 0.0, 0.0)
     dofs = free_dofs(mesh)
     return mesh, free_block(k_glob, mesh).toarray(), dofs
@@ -64,7 +64,7 @@ def reduced_responses(params: SkinParams, stimuli: Sequence[Stimulus], duration_
     if not supports(params):
         raise ConfigError("the modal sweep path needs mechanics='linear' and tension_n=0; "
                           "use SkinModel.simulate_many for other models")
-    mesh, k_unit, dofs = _unit_structure(params.spacing_m, params.layer_gap_m)
+    mesh, k_unit, dofs = _unit_structure(params.spacing_m, params.layer_gap_m, params.size)
     k = params.stiffness_n_per_m
     phi, mad, mbd = modal_form(k * k_unit, params.mass_kg, params.damping_n_s_per_m / k, dt_s)
     q, r = np.linalg.qr(sensor_matrix(mesh, k) @ phi)
@@ -77,6 +77,9 @@ def reduced_responses(params: SkinParams, stimuli: Sequence[Stimulus], duration_
     out = np.empty((len(stimuli), n_steps, phi.shape[1]))
     cache: dict[tuple[float, float, float], np.ndarray] = {}
     for i, s in enumerate(stimuli):
+        if s.size != params.size:
+            raise ConfigError(f"stimulus {s.name!r} is defined on a {format_size(s.size)} "
+                              f"skin, the model is {format_size(params.size)}")
         if np.any(s.peak_forces_n[mesh.fixed] != 0.0):
             raise ConfigError(f"stimulus {s.name!r} pushes fixed masses, which cannot move")
         key = (s.onset_s, s.indentation_s, s.decay_tau_s)

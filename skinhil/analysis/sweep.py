@@ -44,7 +44,7 @@ from skinhil.analysis.modal_response import reduced_responses, supports
 from skinhil.analysis.phases import PhaseWindows
 from skinhil.errors import ConfigError
 from skinhil.skin import Mechanics, SkinModel, SkinParams
-from skinhil.stimuli import paper_stimuli
+from skinhil.stimuli import at_size, paper_stimuli
 
 logger = logging.getLogger(__name__)
 
@@ -130,8 +130,9 @@ def point_step(params: SkinParams, dt_s: float, windows: PhaseWindows) -> float:
 
 
 def evaluate_point(params: SkinParams, dt_s: float = 2.5e-4) -> InformationMeasures:
-    """Simulate the paper stimuli with ``params`` and return the information measures."""
-    stimuli = paper_stimuli()
+    """Simulate the paper stimuli (moved to the skin's size by :func:`at_size`) with
+    ``params`` and return the information measures."""
+    stimuli = [at_size(s, params.size) for s in paper_stimuli()]
     windows = PhaseWindows.of(stimuli)
     with threadpool_limits(1):
         step = point_step(params, dt_s, windows)
