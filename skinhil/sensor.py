@@ -21,6 +21,9 @@ import math
 import numba
 import numpy as np
 
+from skinhil.errors import ConfigError
+from skinhil.events import EVENT_DTYPE
+from skinhil.geometry import format_size
 from skinhil.mechanics_leapfrog import LeapfrogMechanics, leapfrog_kernel
 from skinhil.mechanics_linear import LinearMechanics, _advance_modal_kernel
 from skinhil.neurons import (
@@ -100,6 +103,10 @@ def _scheduled_leapfrog_sensor_kernel(
     _leapfrog_sensor_kernel(forces, springs, spikes, dt_s, substeps, mechanics, neurons)
 
 
+MAX_CHANNELS = int(np.iinfo(EVENT_DTYPE["addr"]).max) + 1
+"""Channels an event address can name (16-bit: 65,536)."""
+
+
 class SkinSensor:
     """Skin mechanics plus one noisy Izhikevich neuron per spring, at step ``dt_s`` (s);
     ``noise`` and ``threads`` as in :class:`~skinhil.neurons.NeuronPopulation`."""
@@ -109,6 +116,11 @@ class SkinSensor:
                  params: IzhikevichParams | None = None,
                  noise: NoiseParams | None = None, threads: int = 1) -> None:
         self.model = model or SkinModel()
+        if self.model.n_springs > MAX_CHANNELS:
+            raise ConfigError(f"a {format_size(self.model.size)} skin has "
+                              f"{self.model.n_springs} sensors; event addresses are 16-bit "
+                              f"(at most {MAX_CHANNELS} channels, a 63x63 skin): use a smaller "
+                              "skin or several boards")
         self.dt_s = float(dt_s)
         self.stepper = self.model.stepper(dt_s)
         self.neurons = NeuronPopulation(self.model.n_springs, params, snr_db, seed, noise=noise,

@@ -119,3 +119,8 @@ def test_sweep_point_at_another_size() -> None:
 
     measures = evaluate_point(replace(SkinParams(), size=(7, 7)))
     assert all(np.isfinite(v) for v in vars(measures).values())
+
+
+def test_a_skin_beyond_16_bit_addresses_is_refused() -> None:
+    with pytest.raises(ConfigError, match="66226 sensors; event addresses are 16-bit"):
+        SkinSensor(SkinModel(SkinParams(size=(64, 64))))
