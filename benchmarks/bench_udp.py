@@ -10,7 +10,7 @@ board's own final status (``events_sent``) and the decoder's ``events_lost``.
 Usage::
 
     python benchmarks/bench_udp.py [--sizes 6x6,32x32] [--duration 60] [--snr-db DB]
-                                   [--realtime]
+                                   [--threads N] [--realtime]
 
 ``--sizes`` needs ``skinhil serve --size``; 6x6 is the default skin either way.
 """
@@ -109,10 +109,12 @@ def main() -> int:
                     "(default: the default skin)")
     ap.add_argument("--duration", type=float, default=60.0, help="seconds per run (60)")
     ap.add_argument("--snr-db", default=None, help="neuron noise SNR, dB (default: serve's)")
+    ap.add_argument("--threads", default=None, help="serve --threads N (neuron threads)")
     ap.add_argument("--realtime", action="store_true",
                     help="serve with --realtime (FIFO scheduling; needs root or CAP_SYS_NICE)")
     args = ap.parse_args()
     extra = (["--snr-db", args.snr_db] if args.snr_db else []) + (
+        ["--threads", args.threads] if args.threads else []) + (
         ["--realtime"] if args.realtime else [])
     print(describe(), flush=True)
     for size in [s for s in args.sizes.split(",") if s] or [None]:

@@ -1,5 +1,5 @@
 """A board whose skin has more than 338 channels streams the wide format (version 2) on CAN:
-an 8x8 skin (1,177 channels) on a python-can virtual bus, classic and FD, decoded by a
+an 8x8 skin (706 channels) on a python-can virtual bus, classic and FD, decoded by a
 decoder that reads only version 2; every event arrives, with addresses above 337."""
 
 from __future__ import annotations
