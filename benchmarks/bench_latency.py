@@ -9,7 +9,7 @@ The board start is estimated as the smallest (arrival − board time) seen, so t
 are latencies above the fastest delivery (a lower bound on the true latency, exact up to
 that minimum).
 
-    python benchmarks/bench_latency.py [--snr-db 40] [--duration 20] [--links pty,vcan]
+    python benchmarks/bench_latency.py [--snr-db 10] [--duration 20] [--links pty,vcan]
 """
 
 from __future__ import annotations
@@ -60,7 +60,7 @@ def measure(receiver: Receiver, arrivals: Arrivals) -> dict[str, float]:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--snr-db", type=float, default=40.0)
+    ap.add_argument("--snr-db", type=float, default=10.0)
     ap.add_argument("--duration", type=float, default=20.0)
     ap.add_argument("--rest", type=float, default=0.25, help="board rest after each stimulus")
     ap.add_argument("--reps", type=int, default=15, help="training stimuli per condition")

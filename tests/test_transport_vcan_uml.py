@@ -48,7 +48,7 @@ def warm_cache() -> None:
 @skip_here
 @pytest.mark.parametrize("module", VCAN_MODULES)
 def test_vcan_tests_pass_inside_user_mode_linux(module: str, warm_cache: None) -> None:
-    cmd = [sys.executable, "-m", "pytest", "-m", "vcan", "-q", "-rfEs", "-p",
+    cmd = [sys.executable, "-m", "pytest", "-m", "vcan", "-q", "-s", "-rfEs", "-p",
            "no:cacheprovider", "--durations=3", str(HERE / module)]
     try:
         res = run_in_uml(cmd, REPO, timeout_s=UML_TIMEOUT_S)
