@@ -10,8 +10,9 @@ Per publish tick ``k`` (default 1 ms = 10 steps of 0.1 ms), due at ``t0 + (k+1)�
 3. events: spikes → events stamped with board time in µs (step resolution) → counted as
    generated → the event FIFO (or dropped by reason, :mod:`firmware_sim.counters`);
 4. host commands received since the last tick are executed and answered (ACK/NACK);
-5. ground-truth markers due in this tick, then events from the FIFO, are encoded into the
-   transmit queue while it holds less than ``tx_target_s`` of wire time; a status record
+5. events from the FIFO are encoded in filled frames into the transmit queue while it
+   holds less than ``tx_target_s`` of wire time (:meth:`Board._fill`: the tick is the flush
+   period); each ground-truth marker follows every event before its time; a status record
    every ``status_period_s``;
 6. the transmit queue goes to the transport within the wire budget
    (:class:`firmware_sim.link.BoardLink`).
@@ -143,7 +144,8 @@ class BoardSummary:
     link_losses: int
     markers_sent: int
     markers_dropped: int
-    """Ground-truth markers lost because the link was gone (see :mod:`firmware_sim.counters`)."""
+    """Ground-truth markers not sent: the board was stopped or the link was gone when they
+    fell due (see :mod:`firmware_sim.counters`)."""
     units_sent: int
     """Bytes (serial) or frames (CAN) handed to the link."""
     wire_busy_s: float
@@ -189,19 +191,16 @@ class Board:
         self._markers: list[MarkerEvent] = []
         self._next_status_us = 0
         self._status_every_us = int(round(config.status_period_s * 1e6))
-        self._wire_per_event_s = 0.0
         self._wire_busy_s = 0.0
         self._units_sent = 0
         self.link = self._make_link(open_link())
 
     # -- link ---------------------------------------------------------------------------
     def _make_link(self, transport: Transport[Any]) -> BoardLink:
-        link = BoardLink(transport, self.config.board_id,
+        return BoardLink(transport, self.config.board_id,
                          fd=bool(getattr(transport, "fd", False)),
                          allowance_s=self.config.tick_s, step_us=self._dt_us,
                          n_channels=self.sensor.model.n_springs)
-        self._wire_per_event_s = 0.0
-        return link
 
     def _lose_link(self, exc: Exception) -> None:
         self.link_losses += 1
@@ -211,7 +210,7 @@ class Board:
             self.link.shutdown()
         self.link = None
         self.counters.drop("link_down", self.fifo.clear())
-        self._drop_markers()
+        self._drop_markers(self._markers)
         if not self.config.reconnect:
             raise TransportError(f"{exc}; start again, or use --reconnect to wait for the "
                                  "link to return") from None
@@ -249,22 +248,24 @@ class Board:
         }
         for reason, n in c.dropped_by.items():
             values[f"dropped_{reason}"] = n
-        fields = {f.name for f in dataclasses.fields(protocols.Status)}
-        return protocols.Status(**{k: v for k, v in values.items() if k in fields})
+        return protocols.Status(**values, markers_sent=c.markers_sent,
+                                markers_dropped=c.markers_dropped)
 
-    def _send_marker(self, link: BoardLink) -> None:
-        """Queue the oldest due ground-truth marker on the link and count it."""
-        m = self._markers.pop(0)
-        phase = protocols.MarkerPhase.ONSET if m.phase == "onset" else protocols.MarkerPhase.END
-        link.queue_record(protocols.Marker(t_us=m.t_us, stimulus_id=m.stimulus_id, phase=phase))
-        self.counters.markers_sent += 1
+    def _send_markers(self, link: BoardLink, before_us: int | None) -> None:
+        """Queue the due ground-truth markers with ``t_us <= before_us`` (all if None): every
+        event before a marker's time is on the wire ahead of it."""
+        while self._markers and (before_us is None or self._markers[0].t_us <= before_us):
+            m = self._markers.pop(0)
+            phase = (protocols.MarkerPhase.ONSET if m.phase == "onset"
+                     else protocols.MarkerPhase.END)
+            link.queue_record(protocols.Marker(t_us=m.t_us, stimulus_id=m.stimulus_id,
+                                               phase=phase))
+            self.counters.markers_sent += 1
 
-    def _drop_markers(self) -> None:
-        """The link is gone: the markers still due are lost, and counted."""
-        self.counters.markers_dropped += len(self._markers)
-        if self._markers:
-            log.warning("%d ground-truth markers lost with the link", len(self._markers))
-        self._markers.clear()
+    def _drop_markers(self, markers: list[MarkerEvent]) -> None:
+        """``markers`` will never be sent (board stopped, link gone): count them, forget them."""
+        self.counters.markers_dropped += len(markers)
+        markers.clear()
 
     # -- commands -----------------------------------------------------------------------
     def handle(self, cmd: Any) -> Any:
@@ -331,10 +332,13 @@ class Board:
             c.drop("fifo_full", self.fifo.push(events))
         markers = self.timeline.markers_before(t_end_us)
         if self.link is None:
+            self._drop_markers(markers)
             self._try_reconnect()
             return
         if self.running:
             self._markers.extend(markers)
+        else:
+            self._drop_markers(markers)
         try:
             self._serve_link(t_end_us)
         except TransportError as exc:
@@ -358,39 +362,37 @@ class Board:
         link.pump()
 
     def _fill(self, link: BoardLink, t_end_us: int) -> None:
-        """Encode markers and FIFO events, in time order, while the queue is short.
+        """Encode the FIFO's events in filled frames, and the due markers, while the
+        transmit queue holds less than ``tx_target_s`` of wire time.
 
-        Each encoder call covers board time ``[end of the last call, t_end)``: a batch that
-        leaves events queued ends at the next queued event's time (a batch never splits a
-        step), an emptied FIFO at the tick's end (which also lets the encoder keep its time
-        base alive with SYNCs while there are no events).
+        Everything queued goes when it fits: the last frame closes after the last event
+        generated (the flush, every tick). When the FIFO holds more than the queue has room
+        for, the encoder writes only whole frames, as many as the room takes (rounded up:
+        the queue may pass its target by less than one frame), and the events left wait for
+        the next call, so a backlog leaves in full frames. A marker is queued once every
+        event before its time is, so it may follow its events by up to one batch.
         """
         target = self.config.tx_target_s
         while True:
-            room = target - link.backlog_s()
             head = self.fifo.peek_time_us()
-            while self._markers and (head is None or self._markers[0].t_us <= head):
-                self._send_marker(link)
+            self._send_markers(link, head)
             if head is None:
-                if self.running:
+                if self.running:  # an empty call: keeps the time base alive (SYNC)
                     link.queue_events(self.fifo.pop(0), t_end_us)
                 return
+            room = target - link.backlog_s()
             if room <= 0:
                 return
-            per = self._wire_per_event_s or 1e-9
-            n = max(1, int(room / per))
-            if self._markers:
-                n = min(n, self.fifo.count_before(self._markers[0].t_us) or 1)
-            if n < len(self.fifo):
-                n = self.fifo.count_before(self.fifo.time_at(n - 1) + self._dt_us)
-            batch = self.fifo.pop(n)
-            end = self.fifo.peek_time_us()
-            wire = link.queue_events(batch, t_end_us if end is None else end)
-            self.counters.sent += len(batch)
-            if len(batch):
-                est = wire / len(batch)
-                self._wire_per_event_s = est if not self._wire_per_event_s else \
-                    0.8 * self._wire_per_event_s + 0.2 * est
+            frames = max(1, math.ceil(room / link.frame_s))
+            n = len(self.fifo)
+            if n > frames * link.frame_events:  # a batch never splits a step
+                n = self.fifo.count_before(self.fifo.time_at(frames * link.frame_events - 1)
+                                           + self._dt_us)
+            batch = self.fifo.peek(n)
+            end = t_end_us if n == len(self.fifo) else self.fifo.time_at(n)
+            used = link.queue_events(batch, end, frames)
+            self.fifo.pop(used)
+            self.counters.sent += used
 
     # -- run ----------------------------------------------------------------------------
     def run(self, duration_s: float | None = None, stop: threading.Event | None = None,
@@ -399,9 +401,11 @@ class Board:
         """Run in real time until ``duration_s`` of board time or ``stop`` is set.
 
         ``on_second(board)`` is called every ``report_period_s`` of wall time (for live
-        status). At the end the FIFO drains onto the wire (at most ``drain_timeout_s``), a
-        final status is sent and the link is closed. Raises :class:`TransportError` when the
-        link goes away without ``reconnect``.
+        status), in a tick's spare time; when the board is overloaded and no tick has spare
+        time it is called anyway once a call is one period overdue, so at least every
+        ``2 * report_period_s``. At the end the FIFO drains onto the wire (at most
+        ``drain_timeout_s``), a final status is sent and the link is closed. Raises
+        :class:`TransportError` when the link goes away without ``reconnect``.
         """
         stop = stop or threading.Event()
         self.warm_up()
@@ -421,11 +425,13 @@ class Board:
                 self.clock.done()
                 if self.clock.slack_s() > HOUSEKEEPING_SLACK_S:
                     self.timeline.prepare(self.board_time_us() * 1e-6)
-                if on_second is not None and time.monotonic() >= next_report \
-                        and self.clock.slack_s() > HOUSEKEEPING_SLACK_S:
-                    # live status only in a tick's spare time (it waits for one)
-                    next_report += report_period_s
-                    on_second(self)
+                now = time.monotonic()
+                if on_second is not None and now >= next_report:
+                    # live status in a tick's spare time; an overloaded board has none
+                    overdue = now >= next_report + report_period_s
+                    if overdue or self.clock.slack_s() > HOUSEKEEPING_SLACK_S:
+                        next_report = (now if overdue else next_report) + report_period_s
+                        on_second(self)
             self._finish()
         finally:
             sys.setswitchinterval(switch_interval)
@@ -454,6 +460,10 @@ class Board:
             self.link.warm_up(self.status())
 
     def _finish(self) -> None:
+        """Drain the FIFO for at most ``drain_timeout_s``, count what is left as dropped at
+        ``shutdown``, queue the markers still due and a final status, and send the whole
+        transmit queue (it holds at most ``tx_target_s`` and one frame more, plus these
+        records: events counted as sent always reach the wire)."""
         link = self.link
         if link is None:
             return
@@ -465,14 +475,13 @@ class Board:
                 link.pump()
                 time.sleep(self.config.tick_s / 4)
             self.counters.drop("shutdown", self.fifo.clear())
-            while self._markers:  # ground truth is never left behind with the events
-                self._send_marker(link)
+            self._send_markers(link, None)  # ground truth is never left behind with events
             link.queue_record(self.status())
-            link.drain(max(0.5, end - time.monotonic()))
+            link.drain(max(0.5, end - time.monotonic(), 2 * link.backlog_s() + 0.5))
             link.wait_wire_idle(1.0)
         except TransportError as exc:
             log.warning("link lost while finishing: %s", exc)
-            self._drop_markers()
+            self._drop_markers(self._markers)
 
     def summary(self, wall_s: float = 0.0, cpu_s: float = 0.0) -> BoardSummary:
         c = self.counters

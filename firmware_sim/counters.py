@@ -15,9 +15,11 @@ Drop reasons:
   queued when it went away;
 - ``shutdown``: still queued when the board stopped and the final drain timed out.
 
-Ground-truth markers are counted apart (``markers_sent``, ``markers_dropped``): they are not
-events and never wait behind dropped events; at shutdown the ones still due are sent after
-the FIFO is cleared, so only a missing link loses one.
+Ground-truth markers are counted apart: every marker that falls due is either sent
+(``markers_sent``) or dropped (``markers_dropped``: the board was stopped, or the link was
+gone), or still waits behind the events before its time. They are not events and never wait
+behind dropped events: at shutdown the ones still due are sent after the FIFO is cleared.
+Both counts are in every status on the wire.
 """
 
 from __future__ import annotations
@@ -41,7 +43,8 @@ class BoardCounters:
     markers_sent: int = 0
     """Ground-truth markers encoded into the transmit queue."""
     markers_dropped: int = 0
-    """Ground-truth markers never sent: the link was gone (``link_down``) when they fell due."""
+    """Ground-truth markers never sent: the board was stopped or the link was gone when they
+    fell due."""
 
     @property
     def dropped(self) -> int:

@@ -66,16 +66,21 @@ class EventFifo:
             return n
         return n + int(np.searchsorted(self._buf["t"][:self._len - first], t_us, side="left"))
 
-    def pop(self, n: int) -> np.ndarray:
-        """Remove and return up to ``n`` oldest events (a new array)."""
+    def peek(self, n: int) -> np.ndarray:
+        """The up to ``n`` oldest events (a new array), left in the FIFO."""
         n = min(int(n), self._len)
         first = min(n, self.capacity - self._head)
         out = np.empty(n, dtype=EVENT_DTYPE)
         out[:first] = self._buf[self._head:self._head + first]
         if n > first:
             out[first:] = self._buf[:n - first]
-        self._head = (self._head + n) % self.capacity
-        self._len -= n
+        return out
+
+    def pop(self, n: int) -> np.ndarray:
+        """Remove and return up to ``n`` oldest events (a new array)."""
+        out = self.peek(n)
+        self._head = (self._head + len(out)) % self.capacity
+        self._len -= len(out)
         return out
 
     def clear(self) -> int:

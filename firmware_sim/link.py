@@ -2,15 +2,17 @@
 
 One :class:`BoardLink` owns a transport, the protocol encoder and decoder that fit it
 (serial framing for a serial port, the CAN layout for a CAN bus), and a small transmit queue
-of encoded data. :meth:`BoardLink.pump` hands the queue to the transport no faster than the
-wire allows (:class:`firmware_sim.pacing.WirePacer`), without ever blocking: what the OS does
-not take stays queued, like bytes in a UART's transmit buffer.
+of encoded data; events are encoded in filled frames (:meth:`BoardLink.queue_events`).
+:meth:`BoardLink.pump` hands the queue to the transport no faster than the wire allows
+(:class:`firmware_sim.pacing.WirePacer`), without ever blocking: what the OS does not take
+stays queued, like bytes in a UART's transmit buffer.
 """
 
 from __future__ import annotations
 
 import collections
 import logging
+import math
 import time
 from typing import Any
 
@@ -47,11 +49,16 @@ class BoardLink:
             self.decoder: Any = protocols.CanDecoder(board_id=board_id, fd=fd)
             self._frames: collections.deque[Any] = collections.deque()
             self._frame_s: collections.deque[float] = collections.deque()
+            self.frame_s = transport.wire_seconds([protocols.full_events_frame(board_id, fd)])
         else:
             self.encoder = protocols.SerialEncoder(**self._codec_args)
             self.decoder = protocols.SerialDecoder()
             self._bytes = bytearray()
             self._byte_s = transport.wire_seconds(b"x")
+            self.frame_s = protocols.MAX_PACKET_BYTES * self._byte_s
+        """Wire time (s) of a full events frame (packet)."""
+        self.frame_events: int = self.encoder.frame_events
+        """Most events one events frame (packet) carries."""
         self.pacer = WirePacer(allowance_s)
         self._backlog_s = 0.0
         self.units_sent = 0
@@ -90,11 +97,16 @@ class BoardLink:
         """Bytes or frames still queued."""
         return len(self._frames) if self.is_can else len(self._bytes)
 
-    def queue_events(self, events: np.ndarray, t_end_us: int) -> float:
-        """Encode ``events`` (all with ``t < t_end_us``) and queue them; return their wire s."""
-        before = self._backlog_s
-        self._queue(self.encoder.events(events, t_end_us))
-        return self._backlog_s - before
+    def queue_events(self, events: np.ndarray, t_end_us: int,
+                     max_frames: int | None = None) -> int:
+        """Encode ``events`` (all with ``t < t_end_us``) in filled frames and queue them.
+
+        With ``max_frames``, at most that many EVENTS frames (packets): returns how many of
+        ``events`` (the first ones) they carry; the rest are for a later call.
+        """
+        payload, used = self.encoder.events_upto(events, t_end_us, max_frames)
+        self._queue(payload)
+        return int(used)
 
     def queue_record(self, record: Any) -> None:
         """Encode and queue a Status, Marker or Ack record."""
@@ -110,6 +122,9 @@ class BoardLink:
     def pump(self, now: float | None = None) -> int:
         """Hand queued data to the transport within the wire budget; never blocks.
 
+        A byte or frame may start while the emulated wire is free within the pacer's
+        allowance, however long it lasts.
+
         Returns the bytes or frames sent. Raises :class:`skinhil.errors.TransportError` if
         the link has gone away.
         """
@@ -119,14 +134,10 @@ class BoardLink:
             return 0
         if self.is_can:
             batch, wire = [], 0.0
-            while self._frames and wire + self._frame_s[0] <= room + 1e-12:
+            while self._frames and wire < room - 1e-12:  # starts within the allowance
                 wire += self._frame_s[0]
                 batch.append(self._frames.popleft())
                 self._frame_s.popleft()
-            if not batch and self._frames and self.pacer.free_at <= now:
-                # a frame longer than the allowance may start once the wire is idle
-                wire = self._frame_s.popleft()
-                batch.append(self._frames.popleft())
             if not batch:
                 return 0
             n = self.transport.send(batch, timeout=0)
@@ -136,9 +147,7 @@ class BoardLink:
             used = sum(self.transport.wire_seconds([f]) for f in batch[:n]) if n < len(batch) \
                 else wire
         else:
-            n_bytes = int(room / self._byte_s)
-            if n_bytes <= 0 and self.pacer.free_at <= now:
-                n_bytes = 1  # a byte longer than the allowance may start once the wire is idle
+            n_bytes = math.ceil(room / self._byte_s - 1e-9)  # bytes starting within it
             if n_bytes <= 0 or not self._bytes:
                 return 0
             chunk = bytes(self._bytes[:n_bytes])

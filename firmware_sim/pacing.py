@@ -3,10 +3,11 @@
 A pty ignores the baud rate and a vcan has no bit timing, so the board keeps the link's
 clock itself. :class:`WirePacer` tracks when the emulated wire becomes free: sending a
 payload that lasts ``d`` seconds on the wire (``Transport.wire_seconds``: 10 bits per byte for
-8N1 serial, worst-case stuffed bits for CAN) moves that time ``d`` later. A payload may start
-only while the wire is free within ``allowance_s`` (a transmit buffer of that many seconds),
-so over any interval of length ``T`` at most ``T + allowance_s`` seconds of wire time are
-handed to the OS: bytes/s ≤ baud/10 and CAN frames at the bitrate.
+8N1 serial, worst-case stuffed bits for CAN) moves that time ``d`` later. A byte or frame may
+start only while the wire is free within ``allowance_s`` (a transmit buffer of that many
+seconds), so over any interval of length ``T`` at most ``T + allowance_s`` seconds of wire
+time and one byte or frame more are handed to the OS: bytes/s ≤ baud/10 and CAN frames at
+the bitrate.
 """
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import skinhil.kernel_cache  # noqa: F401  (numba's cache keyed on the sources, before any kernel)
 from protocols.budget import can_frame_seconds, serial_seconds
-from protocols.can_codec import CanDecoder, CanEncoder
+from protocols.can_codec import CanDecoder, CanEncoder, full_events_frame
 from protocols.constants import N_CHANNELS
 from protocols.records import (
     Ack,
@@ -30,7 +30,7 @@ from protocols.records import (
     Record,
     Status,
 )
-from protocols.serial_codec import SerialDecoder, SerialEncoder
+from protocols.serial_codec import MAX_PACKET_BYTES, SerialDecoder, SerialEncoder
 
 DBC_PATH = Path(__file__).with_name("skinhil.dbc")
 """The CAN database (DBC) of the classic CAN layout, for board id 0."""
@@ -45,6 +45,6 @@ __all__ = [
     "DBC_FD_PATH", "DBC_PATH", "N_CHANNELS", "SPEC_PATH", "Ack", "CanDecoder", "CanEncoder",
     "CanFrame",
     "Command", "CommandCode", "DecodeResult", "LinkCounters", "Marker", "MarkerPhase",
-    "NackReason", "Record", "SerialDecoder", "SerialEncoder", "Status", "can_frame_seconds",
-    "serial_seconds",
+    "MAX_PACKET_BYTES", "NackReason", "Record", "SerialDecoder", "SerialEncoder", "Status",
+    "can_frame_seconds", "full_events_frame", "serial_seconds",
 ]

@@ -2,10 +2,12 @@
 
 11-bit IDs ``class << 4 | board_id``; every board→host frame starts with a frame sequence
 counter (4 bits classic, 8 bits FD); events are 12-bit words (9-bit address, 3-bit step
-delta), 4 per classic frame and 40 per 64-byte FD frame (version 1), or, for skins of more
-than 338 channels, 24-bit words (20-bit address, 4-bit delta) in WIDE_EVENTS frames, 2 per
-classic and 20 per FD frame (version 2); stamped against SYNC frames. The compiled loops are
-in :mod:`protocols.can_kernels`.
+delta), 4 slots in every 8-byte classic frame and 40 in every 64-byte FD frame (version 1),
+or, for skins of more than 338 channels, 24-bit words (20-bit address, 4-bit delta) in
+WIDE_EVENTS frames, 2 slots per classic and 20 per FD frame (version 2); unused slots are
+empty (all ones); stamped against SYNC frames. Every frame type has one fixed length, so a
+DBC (:mod:`protocols.dbc`) describes each exactly. The compiled loops are in
+:mod:`protocols.can_kernels`.
 """
 
 from __future__ import annotations
@@ -18,11 +20,11 @@ import numpy as np
 
 from protocols import can_kernels as k
 from protocols.constants import (
-    DEFAULT_FLUSH_US,
     DEFAULT_STEP_US,
     DEFAULT_SYNC_US,
     KNOWN_VERSIONS,
     N_CHANNELS,
+    WIDE_VERSION,
 )
 from protocols.counters import StatusTracker, unwrap
 from protocols.event_input import check_step_us, event_steps
@@ -40,6 +42,14 @@ from protocols.records import (
     Record,
     Status,
 )
+from protocols.status_layout import (
+    CLASSIC_STATUS_MUX,
+    CLASSIC_WIDTHS,
+    STATUS_WORDS,
+    WORD_WIDTHS,
+    status_from_words,
+    status_words,
+)
 from protocols.versions import check_versions, refuse_version, wire_version
 from skinhil.errors import ProtocolError
 from skinhil.events import make_events
@@ -47,10 +57,9 @@ from skinhil.events import make_events
 log = logging.getLogger(__name__)
 
 _MUX0 = struct.Struct("<B6sB")
-_MUX_WIDE = struct.Struct("<BI3s")
-_MUX_ONE = struct.Struct("<BI")
+_MUX_WORDS = struct.Struct("<BI3s")
 _MARKER_CLASSIC = struct.Struct("<B5sH")
-_STATUS_FD = struct.Struct("<BB6s10I")
+_STATUS_FD = struct.Struct(f"<BB6s{len(STATUS_WORDS)}I4x")
 _MARKER_FD = struct.Struct("<BB6sI")
 _ACK = struct.Struct("<BBBBH")
 _COMMAND = struct.Struct("<BBHI")
@@ -58,16 +67,19 @@ _COMMAND = struct.Struct("<BBHI")
 STATUS_FRAMES_CLASSIC = 8
 """A classic status is this many multiplexed frames (mux 0..7)."""
 
-_CLASSIC_WIDTHS = dict.fromkeys(
-    ("events_generated", "events_sent", "events_dropped", "dropped_fifo_full",
-     "dropped_stopped", "dropped_link_down", "link_events"), 32) | {
-    "late_ticks": 24, "rx_errors": 24}
-_FD_WIDTHS = dict.fromkeys(_CLASSIC_WIDTHS, 32)
+STATUS_LEN_FD = _STATUS_FD.size
+"""Data length (bytes) of a CAN FD STATUS frame."""
 
 
 def can_id(frame_class: int, board_id: int) -> int:
     """The 11-bit arbitration ID of ``frame_class`` (1..6) for board ``board_id`` (0..15)."""
     return (frame_class << 4) | board_id
+
+
+def full_events_frame(board_id: int, fd: bool) -> CanFrame:
+    """An EVENTS frame of board ``board_id`` as long as every one is (for its wire time)."""
+    n = k.EVENTS_LEN_FD if fd else k.EVENTS_LEN_CLASSIC
+    return CanFrame(can_id(k.CLS_EVENTS, _board(board_id)), bytes(n), bool(fd))
 
 
 def _board(board_id: int) -> int:
@@ -83,26 +95,22 @@ def _flags(running: bool, version: int) -> int:
 class CanEncoder:
     """Encoder of one board's CAN frames (classic 8-byte or, with ``fd``, CAN FD 64-byte).
 
-    ``step_us`` is the event time step (µs); ``flush_us`` the longest time one events frame
-    spans (µs); ``sync_us`` the longest time between SYNC frames (µs); ``n_channels`` the
-    board's channel count, which selects the format (:attr:`version`): narrow up to 338
-    channels, wide above.
+    ``step_us`` is the event time step (µs); ``sync_us`` the longest time between SYNC
+    frames while events flow (µs); ``n_channels`` the board's channel count, which selects
+    the format (:attr:`version`): narrow up to 338 channels, wide above. Frames are filled
+    (SPEC.md §5.2): the caller decides when to flush by what it hands to :meth:`events` /
+    :meth:`events_upto`.
     """
 
     def __init__(self, board_id: int = 0, fd: bool = False, step_us: int = DEFAULT_STEP_US,
-                 flush_us: int = DEFAULT_FLUSH_US, sync_us: int = DEFAULT_SYNC_US,
-                 n_channels: int = N_CHANNELS) -> None:
+                 sync_us: int = DEFAULT_SYNC_US, n_channels: int = N_CHANNELS) -> None:
         self.board_id = _board(board_id)
         self.fd = bool(fd)
         self.step_us = check_step_us(step_us)
-        if flush_us < step_us or flush_us % step_us:
-            raise ProtocolError(f"flush_us={flush_us} must be a positive multiple of the "
-                                f"{step_us} µs step")
         max_off = k.FD_MAX_OFFSET if self.fd else k.CLASSIC_MAX_OFFSET
         if not step_us <= sync_us <= (max_off + 1) * step_us:
             raise ProtocolError(f"sync_us={sync_us} must lie in [{step_us}, "
                                 f"{(max_off + 1) * step_us}] µs for this CAN layout")
-        self.flush_us = flush_us
         self.sync_us = sync_us
         self._seq_mod = k.FD_SEQ_MOD if self.fd else k.CLASSIC_SEQ_MOD
         self._st = np.zeros(k.E_SIZE, dtype=np.int64)
@@ -115,7 +123,6 @@ class CanEncoder:
         self._cmd_seq = 0
         self._t_min_us = 0
         self._ids = [can_id(c, self.board_id) for c in range(8)]
-        self._span = flush_us // step_us
         self._sync_every = sync_us // step_us
         self._out = np.empty(0, dtype=np.uint8)
         self._lens = np.empty(0, dtype=np.int64)
@@ -126,29 +133,50 @@ class CanEncoder:
         """Events put into frames so far (the count status frames carry)."""
         return int(self._st[k.E_EVENTS])
 
+    @property
+    def frame_events(self) -> int:
+        """Most events one events frame of this stream carries (4 or 40; wide 2 or 20)."""
+        if self.version == WIDE_VERSION:
+            return k.FD_MAX_WIDE if self.fd else k.CLASSIC_MAX_WIDE
+        return k.FD_MAX_EVENTS if self.fd else k.CLASSIC_MAX_EVENTS
+
     def events(self, events: np.ndarray, t_end_us: int) -> list[CanFrame]:
         """SYNC and EVENTS frames carrying ``events`` (times in [end of last call, t_end_us)).
 
         An empty call returns a SYNC if the last one is ``sync_us`` old, else nothing.
         """
+        return self.events_upto(events, t_end_us)[0]
+
+    def events_upto(self, events: np.ndarray, t_end_us: int, max_frames: int | None = None
+                    ) -> tuple[list[CanFrame], int]:
+        """Like :meth:`events`, but at most ``max_frames`` events frames: returns the frames
+        and how many of ``events`` (the first ones) they carry.
+
+        A sender with more events than its link takes hands them all and sends whole
+        frames only; the events left are handed again with the next call (this call then
+        covers board time up to the first of them).
+        """
         steps, addr = event_steps(events, self.step_us, t_end_us, self._t_min_us,
                                   self.n_channels)
-        self._t_min_us = max(self._t_min_us, int(t_end_us))
         st, fd = self._st, self.fd
         if steps.shape[0] == 0:
+            self._t_min_us = max(self._t_min_us, int(t_end_us))
             end_step = int(t_end_us) // self.step_us
             if st[k.E_SYNC_VALID] and end_step - st[k.E_LAST_SYNC] >= self.sync_us // self.step_us:
                 out = np.zeros(16, dtype=np.uint8)
                 n = k.encode_sync(st, end_step, fd, out, 0)
-                return [CanFrame(self._ids[k.CLS_SYNC], out[:n].tobytes(), fd)]
-            return []
+                return [CanFrame(self._ids[k.CLS_SYNC], out[:n].tobytes(), fd)], 0
+            return [], 0
         n_ev = steps.shape[0]
-        if self._out.shape[0] < 20 * n_ev + 64:
-            self._out = np.empty(40 * n_ev + 64, dtype=np.uint8)
+        if self._out.shape[0] < 70 * n_ev + 80:
+            self._out = np.empty(140 * n_ev + 80, dtype=np.uint8)
             self._lens = np.empty(4 * n_ev + 4, dtype=np.int64)
             self._kinds = np.empty(4 * n_ev + 4, dtype=np.int64)
-        nf = k.encode_events(steps, addr, st, self._span, self._sync_every, fd, self._out,
-                             self._lens, self._kinds)
+        limit = n_ev if max_frames is None else max(1, int(max_frames))
+        nf, used = k.encode_events(steps, addr, st, self._sync_every, fd, limit, self._out,
+                                   self._lens, self._kinds)
+        self._t_min_us = max(self._t_min_us, int(t_end_us) if used == n_ev
+                             else int(steps[used]) * self.step_us)
         lens = self._lens[:nf].tolist()
         data = self._out[:sum(lens)].tobytes()
         ids = self._ids
@@ -157,7 +185,7 @@ class CanEncoder:
         for ln, kind in zip(lens, self._kinds[:nf].tolist(), strict=True):
             frames.append(CanFrame(ids[kind], data[start:start + ln], fd))
             start += ln
-        return frames
+        return frames, int(used)
 
     def _next_seq(self) -> int:
         seq = int(self._st[k.E_SEQ])
@@ -165,38 +193,22 @@ class CanEncoder:
         return seq
 
     def status(self, status: Status) -> list[CanFrame]:
-        """STATUS frame(s): one FD frame, or eight multiplexed classic frames."""
-        link = self.events_encoded & 0xFFFFFFFF
+        """STATUS frame(s): one 64-byte FD frame, or eight multiplexed 8-byte classic frames."""
         t = check_uint(status.t_us, 48, "status time (µs)").to_bytes(6, "little")
-        wide = [status.events_generated, status.events_sent, status.events_dropped,
-                status.dropped_fifo_full, status.dropped_stopped, status.dropped_link_down]
-        for v in wide + [status.late_ticks, status.rx_errors]:
-            if v < 0:
-                raise ProtocolError(f"status counter {v} is negative; counters count up from 0")
         ident = self._ids[k.CLS_STATUS]
+        flags = _flags(status.running, self.version)
         if self.fd:
-            check_uint(status.events_queued, 32, "events_queued")
-            vals = [status.events_generated, status.events_sent, status.events_dropped,
-                    status.events_queued, status.late_ticks, status.rx_errors,
-                    status.dropped_fifo_full, status.dropped_stopped,
-                    status.dropped_link_down, link]
-            data = _STATUS_FD.pack(self._next_seq(), _flags(status.running, self.version), t,
-                                   *(v & 0xFFFFFFFF for v in vals))
+            words = status_words(status, self.events_encoded, WORD_WIDTHS)
+            data = _STATUS_FD.pack(self._next_seq(), flags, t,
+                                   *(words[name] for name in STATUS_WORDS))
             return [CanFrame(ident, data, True)]
-        queued = check_uint(status.events_queued, 24, "events_queued (classic CAN)")
-        parts = [_MUX0.pack(0, t, _flags(status.running, self.version))]
-        for mux, (a, b) in enumerate(((status.events_generated, queued),
-                                      (status.events_sent, status.late_ticks),
-                                      (status.events_dropped, status.rx_errors)), start=1):
-            parts.append(_MUX_WIDE.pack(mux << 4, a & 0xFFFFFFFF,
-                                        (b & 0xFFFFFF).to_bytes(3, "little")))
-        for mux, a in enumerate((status.dropped_fifo_full, status.dropped_stopped,
-                                 status.dropped_link_down, link), start=4):
-            parts.append(_MUX_ONE.pack(mux << 4, a & 0xFFFFFFFF))
-        frames = []
-        for p in parts:
-            frames.append(CanFrame(ident, bytes([p[0] | self._next_seq()]) + p[1:], False))
-        return frames
+        words = status_words(status, self.events_encoded, CLASSIC_WIDTHS)
+        parts = [_MUX0.pack(0, t, flags)]
+        for mux, (a, b) in enumerate(CLASSIC_STATUS_MUX, start=1):
+            parts.append(_MUX_WORDS.pack(mux << 4, words[a],
+                                         (0 if b is None else words[b]).to_bytes(3, "little")))
+        return [CanFrame(ident, bytes([p[0] | self._next_seq()]) + p[1:], False)
+                for p in parts]
 
     def marker(self, marker: Marker) -> list[CanFrame]:
         """A MARKER frame (ground truth: stimulus id and phase at board time)."""
@@ -292,10 +304,10 @@ class CanDecoder:
                    enum_or_int(NackReason, reason))
 
     def _fd_status(self, data: bytes, decoded: int) -> Status:
-        _, flags, t, *v = _STATUS_FD.unpack(data[:48])
-        raw = Status(int.from_bytes(t, "little"), v[0], v[1], v[2], v[3], v[4], v[5],
-                     bool(flags & 1), v[6], v[7], v[8])
-        return self._status.update(raw, v[9], decoded, _FD_WIDTHS, self.counters)
+        _, flags, t, *v = _STATUS_FD.unpack(data[:STATUS_LEN_FD])
+        raw, link = status_from_words(int.from_bytes(t, "little"), bool(flags & 1),
+                                      dict(zip(STATUS_WORDS, v, strict=True)))
+        return self._status.update(raw, link, decoded, WORD_WIDTHS, self.counters)
 
     def _classic_status(self, data: bytes, decoded: int) -> Status | None:
         seq, mux = data[0] & 0xF, data[0] >> 4
@@ -310,16 +322,13 @@ class CanDecoder:
             return None
         g, self._group = self._group, []
         _, t, flags = _MUX0.unpack(g[0][:8])
-        wide = [_MUX_WIDE.unpack(d[:8]) for d in g[1:4]]
-        one = [_MUX_ONE.unpack(d[:5])[1] for d in g[4:8]]
-
-        def u24(b: bytes) -> int:
-            return int.from_bytes(b, "little")
-
-        raw = Status(int.from_bytes(t, "little"), wide[0][1], wide[1][1], wide[2][1],
-                     u24(wide[0][2]), u24(wide[1][2]), u24(wide[2][2]), bool(flags & 1),
-                     one[0], one[1], one[2])
-        return self._status.update(raw, one[3], decoded, _CLASSIC_WIDTHS, self.counters)
+        words: dict[str, int] = {}
+        for (a, b), d in zip(CLASSIC_STATUS_MUX, g[1:], strict=True):
+            _, words[a], low = _MUX_WORDS.unpack(d[:8])
+            if b is not None:
+                words[b] = int.from_bytes(low, "little")
+        raw, link = status_from_words(int.from_bytes(t, "little"), bool(flags & 1), words)
+        return self._status.update(raw, link, decoded, CLASSIC_WIDTHS, self.counters)
 
     def _sync_counters(self) -> None:
         c, lc = self._c, self.counters
@@ -332,4 +341,6 @@ class CanDecoder:
         lc.events_decoded = int(c[k.C_EVENTS])
         lc.events_untimed = int(c[k.C_UNTIMED])
         lc.syncs = int(c[k.C_SYNCS])
+        lc.command_seq_gaps = int(c[k.C_CMD_GAPS])
+        lc.commands_lost = int(c[k.C_CMD_LOST])
 

@@ -33,14 +33,20 @@ CLS_COMMAND, CLS_ACK, CLS_SYNC, CLS_STATUS, CLS_MARKER, CLS_EVENTS, CLS_WIDE = r
 """Frame classes: the 11-bit ID is ``class << 4 | board_id``. CLS_WIDE (wide events) belongs
 to a board only once it announced version 2 (a version-2 SYNC)."""
 
-FD_LENGTHS = np.array([0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64], dtype=np.int64)
-
 CLASSIC_MAX_EVENTS = 4
 FD_MAX_EVENTS = 40
 CLASSIC_MAX_WIDE = 2
 """Wide events per classic frame (2 + 2 x 3 bytes)."""
 FD_MAX_WIDE = 20
 """Wide events per 64-byte FD frame (4 + 20 x 3 bytes)."""
+EVENTS_LEN_CLASSIC = 8
+"""Data length (bytes) of every classic EVENTS / WIDE_EVENTS frame: header and slots."""
+EVENTS_LEN_FD = 64
+"""Data length (bytes) of every FD EVENTS / WIDE_EVENTS frame: header and slots."""
+EMPTY_SLOT = 0xFFF
+"""An unused 12-bit event slot (address 511): slots after a frame's last event hold it."""
+EMPTY_WIDE_SLOT = 0xFFFFFF
+"""An unused 24-bit wide slot (the all-ones address)."""
 CLASSIC_MAX_OFFSET = (1 << 9) - 1
 FD_MAX_OFFSET = (1 << 15) - 1
 EPOCH_MOD = 8
@@ -49,7 +55,11 @@ CLASSIC_SEQ_MOD = 16
 FD_SEQ_MOD = 256
 C_FOREIGN = 11
 """Counter slot of frames with another board's or an unknown ID."""
-C_SIZE = 12
+C_CMD_GAPS = 12
+"""Counter slot of jumps in a host's COMMAND sequence numbers."""
+C_CMD_LOST = 13
+"""Counter slot of COMMAND frames missing by the host's sequence numbers."""
+C_SIZE = 14
 
 # encoder state slots (same meaning as the serial encoder's)
 E_SEQ, E_EPOCH, E_SYNC_VALID, E_SYNC_BASE, E_EVENTS, E_STEP_US, E_LAST_SYNC, E_VERSION = range(8)
@@ -58,24 +68,6 @@ E_SIZE = 8
 (D_HAVE_SEQ, D_SEQ, D_SYNC_VALID, D_EPOCH, D_BASE, D_STEP_US, D_HAVE_CMD_SEQ,
  D_CMD_SEQ, D_VERSION, D_VERSIONS) = range(10)
 D_SIZE = 10
-
-
-@numba.njit(cache=True, nogil=True)
-def fd_length(n: int) -> int:
-    """Smallest CAN FD data length that holds ``n`` bytes."""
-    for v in FD_LENGTHS:
-        if v >= n:
-            return v
-    return 64
-
-
-@numba.njit(cache=True, nogil=True)
-def events_frame_len(n: int, fd: bool, wide: bool = False) -> int:
-    """Data length of an events frame holding ``n`` events (12-bit or, ``wide``, 24-bit)."""
-    bits = 24 if wide else 12
-    if fd:
-        return fd_length(4 + (bits * n + 7) // 8)
-    return 2 + (bits * n + 7) // 8
 
 
 @numba.njit(cache=True, nogil=True)
@@ -106,13 +98,30 @@ def encode_sync(st: np.ndarray, base: int, fd: bool, out: np.ndarray, pos: int) 
 
 
 @numba.njit(cache=True, nogil=True)
-def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int,
-                  sync_every: int, fd: bool, out: np.ndarray, lens: np.ndarray,
-                  kinds: np.ndarray) -> int:
-    """Write SYNC and EVENTS frame data for sorted events into ``out``.
+def _put_slot(out: np.ndarray, bitpos: int, e: int, wide: bool) -> None:
+    """Write one event slot (12-bit word, or 24-bit ``wide``) at bit ``bitpos`` of ``out``."""
+    if wide:
+        put_le(out, bitpos >> 3, e, WIDE_ITEM_BYTES)
+        return
+    p = bitpos >> 3
+    if bitpos & 7:
+        out[p] |= (e & 0xF) << 4
+        out[p + 1] = e >> 4
+    else:
+        out[p] = e & 0xFF
+        out[p + 1] = e >> 8
 
-    Frame ``f`` has ``lens[f]`` bytes and class ``kinds[f]``, consecutive in ``out``.
-    Returns the number of frames.
+
+@numba.njit(cache=True, nogil=True)
+def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, sync_every: int,
+                  fd: bool, max_frames: int, out: np.ndarray, lens: np.ndarray,
+                  kinds: np.ndarray) -> tuple[int, int]:
+    """Write SYNC and EVENTS (or WIDE_EVENTS) frame data for sorted events into ``out``.
+
+    Frames are filled: one closes only when it is full, when the next event's delta does
+    not fit, or after the last event given; its slots after the last event are empty. At
+    most ``max_frames`` events frames are written. Frame ``f`` has ``lens[f]`` bytes and
+    class ``kinds[f]``, consecutive in ``out``. Returns ``(frames written, events consumed)``.
     """
     n = steps.shape[0]
     wide = st[E_VERSION] == WIDE_VERSION
@@ -120,53 +129,45 @@ def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int
         max_n = FD_MAX_WIDE if fd else CLASSIC_MAX_WIDE
         max_d = WIDE_MAX_DELTA
         cls = CLS_WIDE
+        width = 24
+        empty = EMPTY_WIDE_SLOT
+        shift = 4
     else:
         max_n = FD_MAX_EVENTS if fd else CLASSIC_MAX_EVENTS
         max_d = 7
         cls = CLS_EVENTS
+        width = 12
+        empty = EMPTY_SLOT
+        shift = 3
     max_off = FD_MAX_OFFSET if fd else CLASSIC_MAX_OFFSET
     hdr = 4 if fd else 2
+    ln = EVENTS_LEN_FD if fd else EVENTS_LEN_CLASSIC
     pos = 0
     nf = 0
+    frames = 0
     i = 0
-    while i < n:
+    while i < n and frames < max_frames:
         base = steps[i]
         off = base - st[E_SYNC_BASE]
         if st[E_SYNC_VALID] == 0 or off > max_off or off >= sync_every:
-            ln = encode_sync(st, base, fd, out, pos)
-            lens[nf] = ln
+            sl = encode_sync(st, base, fd, out, pos)
+            lens[nf] = sl
             kinds[nf] = CLS_SYNC
             nf += 1
-            pos += ln
+            pos += sl
             off = 0
-        wend = (base // span + 1) * span
         cur = base
         cnt = 0
         bitpos = 8 * (pos + hdr)
-        while i < n and cnt < max_n:
-            s = steps[i]
-            d = s - cur
-            if s >= wend or d > max_d:
-                break
-            if wide:
-                put_le(out, bitpos >> 3, (np.int64(addr[i]) << 4) | d, WIDE_ITEM_BYTES)
-                bitpos += 24
-                cur = s
+        for _ in range(max_n):
+            if i < n and steps[i] - cur <= max_d:
+                _put_slot(out, bitpos, (np.int64(addr[i]) << shift) | (steps[i] - cur), wide)
+                cur = steps[i]
                 cnt += 1
                 i += 1
-                continue
-            e = (np.int64(addr[i]) << 3) | d
-            p = bitpos >> 3
-            if bitpos & 7:
-                out[p] |= (e & 0xF) << 4
-                out[p + 1] = e >> 4
             else:
-                out[p] = e & 0xFF
-                out[p + 1] = e >> 8
-            bitpos += 12
-            cur = s
-            cnt += 1
-            i += 1
+                _put_slot(out, bitpos, empty, wide)
+            bitpos += width
         if fd:
             h = (st[E_SEQ] & 0xFF) | (st[E_EPOCH] << 8) | (cnt << 11) | (off << 17)
             put_le(out, pos, h, 4)
@@ -175,15 +176,13 @@ def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int
             h = (st[E_SEQ] & 0xF) | (st[E_EPOCH] << 4) | (off << 7)
             put_le(out, pos, h, 2)
             st[E_SEQ] = (st[E_SEQ] + 1) % CLASSIC_SEQ_MOD
-        ln = events_frame_len(cnt, fd, wide)
-        for q in range((bitpos + 7) >> 3, pos + ln):
-            out[q] = 0
         lens[nf] = ln
         kinds[nf] = cls
         nf += 1
+        frames += 1
         pos += ln
         st[E_EVENTS] += cnt
-    return nf
+    return nf, i
 
 
 @numba.njit(cache=True, nogil=True)
@@ -196,53 +195,41 @@ def _event_at(blob: np.ndarray, o: int, k: int, hdr: int) -> np.int64:
 
 
 @numba.njit(cache=True, nogil=True)
-def _wide_count(blob: np.ndarray, o: int, ln: int, fd: bool) -> np.int64:
-    """Events in a valid wide events frame, or -1 if its layout is invalid."""
-    if fd:
-        if ln < 4:
-            return np.int64(-1)
-        n = (np.int64(blob[o + 1]) >> 3) | ((np.int64(blob[o + 2]) & 1) << 5)
-        if n < 1 or n > FD_MAX_WIDE or ln < 4 + WIDE_ITEM_BYTES * n:
-            return np.int64(-1)
-        hdr = 4
-    else:
-        if ln == 2 + WIDE_ITEM_BYTES:
-            n = np.int64(1)
-        elif ln == 2 + 2 * WIDE_ITEM_BYTES:
-            n = np.int64(2)
-        else:
-            return np.int64(-1)
-        hdr = 2
-    for k in range(n):
-        if (get_le(blob, o + hdr + WIDE_ITEM_BYTES * k, WIDE_ITEM_BYTES) >> 4) >= MAX_CHANNELS:
-            return np.int64(-1)
-    return n
+def _slot(blob: np.ndarray, o: int, k: int, hdr: int, wide: bool) -> np.int64:
+    if wide:
+        return np.int64(get_le(blob, o + hdr + WIDE_ITEM_BYTES * k, WIDE_ITEM_BYTES))
+    return _event_at(blob, o, k, hdr)
 
 
 @numba.njit(cache=True, nogil=True)
-def _events_count(blob: np.ndarray, o: int, ln: int, fd: bool) -> np.int64:
-    """Events in a valid events frame, or -1 if its layout is invalid."""
-    if fd:
-        if ln < 4:
-            return np.int64(-1)
-        n = (np.int64(blob[o + 1]) >> 3) | ((np.int64(blob[o + 2]) & 1) << 5)
-        if n < 1 or n > FD_MAX_EVENTS or ln < 4 + (12 * n + 7) // 8:
-            return np.int64(-1)
-        hdr = 4
+def _events_count(blob: np.ndarray, o: int, ln: int, fd: bool, wide: bool) -> np.int64:
+    """Events in a valid EVENTS (or ``wide`` WIDE_EVENTS) frame, or -1 if its layout is
+    invalid: the fixed length; events in the first slots (valid addresses), every slot after
+    the last event empty; FD: the count field says how many."""
+    if wide:
+        slots, empty, shift, top = (FD_MAX_WIDE if fd else CLASSIC_MAX_WIDE,
+                                    np.int64(EMPTY_WIDE_SLOT), 4, MAX_CHANNELS)
     else:
-        if ln == 4:
-            n = np.int64(1)
-        elif ln == 5:
-            n = np.int64(2)
-        elif ln == 7:
-            n = np.int64(3)
-        elif ln == 8:
-            n = np.int64(4)
-        else:
-            return np.int64(-1)
-        hdr = 2
+        slots, empty, shift, top = (FD_MAX_EVENTS if fd else CLASSIC_MAX_EVENTS,
+                                    np.int64(EMPTY_SLOT), 3, N_CHANNELS)
+    hdr = 4 if fd else 2
+    if ln != (EVENTS_LEN_FD if fd else EVENTS_LEN_CLASSIC):
+        return np.int64(-1)
+    if fd:
+        n = (np.int64(blob[o + 1]) >> 3) | ((np.int64(blob[o + 2]) & 1) << 5)
+    else:
+        n = np.int64(slots)
+        for k in range(slots):
+            if _slot(blob, o, k, hdr, wide) == empty:
+                n = np.int64(k)
+                break
+    if n < 1 or n > slots:
+        return np.int64(-1)
     for k in range(n):
-        if (_event_at(blob, o, k, hdr) >> 3) >= N_CHANNELS:
+        if (_slot(blob, o, k, hdr, wide) >> shift) >= top:
+            return np.int64(-1)
+    for k in range(n, slots):
+        if _slot(blob, o, k, hdr, wide) != empty:
             return np.int64(-1)
     return n
 
@@ -256,9 +243,8 @@ def _layout_ok(cls: int, blob: np.ndarray, o: int, ln: int, fd: bool) -> bool:
         return ln >= 8 and get_le(blob, o + 1, 2) > 0
     if cls == CLS_STATUS:
         if fd:
-            return ln >= 48
-        mux = blob[o] >> 4 if ln > 0 else 99
-        return ln >= 5 and mux <= 7 and (mux >= 4 or ln >= 8)
+            return ln >= 64
+        return ln >= 8 and (blob[o] >> 4) <= 7
     if cls == CLS_MARKER:
         if fd:
             return ln >= 12 and blob[o + 1] <= 1
@@ -305,8 +291,7 @@ def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: in
             continue
         count = np.int64(0)
         if cls == CLS_EVENTS or cls == CLS_WIDE:
-            count = _events_count(blob, fo, ln, fd) if cls == CLS_EVENTS else _wide_count(
-                blob, fo, ln, fd)
+            count = _events_count(blob, fo, ln, fd, cls == CLS_WIDE)
             if count < 0:
                 c[C_MALFORMED] += 1
                 continue
@@ -320,10 +305,13 @@ def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: in
             if gap == seq_mod - 1:
                 c[C_DUPS] += 1
                 continue
-            if gap:
+            if gap and cls == CLS_COMMAND:  # a host's counter: apart from the board's frames
+                c[C_CMD_GAPS] += 1
+                c[C_CMD_LOST] += gap
+            elif gap:
                 c[C_GAPS] += 1
                 c[C_LOST] += gap
-                if gap >= EPOCH_MOD and cls != CLS_COMMAND:
+                if gap >= EPOCH_MOD:
                     st[D_SYNC_VALID] = 0
         st[have] = 1
         st[last] = seq

@@ -24,9 +24,6 @@ WIDE_MAX_CHANNELS = (1 << WIDE_ADDR_BITS) - 1
 DEFAULT_STEP_US = 100
 """Default time step of event stamps (µs); the stream carries the actual value in SYNC."""
 
-DEFAULT_FLUSH_US = 1000
-"""Default longest time one events packet/frame spans (µs): frames leave at least every ms."""
-
 DEFAULT_SYNC_US = 50_000
 """Default longest time between two SYNCs while events flow (µs)."""
 

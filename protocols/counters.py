@@ -8,7 +8,8 @@ from typing import Any
 from protocols.records import LinkCounters, Status
 
 STATUS_COUNTERS = ("events_generated", "events_sent", "events_dropped", "late_ticks",
-                   "rx_errors", "dropped_fifo_full", "dropped_stopped", "dropped_link_down")
+                   "rx_errors", "dropped_fifo_full", "dropped_stopped", "dropped_link_down",
+                   "dropped_shutdown", "markers_sent", "markers_dropped")
 """Cumulative Status fields; on the wire modulo 2**width, unwrapped by the decoder."""
 
 

@@ -60,9 +60,13 @@ class MarkerPhase(enum.IntEnum):
 class Status:
     """Board status / heartbeat: cumulative counters at board time ``t_us`` (µs).
 
-    Invariant kept by the board: ``events_generated == events_sent + events_dropped +
-    events_queued``; ``events_dropped`` is split by reason into the ``dropped_*`` fields.
-    On the wire each counter is sent modulo 2**32 and a decoder unwraps it (see SPEC.md).
+    Invariants kept by the board in every status, the last one included:
+    ``events_generated == events_sent + events_dropped + events_queued`` and
+    ``events_dropped == dropped_fifo_full + dropped_stopped + dropped_link_down +
+    dropped_shutdown``. Ground-truth markers are counted apart: ``markers_sent`` were put on
+    the wire, ``markers_dropped`` never will be (the board was stopped or the link was gone
+    when they fell due). On the wire each counter is sent modulo 2**32 (some 2**24 on
+    classic CAN) and a decoder unwraps it (see SPEC.md).
     """
 
     t_us: int
@@ -79,6 +83,12 @@ class Status:
     """Events generated while publishing was stopped."""
     dropped_link_down: int = 0
     """Events generated while the transport was gone."""
+    dropped_shutdown: int = 0
+    """Events still queued when the board shut down and its final drain timed out."""
+    markers_sent: int = 0
+    """Ground-truth markers put on the wire."""
+    markers_dropped: int = 0
+    """Ground-truth markers not sent: due while the board was stopped or the link was gone."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -125,9 +135,10 @@ class LinkCounters:
 
     Exact (by the protocol): ``frames_ok``, ``crc_errors``, ``malformed``,
     ``bytes_discarded``, ``events_decoded``, ``events_untimed``, and ``events_lost`` as of the
-    last received SYNC. ``frames_lost`` is exact while fewer than one sequence period
+    last received status. ``frames_lost`` is exact while fewer than one sequence period
     (serial 256, CAN 16 / 256 frames) is lost in a row; ``duplicates`` counts back-to-back
-    repeats only.
+    repeats only. Host COMMAND frames seen on a CAN bus have their own sequence counter and
+    their own gap counts (``command_seq_gaps``, ``commands_lost``), apart from the board's.
     """
 
     frames_ok: int = 0
@@ -154,11 +165,15 @@ class LinkCounters:
     """Events received in frames whose time base (SYNC) was lost: not returned."""
     events_lost: int = 0
     """Events the board put on the wire that never came out of this decoder, exact as of
-    the last SYNC received (board count minus decoded count since the first SYNC)."""
+    the last status received (board count minus decoded count since the first status)."""
     events_lost_reported: int = 0
     """The board's own ``events_dropped`` from the last status received."""
     syncs: int = 0
     """SYNC (time base) frames received."""
+    command_seq_gaps: int = 0
+    """CAN: times a host's COMMAND sequence number jumped (not the board's frames)."""
+    commands_lost: int = 0
+    """CAN: COMMAND frames missing according to the host's sequence numbers."""
 
 
 @dataclasses.dataclass(frozen=True)

@@ -15,11 +15,12 @@ import numpy as np
 
 from protocols import serial_kernels as k
 from protocols.constants import (
-    DEFAULT_FLUSH_US,
+    BITMAP_BYTES,
     DEFAULT_STEP_US,
     DEFAULT_SYNC_US,
     KNOWN_VERSIONS,
     N_CHANNELS,
+    WIDE_VERSION,
 )
 from protocols.counters import StatusTracker
 from protocols.event_input import check_step_us, event_steps
@@ -37,19 +38,20 @@ from protocols.records import (
     Record,
     Status,
 )
+from protocols.status_layout import STATUS_WORDS, WORD_WIDTHS, status_from_words, status_words
 from protocols.versions import check_versions, refuse_version, wire_version
 from skinhil.errors import ProtocolError
 from skinhil.events import make_events
 
 log = logging.getLogger(__name__)
 
-_STATUS = struct.Struct("<BB6s10I")
+_STATUS = struct.Struct(f"<BB6s{len(STATUS_WORDS)}I")
 _MARKER = struct.Struct("<BB6sIB")
 _COMMAND = struct.Struct("<BBHBI")
 _ACK = struct.Struct("<BBHBB")
-_STATUS_WIDTHS = dict.fromkeys(
-    ("events_generated", "events_sent", "events_dropped", "late_ticks", "rx_errors",
-     "dropped_fifo_full", "dropped_stopped", "dropped_link_down", "link_events"), 32)
+
+MAX_PACKET_BYTES = k.MAX_WIRE + 1
+"""Wire bytes of the longest packet (COBS-encoded, delimiter included)."""
 
 
 def _u48(value: int) -> bytes:
@@ -60,22 +62,19 @@ class SerialEncoder:
     """Encoder of one direction of the serial stream (board→host events and records, or
     host→board commands). Keeps the sequence number, SYNC epoch and event count.
 
-    ``step_us`` is the event time step (µs); ``flush_us`` the longest time one events packet
-    spans (µs, a multiple of the step); ``sync_us`` the longest time between SYNCs (µs);
-    ``n_channels`` the board's channel count, which selects the format (:attr:`version`):
-    narrow up to 338 channels, wide above.
+    ``step_us`` is the event time step (µs); ``sync_us`` the longest time between SYNCs
+    while events flow (µs); ``n_channels`` the board's channel count, which selects the
+    format (:attr:`version`): narrow up to 338 channels, wide above. Packets are filled
+    (SPEC.md §3.1): the caller decides when to flush by what it hands to :meth:`events` /
+    :meth:`events_upto`.
     """
 
-    def __init__(self, step_us: int = DEFAULT_STEP_US, flush_us: int = DEFAULT_FLUSH_US,
-                 sync_us: int = DEFAULT_SYNC_US, n_channels: int = N_CHANNELS) -> None:
+    def __init__(self, step_us: int = DEFAULT_STEP_US, sync_us: int = DEFAULT_SYNC_US,
+                 n_channels: int = N_CHANNELS) -> None:
         self.step_us = check_step_us(step_us)
-        if flush_us < step_us or flush_us % step_us:
-            raise ProtocolError(f"flush_us={flush_us} must be a positive multiple of the "
-                                f"{step_us} µs step")
         if not step_us <= sync_us <= 0xFFFF * step_us:
             raise ProtocolError(f"sync_us={sync_us} must lie in [{step_us}, "
                                 f"{0xFFFF * step_us}] µs")
-        self.flush_us = flush_us
         self.sync_us = sync_us
         self.version = wire_version(n_channels)
         """Protocol version of this stream: 1 narrow, 2 wide (SPEC.md §9)."""
@@ -93,25 +92,46 @@ class SerialEncoder:
         """Events put into packets so far (the count status packets carry)."""
         return int(self._st[k.E_EVENTS])
 
+    @property
+    def frame_events(self) -> int:
+        """Most events one events packet carries (a body of bitmaps; wide: of 3-byte words)."""
+        if self.version == WIDE_VERSION:
+            return (k.MAX_BODY - 4) // k.WIDE_ITEM_BYTES
+        return (k.MAX_BODY - 4) // (2 + BITMAP_BYTES) * N_CHANNELS
+
     def events(self, events: np.ndarray, t_end_us: int) -> bytes:
         """Packets carrying ``events`` (EVENT_DTYPE, times in [end of last call, t_end_us)).
 
         An empty call returns a SYNC if the last one is ``sync_us`` old, else nothing.
         """
+        return self.events_upto(events, t_end_us)[0]
+
+    def events_upto(self, events: np.ndarray, t_end_us: int,
+                    max_packets: int | None = None) -> tuple[bytes, int]:
+        """Like :meth:`events`, but at most ``max_packets`` events packets: returns the bytes
+        and how many of ``events`` (the first ones) they carry.
+
+        A sender with more events than its link takes hands them all and sends whole
+        packets only; the events left are handed again with the next call (this call then
+        covers board time up to the first of them).
+        """
         steps, addr = event_steps(events, self.step_us, t_end_us, self._t_min_us,
                                   self.n_channels)
-        self._t_min_us = max(self._t_min_us, int(t_end_us))
         st = self._st
         if steps.shape[0] == 0:
+            self._t_min_us = max(self._t_min_us, int(t_end_us))
             end_step = int(t_end_us) // self.step_us
             if st[k.E_SYNC_VALID] and end_step - st[k.E_LAST_SYNC] >= self.sync_us // self.step_us:
                 n = k.encode_sync(st, end_step, self._pkt, self._out, 0)
-                return self._out[:n].tobytes()
-            return b""
-        out = np.empty(32 * steps.shape[0] + 64, dtype=np.uint8)
-        n = k.encode_events(steps, addr, st, self.flush_us // self.step_us,
-                            self.sync_us // self.step_us, out)
-        return out[:n].tobytes()
+                return self._out[:n].tobytes(), 0
+            return b"", 0
+        n_ev = steps.shape[0]
+        out = np.empty(32 * n_ev + 64, dtype=np.uint8)
+        limit = n_ev if max_packets is None else max(1, int(max_packets))
+        n, used = k.encode_events(steps, addr, st, self.sync_us // self.step_us, limit, out)
+        self._t_min_us = max(self._t_min_us, int(t_end_us) if used == n_ev
+                             else int(steps[used]) * self.step_us)
+        return out[:n].tobytes(), int(used)
 
     def _packet(self, body: bytes) -> bytes:
         pkt = self._pkt
@@ -123,16 +143,9 @@ class SerialEncoder:
 
     def status(self, status: Status) -> bytes:
         """A STATUS packet; counters are sent modulo 2**32 with this encoder's event count."""
-        counts = [status.events_generated, status.events_sent, status.events_dropped,
-                  status.events_queued, status.late_ticks, status.rx_errors,
-                  status.dropped_fifo_full, status.dropped_stopped, status.dropped_link_down,
-                  self.events_encoded]
-        for name, v in zip(("counter",) * 10, counts, strict=True):
-            if v < 0:
-                raise ProtocolError(f"status {name} {v} is negative; counters count up from 0")
-        check_uint(status.events_queued, 32, "events_queued")
+        words = status_words(status, self.events_encoded, WORD_WIDTHS)
         body = _STATUS.pack((k.T_STATUS << 5) | int(bool(status.running)), 0,
-                            _u48(status.t_us), *(v & 0xFFFFFFFF for v in counts))
+                            _u48(status.t_us), *(words[name] for name in STATUS_WORDS))
         return self._packet(body)
 
     def marker(self, marker: Marker) -> bytes:
@@ -204,9 +217,9 @@ class SerialDecoder:
         typ, low = body[0] >> 5, body[0] & 0x1F
         if typ == k.T_STATUS:
             _, _, t, *v = _STATUS.unpack(body)
-            raw = Status(int.from_bytes(t, "little"), v[0], v[1], v[2], v[3], v[4], v[5],
-                         bool(low & 1), v[6], v[7], v[8])
-            return self._status.update(raw, v[9], decoded, _STATUS_WIDTHS, self.counters)
+            raw, link = status_from_words(int.from_bytes(t, "little"), bool(low & 1),
+                                          dict(zip(STATUS_WORDS, v, strict=True)))
+            return self._status.update(raw, link, decoded, WORD_WIDTHS, self.counters)
         if typ == k.T_MARKER:
             _, _, t, sid, phase = _MARKER.unpack(body)
             if phase not in MarkerPhase._value2member_map_:

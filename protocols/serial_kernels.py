@@ -38,7 +38,7 @@ MAX_WIRE = MAX_BODY + 2 + (MAX_BODY + 2) // 254 + 2
 EPOCH_MOD = 32
 """SYNC epochs count modulo this; a sequence gap this long invalidates the time base."""
 
-BODY_LEN = np.array([-1, 11, 48, 13, 9, 6, -1, -1], dtype=np.int64)
+BODY_LEN = np.array([-1, 11, 60, 13, 9, 6, -1, -1], dtype=np.int64)
 """Exact body length of each fixed-size packet type (-1: variable or invalid)."""
 
 # encoder state slots
@@ -97,28 +97,30 @@ def encode_sync(st: np.ndarray, base: int, pkt: np.ndarray, out: np.ndarray, pos
 
 
 @numba.njit(cache=True, nogil=True)
-def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int,
-                  sync_every: int, out: np.ndarray) -> int:
-    """Append EVENTS packets (and the SYNCs they need) for sorted events; return the end.
+def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, sync_every: int,
+                  max_packets: int, out: np.ndarray) -> tuple[int, int]:
+    """Append EVENTS packets (and the SYNCs they need) for sorted events.
 
-    ``steps`` are event times in steps (sorted), ``addr`` their channels; a packet never
-    crosses a multiple of ``span`` steps; a SYNC is sent before a packet whose base is
-    ``sync_every`` steps or more after the last SYNC (or out of the 16-bit offset range).
-    A version-2 encoder (``st[E_VERSION]``) writes WIDE_EVENTS packets instead.
+    ``steps`` are event times in steps (sorted), ``addr`` their channels. Packets are
+    filled: one closes only when the body is full, when the next delta does not fit, or
+    after the last event given; at most ``max_packets`` events packets are written. A SYNC
+    is sent before a packet whose base is ``sync_every`` steps or more after the last SYNC
+    (or out of the 16-bit offset range). A version-2 encoder (``st[E_VERSION]``) writes
+    WIDE_EVENTS packets instead. Returns ``(end in out, events consumed)``.
     """
     if st[E_VERSION] == WIDE_VERSION:
-        return _encode_wide(steps, addr, st, span, sync_every, out)
+        return _encode_wide(steps, addr, st, sync_every, max_packets, out)
     n = steps.shape[0]
     pkt = np.empty(MAX_BODY + 8, dtype=np.uint8)
     seen = np.zeros(N_CHANNELS, dtype=np.bool_)
     pos = 0
     i = 0
-    while i < n:
+    packets = 0
+    while i < n and packets < max_packets:
         base = steps[i]
         if (st[E_SYNC_VALID] == 0 or base - st[E_SYNC_BASE] > 0xFFFF
                 or base - st[E_SYNC_BASE] >= sync_every):
             pos = encode_sync(st, base, pkt, out, pos)
-        wend = (base // span + 1) * span
         off = base - st[E_SYNC_BASE]
         pkt[0] = (T_EVENTS << 5) | st[E_EPOCH]
         pkt[1] = st[E_SEQ] & 0xFF
@@ -130,7 +132,7 @@ def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int
         while i < n:
             s = steps[i]
             d = s - cur
-            if s >= wend or d > 127:
+            if d > 127:
                 break
             j = i + 1
             while j < n and steps[j] == s:
@@ -179,23 +181,24 @@ def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int
         pos = frame_into(pkt, ln, out, pos)
         st[E_SEQ] = (st[E_SEQ] + 1) & 0xFF
         st[E_EVENTS] += count
-    return pos
+        packets += 1
+    return pos, i
 
 
 @numba.njit(cache=True, nogil=True)
-def _encode_wide(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int,
-                 sync_every: int, out: np.ndarray) -> int:
+def _encode_wide(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, sync_every: int,
+                 max_packets: int, out: np.ndarray) -> tuple[int, int]:
     """:func:`encode_events` for version 2: WIDE_EVENTS packets of 24-bit words."""
     n = steps.shape[0]
     pkt = np.empty(MAX_BODY + 8, dtype=np.uint8)
     pos = 0
     i = 0
-    while i < n:
+    packets = 0
+    while i < n and packets < max_packets:
         base = steps[i]
         if (st[E_SYNC_VALID] == 0 or base - st[E_SYNC_BASE] > 0xFFFF
                 or base - st[E_SYNC_BASE] >= sync_every):
             pos = encode_sync(st, base, pkt, out, pos)
-        wend = (base // span + 1) * span
         off = base - st[E_SYNC_BASE]
         pkt[0] = (T_WIDE << 5) | st[E_EPOCH]
         pkt[1] = st[E_SEQ] & 0xFF
@@ -207,7 +210,7 @@ def _encode_wide(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int,
         while i < n and ln + WIDE_ITEM_BYTES <= MAX_BODY:
             s = steps[i]
             d = s - cur
-            if s >= wend or d > WIDE_MAX_DELTA:
+            if d > WIDE_MAX_DELTA:
                 break
             put_le(pkt, ln, (np.int64(addr[i]) << 4) | d, WIDE_ITEM_BYTES)
             ln += WIDE_ITEM_BYTES
@@ -217,7 +220,8 @@ def _encode_wide(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, span: int,
         pos = frame_into(pkt, ln, out, pos)
         st[E_SEQ] = (st[E_SEQ] + 1) & 0xFF
         st[E_EVENTS] += count
-    return pos
+        packets += 1
+    return pos, i
 
 
 @numba.njit(cache=True, nogil=True)

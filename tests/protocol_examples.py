@@ -1,8 +1,9 @@
 """The worked examples of protocols/SPEC.md, built with the encoders (shared by the tests).
 
 Each example is a name and a function returning the wire form as text: serial examples as
-hex bytes (one packet per line), CAN examples as ``ID#DATA`` lines (candump style, ID and
-data in hex).
+hex bytes (one packet per line), CAN examples in the syntax of can-utils' ``candump`` and
+``cansend``: ``ID#DATA`` for classic frames, ``ID##<flags>DATA`` for CAN FD frames (flags
+0: no bit-rate switch), ID and data in hex.
 """
 
 from __future__ import annotations
@@ -25,7 +26,8 @@ from skinhil.events import make_events
 
 STATUS = Status(t_us=1_000_000, events_generated=20_000, events_sent=19_990, events_dropped=5,
                 events_queued=5, late_ticks=1, rx_errors=0, running=True,
-                dropped_fifo_full=3, dropped_stopped=2, dropped_link_down=0)
+                dropped_fifo_full=3, dropped_stopped=2, dropped_link_down=0,
+                dropped_shutdown=0, markers_sent=8, markers_dropped=1)
 MARKER = Marker(t_us=250_000, stimulus_id=3, phase=MarkerPhase.ONSET)
 COMMAND = Command(token=0x1234, opcode=CommandCode.SET_SNR, arg=10.0)
 ACK = Ack(token=0x1234, opcode=CommandCode.SET_STIMULUS, ok=False,
@@ -34,6 +36,8 @@ EVENTS = make_events([0, 0, 300, 900], [5, 17, 337, 2])
 """Four events: channels 5 and 17 at 0 µs, 337 at 300 µs, 2 at 900 µs."""
 BURST = make_events([200] * 25, list(range(0, 250, 10)))
 """25 channels (0, 10, ..., 240) in the step at 200 µs: sent as a bitmap."""
+ONE = make_events([0], [7])
+"""One event: channel 7 at 0 µs (a CAN frame with empty slots)."""
 WIDE_CHANNELS = 15_730
 """A 32x32 skin's channel count: its stream uses the wide format (version 2)."""
 WIDE_EVENTS = make_events([0, 0, 300, 900], [5, 15_000, 337, 12_810])
@@ -50,7 +54,8 @@ def _split_packets(data: bytes) -> str:
 
 
 def _frames(frames: list[CanFrame]) -> str:
-    return "\n".join(f"{f.arbitration_id:03X}#{f.data.hex().upper()}" for f in frames)
+    return "\n".join(f"{f.arbitration_id:03X}#{'#0' if f.is_fd else ''}{f.data.hex().upper()}"
+                     for f in frames)
 
 
 def _serial(fn: Callable[[SerialEncoder], bytes]) -> Callable[[], str]:
@@ -73,6 +78,7 @@ EXAMPLES: dict[str, Callable[[], str]] = {
 }
 for _fd, _tag in ((False, "can"), (True, "canfd")):
     EXAMPLES[f"{_tag}-events"] = _can(_fd, lambda e: e.events(EVENTS, 1000))
+    EXAMPLES[f"{_tag}-one-event"] = _can(_fd, lambda e: e.events(ONE, 100))
     EXAMPLES[f"{_tag}-status"] = _can(_fd, lambda e: e.status(STATUS))
     EXAMPLES[f"{_tag}-marker"] = _can(_fd, lambda e: e.marker(MARKER))
     EXAMPLES[f"{_tag}-command"] = _can(_fd, lambda e: e.command(COMMAND))

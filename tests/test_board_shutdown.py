@@ -14,7 +14,7 @@ from skinhil.transports import SerialTransport
 
 def test_markers_survive_a_shutdown_that_drops_queued_events(pty_pair) -> None:
     duration_s = 1.0
-    config = BoardConfig(snr_db=20.0, seed=3, rest_s=0.05, drain_timeout_s=0.2)
+    config = BoardConfig(snr_db=-10.0, seed=3, rest_s=0.05, drain_timeout_s=0.2)
     peer = PtyPeer(pty_pair.master)
     try:
         board = Board(config, lambda: SerialTransport(pty_pair.path, baud=9600))

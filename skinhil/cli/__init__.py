@@ -23,6 +23,7 @@ SUBCOMMANDS: tuple[str, ...] = (
     "train",
     "simulate",
     "reproduce",
+    "dbc",
 )
 
 

@@ -99,6 +99,7 @@ def _live(board: Board) -> dict[str, Any]:
             "dropped_by": dict(c.dropped_by), "queued": len(board.fifo),
             "deadline_misses": board.clock.deadline_misses,
             "lateness_p99_ms": round(lat["p99"], 4), "lateness_max_ms": round(lat["max"], 4),
+            "markers_sent": c.markers_sent, "markers_dropped": c.markers_dropped,
             "running": board.running, "link_up": board.link is not None}
 
 
@@ -112,7 +113,8 @@ def _summary_text(s: BoardSummary) -> str:
             f"p99 {s.lateness_ms['p99']:.3f} ms max {s.lateness_ms['max']:.3f} ms; "
             f"CPU {100 * s.cpu_s / max(s.wall_s, 1e-9):.1f}% of one core; "
             f"{s.commands} commands ({s.nacks} NACK), {s.link_losses} link losses; "
-            f"{s.markers_sent} markers sent, {s.markers_dropped} lost with the link")
+            f"{s.markers_sent} markers sent, {s.markers_dropped} not sent (board stopped or "
+            "link down)")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,0 +1,158 @@
+"""The CAN databases (DBC) of the CAN layouts (SPEC.md §5), generated for any board id.
+
+One generator, :func:`dbc_text`, writes the DBC of board ``board_id`` (0..15) for classic
+CAN or CAN FD; ``protocols/skinhil.dbc`` and ``protocols/skinhil_fd.dbc`` are its output for
+board 0 (``skinhil dbc --board-id N [--fd] --out FILE`` writes the others). Every frame type
+has one fixed length on the wire, so cantools, SavvyCAN and candump users decode every frame
+with default settings. Event slots after a frame's last event hold the all-ones address
+(511; wide: 1048575), which the DBC names ``NONE`` (an FD frame also says how many events it
+holds in ``Count``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from protocols import can_kernels as k
+from protocols.can_codec import STATUS_LEN_FD, can_id
+from protocols.constants import PROTOCOL_VERSION
+from protocols.records import CommandCode, MarkerPhase, NackReason
+from protocols.status_layout import CLASSIC_STATUS_MUX, STATUS_WORDS
+from skinhil.errors import ProtocolError
+
+BOARD, HOST = "BOARD", "HOST"
+_FD_FORMAT = 14
+"""``VFrameFormat`` value of a standard-ID CAN FD frame."""
+
+
+@dataclass(frozen=True)
+class Signal:
+    """A little-endian unsigned field: ``bits`` bits from bit ``start`` of the data."""
+
+    name: str
+    start: int
+    bits: int
+    unit: str = ""
+    mux: str = ""
+    """``"M"`` for the multiplexer, ``"m<n>"`` for a field of mux value n, else ``""``."""
+    choices: tuple[tuple[int, str], ...] = ()
+
+
+@dataclass(frozen=True)
+class Message:
+    """One frame type: class (the ID is ``class << 4 | board``), name, length, sender."""
+
+    frame_class: int
+    name: str
+    length: int
+    sender: str
+    signals: tuple[Signal, ...]
+
+
+def _camel(name: str) -> str:
+    return "".join(part.capitalize() for part in name.split("_"))
+
+
+def _enum_choices(enum: type[CommandCode] | type[NackReason] | type[MarkerPhase]
+                  ) -> tuple[tuple[int, str], ...]:
+    return tuple(sorted({int(m): m.name for m in enum}.items()))
+
+
+def _event_slots(header_bits: int, slots: int, wide: bool = False) -> tuple[Signal, ...]:
+    """``Ev<i>`` (12-bit) or ``WEv<i>`` (24-bit, ``wide``) slots: delta, then address."""
+    name, width, delta, empty = (("WEv", 24, 4, k.EMPTY_WIDE_SLOT) if wide
+                                 else ("Ev", 12, 3, k.EMPTY_SLOT))
+    out: list[Signal] = []
+    for i in range(slots):
+        at = header_bits + width * i
+        out += [Signal(f"{name}{i}Delta", at, delta),
+                Signal(f"{name}{i}Addr", at + delta, width - delta,
+                       choices=((empty >> delta, "NONE"),))]
+    return tuple(out)
+
+
+def messages(fd: bool) -> tuple[Message, ...]:
+    """Every frame type of the classic (``fd`` False) or CAN FD layout, as SPEC.md §5 and
+    (SKIN_WIDE_EVENTS, sent only by boards of more than 338 channels) §9.2."""
+    seq = Signal("Seq", 0, 8 if fd else 4)
+    command = Message(k.CLS_COMMAND, "SKIN_COMMAND", 8, HOST, (
+        seq, Signal("Opcode", 8, 8, choices=_enum_choices(CommandCode)),
+        Signal("Token", 16, 16), Signal("Arg", 32, 32)))
+    ack = Message(k.CLS_ACK, "SKIN_ACK", 6, BOARD, (
+        seq, Signal("Ok", 8, 1), Signal("Opcode", 16, 8, choices=_enum_choices(CommandCode)),
+        Signal("Reason", 24, 8, choices=_enum_choices(NackReason)), Signal("Token", 32, 16)))
+    phase_choices = _enum_choices(MarkerPhase)
+    if fd:
+        sync = Message(k.CLS_SYNC, "SKIN_SYNC", 12, BOARD, (
+            seq, Signal("Epoch", 8, 3), Signal("Reserved", 11, 1), Signal("Version", 12, 4),
+            Signal("StepUs", 16, 16, "us"), Signal("BaseSteps", 32, 48)))
+        status = Message(k.CLS_STATUS, "SKIN_STATUS", STATUS_LEN_FD, BOARD, (
+            seq, Signal("Running", 8, 1), Signal("Version", 12, 4),
+            Signal("TimeUs", 16, 48, "us"),
+            *(Signal(_camel(name), 64 + 32 * i, 32) for i, name in enumerate(STATUS_WORDS))))
+        marker = Message(k.CLS_MARKER, "SKIN_MARKER", 12, BOARD, (
+            seq, Signal("Phase", 8, 8, choices=phase_choices), Signal("TimeUs", 16, 48, "us"),
+            Signal("StimulusId", 64, 32)))
+        events = Message(k.CLS_EVENTS, "SKIN_EVENTS", k.EVENTS_LEN_FD, BOARD, (
+            seq, Signal("Epoch", 8, 3), Signal("Count", 11, 6), Signal("Offset", 17, 15),
+            *_event_slots(32, k.FD_MAX_EVENTS)))
+        wide = Message(k.CLS_WIDE, "SKIN_WIDE_EVENTS", k.EVENTS_LEN_FD, BOARD, (
+            seq, Signal("Epoch", 8, 3), Signal("Count", 11, 6), Signal("Offset", 17, 15),
+            *_event_slots(32, k.FD_MAX_WIDE, wide=True)))
+    else:
+        sync = Message(k.CLS_SYNC, "SKIN_SYNC", 8, BOARD, (
+            seq, Signal("Epoch", 4, 3), Signal("Reserved", 7, 1),
+            Signal("StepUs", 8, 16, "us"), Signal("BaseSteps", 24, 40)))
+        muxed = [Signal("TimeUs", 8, 48, "us", "m0"), Signal("Running", 56, 1, mux="m0"),
+                 Signal("Version", 60, 4, mux="m0")]
+        for mux, (u32, u24) in enumerate(CLASSIC_STATUS_MUX, start=1):
+            muxed.append(Signal(_camel(u32), 8, 32, mux=f"m{mux}"))
+            if u24 is not None:
+                muxed.append(Signal(_camel(u24), 40, 24, mux=f"m{mux}"))
+        status = Message(k.CLS_STATUS, "SKIN_STATUS", 8, BOARD, (
+            seq, Signal("Mux", 4, 4, mux="M"), *muxed))
+        marker = Message(k.CLS_MARKER, "SKIN_MARKER", 8, BOARD, (
+            seq, Signal("Phase", 4, 4, choices=phase_choices), Signal("TimeUs", 8, 40, "us"),
+            Signal("StimulusId", 48, 16)))
+        events = Message(k.CLS_EVENTS, "SKIN_EVENTS", k.EVENTS_LEN_CLASSIC, BOARD, (
+            seq, Signal("Epoch", 4, 3), Signal("Offset", 7, 9),
+            *_event_slots(16, k.CLASSIC_MAX_EVENTS)))
+        wide = Message(k.CLS_WIDE, "SKIN_WIDE_EVENTS", k.EVENTS_LEN_CLASSIC, BOARD, (
+            seq, Signal("Epoch", 4, 3), Signal("Offset", 7, 9),
+            *_event_slots(16, k.CLASSIC_MAX_WIDE, wide=True)))
+    return command, ack, sync, status, marker, events, wide
+
+
+def dbc_text(board_id: int = 0, fd: bool = False) -> str:
+    """The DBC of board ``board_id`` (0..15), classic CAN or (``fd``) CAN FD."""
+    if not 0 <= int(board_id) <= 15:
+        raise ProtocolError(f"CAN board id {board_id} is outside 0..15: give 0..15")
+    layout = "CAN FD" if fd else "classic CAN"
+    lines = [f'VERSION "skinhil protocol {PROTOCOL_VERSION} ({layout}, board {board_id})"', "",
+             "NS_ :", "", "BS_:", "", f"BU_: {BOARD} {HOST}", ""]
+    values: list[str] = []
+    msgs = messages(fd)
+    for m in msgs:
+        ident = can_id(m.frame_class, board_id)
+        lines.append(f"BO_ {ident} {m.name}: {m.length} {m.sender}")
+        receiver = HOST if m.sender == BOARD else BOARD
+        for s in m.signals:
+            mux = f" {s.mux}" if s.mux else ""
+            lines.append(f" SG_ {s.name}{mux} : {s.start}|{s.bits}@1+ (1,0) "
+                         f'[0|{(1 << s.bits) - 1}] "{s.unit}" {receiver}')
+            if s.choices:
+                pairs = " ".join(f'{v} "{n}"' for v, n in s.choices)
+                values.append(f"VAL_ {ident} {s.name} {pairs} ;")
+        lines.append("")
+    lines.append(f'CM_ "skinhil wire protocol version {PROTOCOL_VERSION}, {layout}, board id '
+                 f"{board_id} (ID = class << 4 | board id). Every frame type has the length "
+                 "given here. Event slots after the last event hold address 511 (NONE). "
+                 'Layout: protocols/SPEC.md";')
+    if fd:
+        lines.append('BA_DEF_ BO_ "VFrameFormat" ENUM "StandardCAN","ExtendedCAN",'
+                     + ",".join(['"reserved"'] * 12) + ',"StandardCAN_FD","ExtendedCAN_FD";')
+        lines.append('BA_DEF_DEF_ "VFrameFormat" "StandardCAN_FD";')
+        lines += [f'BA_ "VFrameFormat" BO_ {can_id(m.frame_class, board_id)} {_FD_FORMAT};'
+                  for m in msgs]
+    lines += values
+    return "\n".join(lines) + "\n"
