@@ -187,3 +187,13 @@ def test_cantools_decodes_a_live_board(board_id: int, fd: bool) -> None:
     assert {(f.arbitration_id, len(f.data)) for f in frames} == {
         (m.frame_id, m.length) for m in reader.db.messages if m.name in NAMES.values()}
     assert np.all(np.diff([t for t, _ in want]) >= 0)
+
+
+def test_dbc_command_writes_the_generator_output(tmp_path, capsys) -> None:
+    from skinhil.cli import main
+
+    out = tmp_path / "board9_fd.dbc"
+    assert main(["dbc", "--board-id", "9", "--fd", "--out", str(out)]) == 0
+    assert out.read_text(encoding="ascii") == dbc_text(9, fd=True)
+    assert main(["dbc", "--board-id", "16"]) == 2
+    assert "board id from 0 to 15" in capsys.readouterr().err

@@ -201,3 +201,21 @@ def test_empty_calls_emit_sync_only_when_due() -> None:
     dec = SerialDecoder()
     dec.feed(sync)
     assert dec.counters.syncs == 1
+
+
+@pytest.mark.parametrize("fd", [False, True])
+def test_host_command_gaps_are_not_board_frame_loss(fd: bool) -> None:
+    """On a shared CAN bus a decoder sees hosts' COMMAND frames too: their sequence numbers
+    (two hosts, each its own counter) jump, and that is counted apart from the board's."""
+    board = CanEncoder(board_id=3, fd=fd)
+    hosts = [CanEncoder(board_id=3, fd=fd), CanEncoder(board_id=3, fd=fd)]
+    frames = board.events(make_events([0, 100], [1, 2]), 1000)
+    for i in range(6):  # host 0 sends three, then host 1 three, interleaved with board frames
+        frames += hosts[i // 3].command(Command(i, CommandCode.PING))
+        frames += board.ack(Ack(i, CommandCode.PING, True))
+    dec = CanDecoder(board_id=3, fd=fd)
+    res = dec.feed(frames)
+    assert len(res.events) == 2 and len([r for r in res.records if isinstance(r, Command)]) == 6
+    assert dec.counters.frames_lost == 0 and dec.counters.seq_gaps == 0
+    assert dec.counters.command_seq_gaps == 1  # host 1 restarts at 0 after host 0's 2
+    assert dec.counters.commands_lost == (256 if fd else 16) - 3
