@@ -9,13 +9,17 @@ records, acknowledgements and link errors. Corrupted or lost data never stop it:
 counts them, and a link that goes away is reported and, with ``reopen``, reopened.
 
 Board time is followed as the newest event's time (the stream is in time order), else the
-newest marker time (or status time, when the board had no events queued) or the host
-clock's estimate of board time from those items, minus ``guard_s``.
+newest marker time (or status time, when the board had no events queued) minus
+``guard_s``; only while the stream has been silent for ``guard_s`` of host time does the
+host clock's estimate of board time from those items (minus ``guard_s``) move it on, so
+items that arrive late because the board or the link paused for a moment (a loaded host,
+user-mode Linux) are not taken as already complete.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import threading
 import time
 from collections.abc import Callable, Iterable
@@ -136,6 +140,8 @@ class Receiver:
         self._guard_us = int(round(self.params.guard_s * 1e6))
         self._last_event_us = -1
         self._last_record_us = -1
+        self._last_item_host_s = -math.inf
+        """Host time (s) of the newest board-stamped item in stream order."""
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.link_down = False
@@ -154,6 +160,7 @@ class Receiver:
                 self.classifier.push(ev)
                 self._last_event_us = max(self._last_event_us, int(ev["t"][-1]))
                 self.clock.observe(int(ev["t"][-1]), h)
+                self._last_item_host_s = h
                 for listener in self.listeners:
                     listener.on_events(ev, h)
             for rec in result.records:
@@ -165,6 +172,7 @@ class Receiver:
         if t is not None and _in_stream_order(rec):
             self._last_record_us = max(self._last_record_us, int(t))
             self.clock.observe(int(t), host_s)
+            self._last_item_host_s = host_s
         if isinstance(rec, protocols.Marker):
             if _is_onset(rec):
                 self.scoreboard.add_marker(int(rec.t_us), int(rec.stimulus_id))
@@ -184,9 +192,10 @@ class Receiver:
         known = self._last_event_us
         if self._last_record_us >= 0:
             known = max(known, self._last_record_us - guard)
-        now = self.clock.board_now_us(host_s)
-        if now is not None:
-            known = max(known, now - guard)
+        h = time.monotonic() if host_s is None else host_s
+        now = self.clock.board_now_us(h)
+        if now is not None and h - self._last_item_host_s >= guard * 1e-6:
+            known = max(known, now - guard)  # a silent stream still advances
         return known
 
     def _advance(self, host_s: float) -> list[ScoredDecision]:
