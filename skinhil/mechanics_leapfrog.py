@@ -22,7 +22,7 @@ order); the extrapolated velocity in the damping term is exact to O(h²), so the
 second order overall: the global error of the spring forces falls 4x per halving of ``dt``
 (tests/test_core_leapfrog.py measures the order and the error against ``solve_ivp``). At the
 default parameters and dt = 0.1 ms (fastest mode ω·dt ≈ 0.2) the largest error of the spring
-forces under paper stimulus A is a few 0.1 % of their peak.
+forces under paper stimulus A is 0.13 % of their peak at 6x6 and 16x16.
 
 Explicit, so the step must resolve the fastest mode. For one mode ``q'' + γ q' + ω² q = f/m``
 the scheme is stable for ``γ·h + (ω·h)²/4 < 1`` (the undamped limit ω·h < 2 of Störmer–Verlet,

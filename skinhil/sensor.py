@@ -24,17 +24,18 @@ import numpy as np
 from skinhil.errors import ConfigError
 from skinhil.events import EVENT_DTYPE
 from skinhil.geometry import format_size
-from skinhil.mechanics_leapfrog import LeapfrogMechanics, leapfrog_kernel
+from skinhil.mechanics_leapfrog import LeapfrogMechanics, LeapfrogOperands, leapfrog_kernel
 from skinhil.mechanics_linear import LinearMechanics, _advance_modal_kernel
 from skinhil.neurons import (
     IzhikevichParams,
+    KernelOperands,
     NeuronPopulation,
     NoiseParams,
     _izhikevich_kernel,
     raster_to_events,
 )
 from skinhil.skin import SkinModel
-from skinhil.stimuli import Schedule, add_schedule_forces
+from skinhil.stimuli import Schedule, ScheduleOperands, add_schedule_forces
 
 
 @numba.njit(cache=True)
@@ -79,8 +80,8 @@ def _scheduled_modal_sensor_kernel(
 
 @numba.njit(cache=True)
 def _leapfrog_sensor_kernel(forces: np.ndarray, springs: np.ndarray, spikes: np.ndarray,
-                            dt_s: float, substeps: int, mechanics: tuple,  # type: ignore[type-arg]
-                            neurons: tuple) -> None:  # type: ignore[type-arg] # pragma: no cover
+                            dt_s: float, substeps: int, mechanics: LeapfrogOperands,
+                            neurons: KernelOperands) -> None:  # pragma: no cover - compiled
     # forces (n, n_masses, 3) N → springs (n, n_springs) N → spikes over steps of dt_s (s);
     # mechanics is LeapfrogMechanics.operands, neurons NeuronPopulation.kernel_operands()
     leapfrog_kernel(forces, springs, dt_s, substeps, *mechanics)
@@ -92,8 +93,8 @@ def _leapfrog_sensor_kernel(forces: np.ndarray, springs: np.ndarray, spikes: np.
 @numba.njit(cache=True)
 def _scheduled_leapfrog_sensor_kernel(
         first_step: int, dt_s: float, t_offset_s: float, n_masses: int, springs: np.ndarray,
-        spikes: np.ndarray, schedule: tuple, substeps: int,  # type: ignore[type-arg]
-        mechanics: tuple, neurons: tuple) -> None:  # type: ignore[type-arg] # pragma: no cover
+        spikes: np.ndarray, schedule: ScheduleOperands, substeps: int,
+        mechanics: LeapfrogOperands, neurons: KernelOperands) -> None:  # pragma: no cover
     # the schedule's forces (N) for steps first_step.. of dt_s (s), schedule time 0 at
     # t_offset_s (s), then _leapfrog_sensor_kernel; schedule is Schedule.kernel_operands
     n_steps = springs.shape[0]
