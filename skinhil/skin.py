@@ -14,9 +14,18 @@ Defaults and their reasoning (the paper gives the structure, not SI values):
   forces ring briefly after onset and decay within ~10 ms after the indentation.
 - ``tension_n = 0``: no baseline tension by default (the paper's K has none); set it to give
   in-plane springs transverse stiffness ``T/L``.
-- ``mechanics = "linear"``: the paper's stiffness-matrix model, so the reproduction starts
-  from the paper's own equations; exact at any step and the cheapest. ``"geometric"`` keeps
-  true spring lengths for large deformations; the reproduction reports both.
+- ``mechanics = "linear"``, chosen from the reproduction and the board's real-time budget.
+  Evidence (``skinhil reproduce``, docs/figures/REPORT.md): ``"geometric"`` reproduces 4 of
+  the paper's 7 checked claims (1E-F, 3F, 4F, 4G), ``"linear"`` 1 (4F); what linear misses
+  needs large-deformation coupling (a normal push stretches the in-plane springs only
+  through it), which the small-displacement stiffness matrix drops. Budget: the board steps
+  the skin in real time on one core beside its encoder; linear runs at 25x real time
+  (exact ZOH at any step; a leapfrog of O(springs) per step for large skins), geometric at
+  6x on a 6x6 skin (RK4, stable only below ~0.14 ms at these parameters), so the skin's share
+  of a core would rise from ~4 % to ~16 % and the board past its 25 % target, with 4x the
+  CPU time to train a decoder on a simulated stream. The product keeps linear; the
+  reproduction runs both, and ``--mechanics geometric`` (``simulate``, ``serve``) gives the
+  mechanics that reproduces the paper, at 6x real time.
 - ``size = (6, 6)``: the paper's top layer; any ``rows x cols`` >= 3x3 builds the same
   pyramid (:mod:`skinhil.geometry`).
 - ``linear_stepper = "auto"``: how the linear mechanics is stepped, one rule: the exact ZOH

@@ -67,8 +67,9 @@ def information_phases(m: InformationMeasures) -> Verdict:
             reason = "a phase has no variance at all (silent), so the measures are undefined"
         else:
             reason = ("during indentation the mesh follows the force quasi-statically, one "
-                      "pattern per input; after release it rings freely in its own modes, "
-                      "which spreads the variance over more components")
+                      "spatial pattern per input; after release it rings freely in its own "
+                      "modes, which spreads the variance over more components; only "
+                      "large-deformation coupling adds components during indentation")
     return Verdict("1E-F", claim, ok, evidence, reason)
 
 
@@ -112,14 +113,31 @@ def _where_max(sweep: SweepResult, name: str) -> str:
 
 
 def _tercile_claim(sweep: SweepResult, name: str, key: str, claim: str,
-                   want: tuple[str, str], reason: str) -> Verdict:
+                   want: tuple[str, str]) -> Verdict:
     best = best_tercile(sweep.at(name))
     means = tercile_means(sweep.at(name))
     evidence = (f"highest block mean in K {best[0]}, C {best[1]} ({np.nanmax(means):.3g}); "
                 if best else "the grid is too small for terciles (needs 3 x 3); ")
     evidence += _where_max(sweep, name)
     ok = best == want
-    return Verdict(key, claim, ok, evidence, "" if ok else reason)
+    return Verdict(key, claim, ok, evidence, "" if ok else _tercile_reason(best, want))
+
+
+def _tercile_reason(best: tuple[str, str] | None, want: tuple[str, str]) -> str:
+    """Why a ratio peaks elsewhere, from where it peaks (the ratios are ind/post, so they grow
+    where the free response after release is weakest against the forced one)."""
+    if best is None:
+        return "the grid is too small for terciles"
+    parts = []
+    if best[1] != want[1]:
+        parts.append("it keeps growing with damping up to the grid's edge: heavier damping "
+                     "cuts the free ringing after release (the ratio's denominator) more "
+                     "than the forced response, with no turn-over at intermediate damping "
+                     "within a decade of the default" if best[1] == "high" else
+                     f"it is largest at {best[1]} damping")
+    if best[0] != want[0]:
+        parts.append(f"along the stiffness it peaks at {best[0]} K, not {want[0]} K")
+    return "; ".join(parts)
 
 
 def extreme_counts(shape: tuple[int, ...]) -> tuple[int, int]:
@@ -154,9 +172,9 @@ def area_flat_except_extremes(sweep: SweepResult) -> Verdict:
                 f"{share:.2f}); largest deviation from the median ({np.nanmedian(v):.3g}) "
                 f"{v[i, j]:.3g} at K {sweep.spec.stiffness_n_per_m[i]:.3g}, C "
                 f"{sweep.spec.damping_n_s_per_m[j]:.3g}")
-    reason = "" if ok else ("the area also changes away from the extremes: the balance of "
-                            "forced and free (ringing) response shifts with K and C across "
-                            "the grid")
+    reason = "" if ok else ("the area changes away from the extremes too: the free ringing "
+                            "after release, which shapes the post-indentation curve, depends on "
+                            "K and C across the whole grid, not only where it is underdamped")
     return Verdict("2A", claim, ok, evidence, reason)
 
 
@@ -164,9 +182,7 @@ def npc_ratio_region(sweep: SweepResult) -> Verdict:
     """2B: the nPC ratio is highest at intermediate damping and high compliance (low K)."""
     return _tercile_claim(
         sweep, "npc_ratio", "2B", "the nPC ratio is highest at intermediate damping and high "
-        "compliance (low K)", ("low", "mid"),
-        "the nPC ratio peaks elsewhere: where the free ringing after release is weakest "
-        "relative to the forced response")
+        "compliance (low K)", ("low", "mid"))
 
 
 def sir_ratio_region(sweep: SweepResult) -> Verdict:
@@ -174,14 +190,19 @@ def sir_ratio_region(sweep: SweepResult) -> Verdict:
     intermediate damping."""
     return _tercile_claim(
         sweep, "sir_ratio", "2C", "the signal-information ratio is highest at low compliance "
-        "(high K) and intermediate damping", ("high", "mid"),
-        "the SIR ratio peaks elsewhere: it grows where the post-indentation response dies "
-        "out fastest relative to the forced one")
+        "(high K) and intermediate damping", ("high", "mid"))
 
 
-def inputs_2_3_most_similar(similarity: np.ndarray, names: Sequence[str]) -> Verdict:
+WEAK_LOAD_RATIO = 0.25
+"""3F's reason: input 2 'barely loads' M15's springs if its RMS force there is below this
+fraction of input 3's."""
+
+
+def inputs_2_3_most_similar(similarity: np.ndarray, names: Sequence[str],
+                            rms_n: Sequence[float] | None = None) -> Verdict:
     """3F: inputs 2 and 3 (same push, same mass, different angle) are the most similar pair
-    of distinct inputs (strictly: a tie is not a reproduction)."""
+    of distinct inputs (strictly: a tie is not a reproduction). ``rms_n``: each input's RMS
+    force (N) at the sensors compared, for the evidence and the reason."""
     claim = "inputs 2 and 3 are the most similar pair"
     n = similarity.shape[0]
     pairs = [(similarity[i, j], i, j) for i in range(n) for j in range(i + 1, n)
@@ -191,15 +212,23 @@ def inputs_2_3_most_similar(similarity: np.ndarray, names: Sequence[str]) -> Ver
         return Verdict("3F", claim, False, "no defined similarity", "every input is silent")
     top = pairs[0][0]
     ties = [(i, j) for v, i, j in pairs if v == top]
-    s23 = similarity[1, 2]
     ok = ties == [(1, 2)]
     label = {i: f"{i + 1} ({names[i]})" for i in range(n)}
-    evidence = (f"index of inputs 2-3 {s23:.3f}; highest {top:.3f} for "
+    evidence = (f"index of inputs 2-3 {similarity[1, 2]:.3f}; highest {top:.3f} for "
                 f"{', '.join(f'{label[i]}-{label[j]}' for i, j in ties)}; next "
                 + ", ".join(f"{label[i]}-{label[j]} {v:.3f}" for v, i, j in pairs[1:3]))
-    reason = "" if ok else ("at M15 the response to a push on its neighbour M16 is dominated "
-                            "by how that push loads the shared springs, which another input "
-                            "matches more closely than the tilt of the same push")
+    weak = False
+    if rms_n is not None:
+        ratio = rms_n[1] / rms_n[2] if rms_n[2] > 0 else math.nan
+        weak = bool(ratio < WEAK_LOAD_RATIO)
+        evidence += f"; RMS force at the sensors, input 2 / input 3: {ratio:.2f}"
+    reason = ""
+    if not ok:
+        reason = ("input 2, the perpendicular push, barely loads M15's springs: without "
+                  "large-deformation coupling a normal push hardly stretches the in-plane "
+                  "springs, so input 3's response there is mostly its tangential part"
+                  if weak else "another pair of inputs loads M15's springs in a more similar "
+                  "pattern than the tilt of one push changes it")
     return Verdict("3F", claim, ok, evidence, reason)
 
 
@@ -226,7 +255,8 @@ def decoding_at_operating_point(snr_db: float, decoding: dict[str, CVResult], pa
     reason = "" if ok else (
         "the sensor's spikes carry nearly all of the direction even at this noise level"
         if acc > WELL_BELOW_FULL else
-        "the noise hides the sensor's evoked spikes, or the sensor sees the 9 forces alike")
+        "the sensor fires only when stretched: the conditions that compress it are silent "
+        "and confused with each other")
     return Verdict("4F", claim, ok, evidence, reason)
 
 
@@ -248,6 +278,8 @@ def decoding_rises_with_snr(snrs: Sequence[float], decoding: dict[str, list[CVRe
                      f"(rho {rho:.2f}{', rising' if rising else ''})")
     ok, _ = _rising(snrs, decoding[paper_set])
     evidence = f"over {', '.join(f'{s:g}' for s in snrs)} dB: " + "; ".join(parts)
-    reason = "" if ok else ("accuracy is flat: the noise is small against the evoked drive "
-                            "at every SNR of the range, or the sensor's view limits it")
+    reason = "" if ok else ("accuracy is flat: the sensor fires only when stretched, so the "
+                            "conditions that compress it stay silent and cannot be told apart "
+                            "at any SNR, and over this SNR range the noise changes few of the "
+                            "evoked spikes")
     return Verdict("4G", claim, ok, evidence, reason)

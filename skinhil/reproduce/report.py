@@ -44,7 +44,8 @@ def verdicts(r: MechanicsResults) -> list[tuple[claims.Verdict, str]]:
         (claims.area_flat_except_extremes(r.sweep), "fig2ABC_sweeps.png"),
         (claims.npc_ratio_region(r.sweep), "fig2ABC_sweeps.png"),
         (claims.sir_ratio_region(r.sweep), "fig2ABC_sweeps.png"),
-        (claims.inputs_2_3_most_similar(r.similarity, names), "fig3F_similarity.png"),
+        (claims.inputs_2_3_most_similar(r.similarity, names, _rms_at_focus(r)),
+         "fig3F_similarity.png"),
         (claims.decoding_at_operating_point(r.snrs_db[r.figure_index],
                                             _headline(r.at_figure_snr(), r), r.paper_label),
          "fig4F_confusion.png"),
@@ -52,6 +53,12 @@ def verdicts(r: MechanicsResults) -> list[tuple[claims.Verdict, str]]:
          "fig4G_accuracy_vs_snr.png"),
     ]
     return out
+
+
+def _rms_at_focus(r: MechanicsResults) -> list[float]:
+    """Each input's RMS force (N) at M15's sensors over the simulated response."""
+    focus = r.responses[:, :, r.focus_sensors]
+    return [float(np.sqrt(np.mean(f * f))) for f in focus]
 
 
 def _headline(d: dict[str, Any], r: MechanicsResults) -> dict[str, Any]:
@@ -79,9 +86,9 @@ def _claims_table(results: Sequence[MechanicsResults]) -> list[str]:
                          f"{v.reason or '—'} | [{fig}]({fig}) |")
     counts = ", ".join(f"{r.mechanics} **{sum(v.reproduced for v, _ in rows[r.mechanics])} "
                        f"of {len(CLAIM_KEYS)}**" for r in results)
-    return lines + ["", f"Claims reproduced: {counts}. The default mechanics "
-                    f"(`SkinParams().mechanics`) is **{SkinParams().mechanics}**; the reasons "
-                    "are in `skinhil/skin.py` and the README.", ""]
+    return lines + ["", f"Claims reproduced: {counts}. The default mechanics is chosen from "
+                    "these counts and the board's real-time budget: see `skinhil/skin.py` and "
+                    "the README.", ""]
 
 
 def _decoding_tables(r: MechanicsResults, config: ReproduceConfig) -> list[str]:
@@ -263,7 +270,7 @@ def _sweep_json(sw: SweepResult) -> dict[str, Any]:
 
 
 def _json(results: Sequence[MechanicsResults], total_s: float) -> dict[str, Any]:
-    out: dict[str, Any] = {"total_s": total_s, "default_mechanics": SkinParams().mechanics}
+    out: dict[str, Any] = {"total_s": total_s}
     for r in results:
         out[r.mechanics] = {
             "measures": r.measures.as_dict(),
