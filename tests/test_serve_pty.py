@@ -75,7 +75,10 @@ def test_serve_pty_stream_markers_status_and_commands(pty_pair) -> None:
 
 
 def test_serve_low_baud_holds_real_time_and_loss_is_exact(pty_pair) -> None:
-    duration, baud = 2.0, 9600
+    """4 s at 9600 baud: a single stall of the host (a shared 2-core VM stalls a real-time
+    process for 20-30 ms now and then) makes every tick until the board has caught up a
+    miss, so the 1 % bound is taken over 4,000 ticks."""
+    duration, baud = 4.0, 9600
     serve = ServeProcess("--port", pty_pair.path, "--baud", str(baud), "--duration",
                          str(duration), "--snr-db", "25", "--fifo", "64", "--json",
                          *realtime_args())

@@ -10,10 +10,11 @@ counts them, and a link that goes away is reported and, with ``reopen``, reopene
 
 Board time is followed as the newest event's time (the stream is in time order), else the
 newest marker time (or status time, when the board had no events queued) minus
-``guard_s``; only while the stream has been silent for ``guard_s`` of host time does the
-host clock's estimate of board time from those items (minus ``guard_s``) move it on, so
-items that arrive late because the board or the link paused for a moment (a loaded host,
-user-mode Linux) are not taken as already complete.
+``guard_s``; only while the stream has been silent for ``silence_s`` of host time (longer
+than the board's status period) does the host clock's estimate of board time from those
+items (minus ``guard_s``) move it on, so items that arrive late because the board or the
+link paused for a moment (a loaded host, user-mode Linux) are not taken as already
+complete.
 """
 
 from __future__ import annotations
@@ -194,7 +195,7 @@ class Receiver:
             known = max(known, self._last_record_us - guard)
         h = time.monotonic() if host_s is None else host_s
         now = self.clock.board_now_us(h)
-        if now is not None and h - self._last_item_host_s >= guard * 1e-6:
+        if now is not None and h - self._last_item_host_s >= self.params.silence_s:
             known = max(known, now - guard)  # a silent stream still advances
         return known
 
