@@ -96,6 +96,34 @@ def encode_sync(st: np.ndarray, base: int, pkt: np.ndarray, out: np.ndarray, pos
     return frame_into(pkt, 11, out, pos)
 
 
+@numba.njit(inline="always")
+def _open_events_packet(st: np.ndarray, base: int, sync_every: int, ptype: int,
+                        pkt: np.ndarray, out: np.ndarray, pos: int) -> int:
+    """Write the header of an events packet of type ``ptype`` whose first event is at step
+    ``base`` into ``pkt``, after a SYNC into ``out`` at ``pos`` when the offset needs one;
+    return the new end of ``out``."""
+    if (st[E_SYNC_VALID] == 0 or base - st[E_SYNC_BASE] > 0xFFFF
+            or base - st[E_SYNC_BASE] >= sync_every):
+        pos = encode_sync(st, base, pkt, out, pos)
+    off = base - st[E_SYNC_BASE]
+    pkt[0] = (ptype << 5) | st[E_EPOCH]
+    pkt[1] = st[E_SEQ] & 0xFF
+    pkt[2] = off & 0xFF
+    pkt[3] = off >> 8
+    return pos
+
+
+@numba.njit(inline="always")
+def _close_events_packet(st: np.ndarray, pkt: np.ndarray, ln: int, count: int,
+                         out: np.ndarray, pos: int) -> int:
+    """Frame the events packet ``pkt[:ln]`` of ``count`` events into ``out`` at ``pos``,
+    advance the sequence number and the events count; return the new end of ``out``."""
+    pos = frame_into(pkt, ln, out, pos)
+    st[E_SEQ] = (st[E_SEQ] + 1) & 0xFF
+    st[E_EVENTS] += count
+    return pos
+
+
 @numba.njit(cache=True, nogil=True)
 def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, sync_every: int,
                   max_packets: int, out: np.ndarray) -> tuple[int, int]:
@@ -118,14 +146,7 @@ def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, sync_ever
     packets = 0
     while i < n and packets < max_packets:
         base = steps[i]
-        if (st[E_SYNC_VALID] == 0 or base - st[E_SYNC_BASE] > 0xFFFF
-                or base - st[E_SYNC_BASE] >= sync_every):
-            pos = encode_sync(st, base, pkt, out, pos)
-        off = base - st[E_SYNC_BASE]
-        pkt[0] = (T_EVENTS << 5) | st[E_EPOCH]
-        pkt[1] = st[E_SEQ] & 0xFF
-        pkt[2] = off & 0xFF
-        pkt[3] = off >> 8
+        pos = _open_events_packet(st, base, sync_every, T_EVENTS, pkt, out, pos)
         ln = 4
         cur = base
         count = 0
@@ -178,9 +199,7 @@ def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, sync_ever
                     cur = s
                     break
             cur = s
-        pos = frame_into(pkt, ln, out, pos)
-        st[E_SEQ] = (st[E_SEQ] + 1) & 0xFF
-        st[E_EVENTS] += count
+        pos = _close_events_packet(st, pkt, ln, count, out, pos)
         packets += 1
     return pos, i
 
@@ -196,14 +215,7 @@ def _encode_wide(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, sync_every
     packets = 0
     while i < n and packets < max_packets:
         base = steps[i]
-        if (st[E_SYNC_VALID] == 0 or base - st[E_SYNC_BASE] > 0xFFFF
-                or base - st[E_SYNC_BASE] >= sync_every):
-            pos = encode_sync(st, base, pkt, out, pos)
-        off = base - st[E_SYNC_BASE]
-        pkt[0] = (T_WIDE << 5) | st[E_EPOCH]
-        pkt[1] = st[E_SEQ] & 0xFF
-        pkt[2] = off & 0xFF
-        pkt[3] = off >> 8
+        pos = _open_events_packet(st, base, sync_every, T_WIDE, pkt, out, pos)
         ln = 4
         cur = base
         count = 0
@@ -217,9 +229,7 @@ def _encode_wide(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, sync_every
             cur = s
             count += 1
             i += 1
-        pos = frame_into(pkt, ln, out, pos)
-        st[E_SEQ] = (st[E_SEQ] + 1) & 0xFF
-        st[E_EVENTS] += count
+        pos = _close_events_packet(st, pkt, ln, count, out, pos)
         packets += 1
     return pos, i
 

@@ -10,6 +10,7 @@ import signal
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -171,32 +172,41 @@ def bus_summary(bus: BusReceiver, wall_s: float) -> dict[str, Any]:
             "foreign_frames": bus.foreign_frames, "link": bus.combined_report().as_dict()}
 
 
-def run_bus(args: argparse.Namespace, bus: BusReceiver, names: dict[int, str]) -> int:
-    """``listen`` over several boards: per-board decisions and summaries, a combined view."""
+def listen_until_stopped(args: argparse.Namespace, rx: Receiver | BusReceiver,
+                         link_line: Callable[[], dict[str, Any]],
+                         gone: Callable[[], bool]) -> None:
+    """Poll ``rx`` until Ctrl-C/SIGTERM, ``--duration`` (s) or ``gone()``; with ``--json``
+    print ``link_line()`` every STATUS_PERIOD_S; then flush ``rx`` and shut its transport."""
     stop = threading.Event()
     old = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
+    t0 = time.monotonic()
+    next_line = t0 + STATUS_PERIOD_S
+    try:
+        while not stop.is_set() and not gone():
+            now = time.monotonic()
+            if args.duration_s is not None and now - t0 >= args.duration_s:
+                break
+            rx.poll(0.02)
+            if args.json and now >= next_line:
+                next_line += STATUS_PERIOD_S
+                print(json.dumps({"type": "link", **link_line()}), flush=True)
+        rx.flush()
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+        rx.transport.shutdown()
+
+
+def run_bus(args: argparse.Namespace, bus: BusReceiver, names: dict[int, str]) -> int:
+    """``listen`` over several boards: per-board decisions and summaries, a combined view."""
     if not args.json:
         print(f"skinhil listen: {describe_transport(args)}, boards "
               f"{', '.join(map(str, bus.boards)) or 'as they send'}, model {args.model}; "
               "Ctrl-C stops", file=sys.stderr, flush=True)
     t0 = time.monotonic()
-    next_line = t0 + STATUS_PERIOD_S
-    try:
-        while not stop.is_set() and not bus.link_down:
-            now = time.monotonic()
-            if args.duration_s is not None and now - t0 >= args.duration_s:
-                break
-            bus.poll(0.02)
-            if args.json and now >= next_line:
-                next_line += STATUS_PERIOD_S
-                print(json.dumps({"type": "link", "boards": {
-                    str(k): r.as_dict() for k, r in bus.link_reports().items()},
-                    "combined": bus.combined_report().as_dict()}), flush=True)
-        bus.flush()
-    finally:
-        for s, h in old.items():
-            signal.signal(s, h)
-        bus.transport.shutdown()
+    listen_until_stopped(args, bus, lambda: {
+        "boards": {str(k): r.as_dict() for k, r in bus.link_reports().items()},
+        "combined": bus.combined_report().as_dict()}, lambda: bus.link_down)
     info = bus_summary(bus, time.monotonic() - t0)
     if args.json:
         print(json.dumps(info), flush=True)
@@ -233,28 +243,12 @@ def run(args: argparse.Namespace) -> int:
     receiver.add_listener(LivePrinter(receiver, args.json, names))
     if recorder is not None:
         receiver.add_listener(recorder)
-    stop = threading.Event()
-    old = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
     if not args.json:
         print(f"skinhil listen: {describe_transport(args)}, model {args.model}; Ctrl-C stops",
               file=sys.stderr, flush=True)
     t0 = time.monotonic()
-    next_line = t0 + STATUS_PERIOD_S
-    try:
-        while not stop.is_set():
-            now = time.monotonic()
-            if args.duration_s is not None and now - t0 >= args.duration_s:
-                break
-            receiver.poll(0.02)
-            if args.json and now >= next_line:
-                next_line += STATUS_PERIOD_S
-                print(json.dumps({"type": "link", **receiver.link_report().as_dict()}),
-                      flush=True)
-        receiver.flush()
-    finally:
-        for s, h in old.items():
-            signal.signal(s, h)
-        transport.shutdown()
+    listen_until_stopped(args, receiver, lambda: receiver.link_report().as_dict(),
+                         lambda: False)
     info = summary(receiver, time.monotonic() - t0)
     if recorder is not None:
         recorder.save(args.record, {"model": str(args.model), "link": describe_transport(args),
