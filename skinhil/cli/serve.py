@@ -11,7 +11,7 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from firmware_sim.board import Board, BoardConfig, BoardSummary
+from firmware_sim.board import REALTIME_SPIN_S, Board, BoardConfig, BoardSummary
 from firmware_sim.clock import request_realtime
 from skinhil.cli.options import add_model_options, noise_from_args
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
@@ -58,7 +58,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="when the link goes away, keep running and reopen it when it returns")
     p.add_argument("--realtime", action="store_true",
                    help="run with real-time (FIFO) scheduling so other programs cannot delay "
-                        "ticks (needs root or CAP_SYS_NICE)")
+                        "ticks, and spin the last 0.3 ms before each tick instead of sleeping "
+                        "(needs root or CAP_SYS_NICE)")
     out = p.add_mutually_exclusive_group()
     out.add_argument("--quiet", action="store_true", help="print nothing but errors")
     out.add_argument("--json", action="store_true",
@@ -88,7 +89,8 @@ def _config(args: argparse.Namespace) -> BoardConfig:
                        noise=noise_from_args(args),
                        seed=args.seed, board_id=args.board_id, mechanics=args.mechanics,
                        size=args.size, threads=args.threads, schedule_mode=mode, rest_s=args.rest_s,
-                       start_running=not args.stopped, reconnect=args.reconnect).check()
+                       start_running=not args.stopped, reconnect=args.reconnect,
+                       spin_s=REALTIME_SPIN_S if args.realtime else 0.0).check()
 
 
 def _live(board: Board) -> dict[str, Any]:

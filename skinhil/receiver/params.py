@@ -58,18 +58,20 @@ class ReceiverParams:
     twice the largest lateness seen, up to ``max_guard_s`` (s), so a board that lags behind
     real time (a loaded host) is followed without shifting spikes. ``match_window_s`` (s):
     a decision is scored against the ground-truth marker whose onset precedes its detection
-    by at most this. ``silence_s`` (s): only a stream silent this long is taken as idle,
-    and then the host clock's estimate of board time (minus the guard) moves board time on.
-    The board sends a status at least every 0.1 s (``BoardConfig.status_period_s``), so a
-    shorter silence means the board or the link paused (a loaded host, user-mode Linux):
-    moving on then would make the first events after the pause late.
+    by at most this. ``silence_s`` (s): only a stream silent this long is taken as a board
+    that stopped sending (gone, or stalled for good), and then the host clock's estimate of
+    board time (minus the guard) moves board time on, so the decisions it owes are made.
+    The board sends a status every 0.1 s of its time (``BoardConfig.status_period_s``), so a
+    shorter silence is a board or link that paused (a loaded host; inside user-mode Linux
+    pauses of 50-160 ms were seen): moving on then would make the events after the pause
+    late.
     """
 
     onset: OnsetParams = field(default_factory=OnsetParams)
     guard_s: float = 0.02
     max_guard_s: float = 0.25
     match_window_s: float = 0.1
-    silence_s: float = 0.15
+    silence_s: float = 1.0
 
     def __post_init__(self) -> None:
         _positive(self, "guard_s")

@@ -10,8 +10,8 @@ counts them, and a link that goes away is reported and, with ``reopen``, reopene
 
 Board time is followed as the newest event's time (the stream is in time order), else the
 newest marker time (or status time, when the board had no events queued) minus
-``guard_s``; only while the stream has been silent for ``silence_s`` of host time (longer
-than the board's status period) does the host clock's estimate of board time from those
+``guard_s``; only while the stream has been silent for ``silence_s`` of host time (1 s,
+ten of the board's status periods) does the host clock's estimate of board time from those
 items (minus ``guard_s``) move it on, so items that arrive late because the board or the
 link paused for a moment (a loaded host, user-mode Linux) are not taken as already
 complete.
