@@ -27,7 +27,7 @@ from protocols.constants import (
     WIDE_VERSION,
 )
 from protocols.counters import StatusTracker, unwrap
-from protocols.event_input import check_step_us, event_steps
+from protocols.event_input import E_SIZE, check_step_us, event_steps, idle_sync_step
 from protocols.record_fields import arg_bits, arg_value, check_uint, enum_or_int
 from protocols.records import (
     Ack,
@@ -113,7 +113,7 @@ class CanEncoder:
                                 f"{(max_off + 1) * step_us}] µs for this CAN layout")
         self.sync_us = sync_us
         self._seq_mod = k.FD_SEQ_MOD if self.fd else k.CLASSIC_SEQ_MOD
-        self._st = np.zeros(k.E_SIZE, dtype=np.int64)
+        self._st = np.zeros(E_SIZE, dtype=np.int64)
         self._st[k.E_EPOCH] = k.EPOCH_MOD - 1
         self._st[k.E_STEP_US] = self.step_us
         self.version = wire_version(n_channels)
@@ -161,8 +161,8 @@ class CanEncoder:
         st, fd = self._st, self.fd
         if steps.shape[0] == 0:
             self._t_min_us = max(self._t_min_us, int(t_end_us))
-            end_step = int(t_end_us) // self.step_us
-            if st[k.E_SYNC_VALID] and end_step - st[k.E_LAST_SYNC] >= self.sync_us // self.step_us:
+            end_step = idle_sync_step(st, t_end_us, self.step_us, self.sync_us)
+            if end_step is not None:
                 out = np.zeros(16, dtype=np.uint8)
                 n = k.encode_sync(st, end_step, fd, out, 0)
                 return [CanFrame(self._ids[k.CLS_SYNC], out[:n].tobytes(), fd)], 0

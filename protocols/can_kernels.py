@@ -11,6 +11,16 @@ import numba
 import numpy as np
 
 from protocols.constants import N_CHANNELS, PROTOCOL_VERSION, WIDE_VERSION
+from protocols.event_input import (
+    E_EPOCH,
+    E_EVENTS,
+    E_LAST_SYNC,
+    E_SEQ,
+    E_STEP_US,
+    E_SYNC_BASE,
+    E_SYNC_VALID,
+    E_VERSION,
+)
 from protocols.serial_kernels import (
     C_DUPS,
     C_EVENTS,
@@ -61,9 +71,6 @@ C_CMD_LOST = 13
 """Counter slot of COMMAND frames missing by the host's sequence numbers."""
 C_SIZE = 14
 
-# encoder state slots (same meaning as the serial encoder's)
-E_SEQ, E_EPOCH, E_SYNC_VALID, E_SYNC_BASE, E_EVENTS, E_STEP_US, E_LAST_SYNC, E_VERSION = range(8)
-E_SIZE = 8
 # decoder state slots (D_VERSION: of the last SYNC; D_VERSIONS: bit v set once one was seen)
 (D_HAVE_SEQ, D_SEQ, D_SYNC_VALID, D_EPOCH, D_BASE, D_STEP_US, D_HAVE_CMD_SEQ,
  D_CMD_SEQ, D_VERSION, D_VERSIONS) = range(10)

@@ -8,6 +8,20 @@ import numpy as np
 from protocols.constants import N_CHANNELS
 from skinhil.errors import ProtocolError
 
+# encoder state slots, the serial and the CAN encoders' alike
+E_SEQ, E_EPOCH, E_SYNC_VALID, E_SYNC_BASE, E_EVENTS, E_STEP_US, E_LAST_SYNC, E_VERSION = range(8)
+E_SIZE = 8
+
+
+def idle_sync_step(st: np.ndarray, t_end_us: int, step_us: int, sync_us: int) -> int | None:
+    """The step of the SYNC an encoder with state ``st`` sends at a flush without events up
+    to ``t_end_us`` (µs): the end step once its last SYNC base is ``sync_us`` old, else
+    None (also before any SYNC)."""
+    end_step = int(t_end_us) // step_us
+    if st[E_SYNC_VALID] and end_step - st[E_LAST_SYNC] >= sync_us // step_us:
+        return end_step
+    return None
+
 _OK, _UNSORTED, _BAD_ADDR, _NOT_MULTIPLE, _OUT_OF_RANGE = 0, 1, -1, -2, -3
 
 

@@ -23,7 +23,7 @@ from protocols.constants import (
     WIDE_VERSION,
 )
 from protocols.counters import StatusTracker
-from protocols.event_input import check_step_us, event_steps
+from protocols.event_input import E_SIZE, check_step_us, event_steps, idle_sync_step
 from protocols.framing import frame_into
 from protocols.record_fields import arg_bits, arg_value, check_uint, enum_or_int
 from protocols.records import (
@@ -79,7 +79,7 @@ class SerialEncoder:
         self.version = wire_version(n_channels)
         """Protocol version of this stream: 1 narrow, 2 wide (SPEC.md §9)."""
         self.n_channels = int(n_channels)
-        self._st = np.zeros(k.E_SIZE, dtype=np.int64)
+        self._st = np.zeros(E_SIZE, dtype=np.int64)
         self._st[k.E_EPOCH] = k.EPOCH_MOD - 1
         self._st[k.E_STEP_US] = self.step_us
         self._st[k.E_VERSION] = self.version
@@ -120,8 +120,8 @@ class SerialEncoder:
         st = self._st
         if steps.shape[0] == 0:
             self._t_min_us = max(self._t_min_us, int(t_end_us))
-            end_step = int(t_end_us) // self.step_us
-            if st[k.E_SYNC_VALID] and end_step - st[k.E_LAST_SYNC] >= self.sync_us // self.step_us:
+            end_step = idle_sync_step(st, t_end_us, self.step_us, self.sync_us)
+            if end_step is not None:
                 n = k.encode_sync(st, end_step, self._pkt, self._out, 0)
                 return self._out[:n].tobytes(), 0
             return b"", 0

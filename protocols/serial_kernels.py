@@ -11,6 +11,16 @@ import numba
 import numpy as np
 
 from protocols.constants import BITMAP_BYTES, N_CHANNELS, WIDE_VERSION
+from protocols.event_input import (
+    E_EPOCH,
+    E_EVENTS,
+    E_LAST_SYNC,
+    E_SEQ,
+    E_STEP_US,
+    E_SYNC_BASE,
+    E_SYNC_VALID,
+    E_VERSION,
+)
 from protocols.framing import cobs_decode, crc16, frame_into
 from protocols.versions import MAX_CHANNELS
 
@@ -41,9 +51,6 @@ EPOCH_MOD = 32
 BODY_LEN = np.array([-1, 11, 60, 13, 9, 6, -1, -1], dtype=np.int64)
 """Exact body length of each fixed-size packet type (-1: variable or invalid)."""
 
-# encoder state slots
-E_SEQ, E_EPOCH, E_SYNC_VALID, E_SYNC_BASE, E_EVENTS, E_STEP_US, E_LAST_SYNC, E_VERSION = range(8)
-E_SIZE = 8
 # decoder state slots (D_VERSIONS: bit v set once a SYNC of version v was received)
 D_HAVE_SEQ, D_SEQ, D_SYNC_VALID, D_EPOCH, D_BASE, D_STEP_US, D_VERSIONS = range(7)
 D_SIZE = 7
