@@ -6,7 +6,10 @@ Per publish tick ``k`` (default 1 ms = 10 steps of 0.1 ms), due at ``t0 + (k+1)�
 1. stimulus: the external forces of the timeline at each step's start time
    (:class:`skinhil.timeline.Timeline`), a block (steps, 77, 3) N;
 2. model: ``SkinStepper.advance`` then ``NeuronPopulation.step_block``
-   (:class:`skinhil.sensor.SkinSensor`): spikes (steps, 338);
+   (:class:`skinhil.sensor.SkinSensor`): spikes (steps, 338). With ``threads`` > 1 the
+   neurons run one tick behind the mechanics, on threads of their own
+   (:class:`skinhil.pipeline.SensorPipeline`): the tick publishes the spikes of the tick
+   before, one tick more latency for up to twice the skin in real time;
 3. events: spikes → events stamped with board time in µs (step resolution) → counted as
    generated → the event FIFO (or dropped by reason, :mod:`firmware_sim.counters`);
 4. host commands received since the last tick are executed and answered (ACK/NACK);
@@ -46,6 +49,7 @@ from firmware_sim.link import BoardLink
 from skinhil.errors import ConfigError, TransportError
 from skinhil.geometry import PAPER_SIZE, MeshSize
 from skinhil.neurons import NoiseParams
+from skinhil.pipeline import SensorPipeline
 from skinhil.sensor import SkinSensor
 from skinhil.skin import SkinModel, SkinParams
 from skinhil.stimuli import Schedule, ScheduledStimulus
@@ -97,8 +101,10 @@ class BoardConfig:
     size: MeshSize = PAPER_SIZE
     """The skin's top layer (rows, cols) of masses; 6x6 is the paper's 338-channel skin."""
     threads: int = 1
-    """Threads the neurons run on (:class:`skinhil.neurons.NeuronPopulation`); more than one
-    pays off from a few thousand channels, where one core cannot keep real time."""
+    """Threads the model runs on. 1: mechanics then neurons, each tick. N > 1: the mechanics
+    on the board's thread and the neurons on N − 1 others, one tick behind
+    (:class:`skinhil.pipeline.SensorPipeline`); pays off from a few thousand channels, where
+    one core cannot keep real time."""
     schedule_mode: int = Timeline.SCHEDULE_RANDOM
     """0: host-driven only, 1: default random schedule, 2: schedule file."""
     rest_s: float = 0.25
@@ -186,9 +192,11 @@ class Board:
         model = SkinModel(SkinParams(mechanics=config.mechanics,  # type: ignore[arg-type]
                                      size=config.size))
         self.sensor = SkinSensor(model, config.dt_s, config.snr_db, config.seed,
-                                 noise=config.noise, threads=config.threads)
+                                 noise=config.noise, threads=max(1, config.threads - 1))
+        self.pipeline = SensorPipeline(self.sensor) if config.threads > 1 else None
+        """The model's two stages on their own threads (``threads`` > 1), else None."""
         log.info("board %d: %dx%d skin, %d channels, model on %d thread(s)", config.board_id,
-                 model.size[0], model.size[1], model.n_springs, self.sensor.threads)
+                 model.size[0], model.size[1], model.n_springs, config.threads)
         self.timeline = Timeline(config.dt_s, file_schedule, config.seed, config.rest_s,
                                  config.schedule_mode, model.size)
         self.fifo = EventFifo(config.fifo_events)
@@ -245,8 +253,10 @@ class Board:
 
     # -- records ------------------------------------------------------------------------
     def board_time_us(self) -> int:
-        """Board time (µs) at the end of the last completed tick."""
-        return self.sensor.step_index * self._dt_us
+        """Board time (µs): the end of the last step whose spikes are out (with a pipeline,
+        one tick behind the mechanics)."""
+        steps = self.sensor.step_index if self.pipeline is None else self.pipeline.spike_index
+        return steps * self._dt_us
 
     def status(self) -> Any:
         """The current counters as a :class:`protocols.Status` record."""
@@ -287,7 +297,7 @@ class Board:
         10..14 paper stimuli A-E, 100.. stimuli of the schedule file).
         """
         codes, why = protocols.CommandCode, protocols.NackReason
-        now_s = self.board_time_us() * 1e-6
+        now_s = self.sensor.step_index * self._dt_us * 1e-6  # the mechanics' next step
         self.counters.commands += 1
         op = cmd.opcode
         reason = why.NONE
@@ -327,10 +337,24 @@ class Board:
     def tick(self) -> None:
         """Run one publish tick (see module docstring for the order)."""
         cfg = self.config
-        n = cfg.steps_per_tick
         first = self.sensor.step_index
-        t_s = (first + np.arange(n)) * cfg.dt_s
-        _, spikes = self.sensor.advance(self.timeline.forces(t_s))
+        forces = self.timeline.forces((first + np.arange(cfg.steps_per_tick)) * cfg.dt_s)
+        if self.pipeline is None:
+            _, spikes = self.sensor.advance(forces)
+        else:
+            spikes, first = self.pipeline.advance(forces)
+        if not self._publish(spikes, first):
+            self._try_reconnect()
+            return
+        try:
+            self._serve_link(self.board_time_us())
+        except TransportError as exc:
+            self._lose_link(exc)
+
+    def _publish(self, spikes: np.ndarray, first: int) -> bool:
+        """The events of a spike block starting at step ``first`` counted as generated and
+        pushed into the FIFO (or dropped by reason), the markers due by the board time
+        queued (or dropped); False when there is no link."""
         t_end_us = self.board_time_us()
         events = self.sensor.events(spikes, first)
         c = self.counters
@@ -344,16 +368,12 @@ class Board:
         markers = self.timeline.markers_before(t_end_us)
         if self.link is None:
             self._drop_markers(markers)
-            self._try_reconnect()
-            return
+            return False
         if self.running:
             self._markers.extend(markers)
         else:
             self._drop_markers(markers)
-        try:
-            self._serve_link(t_end_us)
-        except TransportError as exc:
-            self._lose_link(exc)
+        return True
 
     def _serve_link(self, t_end_us: int) -> None:
         link = self.link
@@ -461,20 +481,30 @@ class Board:
             return
         n = self.config.steps_per_tick
         t_s = np.arange(n) * self.config.dt_s
-        self.sensor.advance(self.timeline.forces(t_s))
+        if self.pipeline is None:
+            self.sensor.advance(self.timeline.forces(t_s))
+        else:
+            for _ in range(2):  # the second call steps the neurons too
+                self.pipeline.advance(self.timeline.forces(t_s))
         for entry in self.timeline.schedule.entries[:1]:  # a stimulus while it is active
             Schedule((ScheduledStimulus(0.0, entry.stimulus, 0),)).force_at(
                 t_s, entry.stimulus.size)
         self.sensor.events(np.zeros((n, self.sensor.model.n_springs), dtype=bool), 0)
-        self.sensor.reset()
+        if self.pipeline is None:
+            self.sensor.reset()
+        else:
+            self.pipeline.reset()
         if self.link is not None:
             self.link.warm_up(self.status())
 
     def _finish(self) -> None:
-        """Drain the FIFO for at most ``drain_timeout_s``, count what is left as dropped at
+        """Publish the spikes still in the pipeline (``threads`` > 1), then drain the FIFO
+        for at most ``drain_timeout_s``, count what is left as dropped at
         ``shutdown``, queue the markers still due and a final status, and send the whole
         transmit queue (it holds at most ``tx_target_s`` and one frame more, plus these
         records: events counted as sent always reach the wire)."""
+        if self.pipeline is not None and self.pipeline.in_flight:
+            self._publish(*self.pipeline.flush())  # the last tick's spikes
         link = self.link
         if link is None:
             return

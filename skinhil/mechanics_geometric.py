@@ -68,7 +68,7 @@ def _spring_forces(p: np.ndarray, v: np.ndarray, springs: np.ndarray, rest: np.n
         out[j, 2] -= f * ez
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=True, nogil=True)
 def _rk4_kernel(p: np.ndarray, v: np.ndarray, springs: np.ndarray, rest: np.ndarray,
                 k: float, c: float, t: float, preload: np.ndarray, free: np.ndarray,
                 inv_m: float, dt: float, f_ext: np.ndarray,

@@ -158,7 +158,7 @@ def _add_input(forces: np.ndarray, dofs: np.ndarray, table: np.ndarray,
                 acc[i] += table[j, i] * f
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=True, nogil=True)
 def _advance_kernel(ad: np.ndarray, bd_t: np.ndarray, ke: np.ndarray, ii: np.ndarray,
                     jj: np.ndarray, x: np.ndarray, forces: np.ndarray, dofs: np.ndarray,
                     out: np.ndarray) -> None:  # pragma: no cover - compiled
@@ -175,7 +175,7 @@ def _advance_kernel(ad: np.ndarray, bd_t: np.ndarray, ke: np.ndarray, ii: np.nda
             x[i] = xn[i] if abs(xn[i]) > TINY else 0.0
 
 
-@numba.njit(cache=True, fastmath=True)
+@numba.njit(cache=True, fastmath=True, nogil=True)
 def _advance_modal_kernel(forces: np.ndarray, out: np.ndarray, phi: np.ndarray,
                           phi_t: np.ndarray, mad: np.ndarray, mbd: np.ndarray, ke: np.ndarray,
                           ii: np.ndarray, jj: np.ndarray, dofs: np.ndarray,

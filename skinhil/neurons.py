@@ -189,7 +189,7 @@ def _noise_and_threshold(v: np.ndarray, u: np.ndarray, zv: np.ndarray, zu: np.nd
         u[i] = uu + d if fired else uu
 
 
-@numba.njit(cache=True, fastmath=False)
+@numba.njit(cache=True, fastmath=False, nogil=True)
 def _izhikevich_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray, v: np.ndarray,
                        u: np.ndarray, a: float, b: float, c: float, d: float, gain: float,
                        v_peak: float, measured: bool, noise_var: float, ref_step_ms: float,
@@ -227,7 +227,7 @@ def _izhikevich_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray, v:
             _noise_and_threshold(vb, ub, zv, zu, sv, su, c, d, v_peak, spikes[k, bb])
 
 
-@numba.njit(cache=True, fastmath=False, parallel=True)
+@numba.njit(cache=True, fastmath=False, parallel=True, nogil=True)
 def _izhikevich_parallel_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray,
                                 v: np.ndarray, u: np.ndarray, a: float, b: float, c: float,
                                 d: float, gain: float, v_peak: float, measured: bool,

@@ -4,6 +4,8 @@ skin in the narrow format (version 1) and a 32x32 skin (15,730 channels) in the 
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 from harness.peers import UdpPeer
@@ -40,3 +42,32 @@ def test_serve_udp_stream_is_complete_and_exact(size: str, version: int,
     assert c.frames_lost == 0 and c.events_lost == 0 and c.crc_errors == 0
     assert len(peer.of(protocols.Marker)) == summary["markers_sent"] > 0
     assert [a.ok for a in peer.of(protocols.Ack) if a.token == token] == [True]
+
+
+def _udp_run(*args: str) -> tuple[np.ndarray, list[tuple[int, int, int]], dict[str, Any]]:
+    peer = UdpPeer(versions=(2,))
+    serve = ServeProcess("--udp", f"127.0.0.1:{peer.port}", "--json", *args)
+    try:
+        assert serve.wait(120) == 0, serve.stderr
+        sent = serve.summary()["sent"]
+        assert peer.wait_for(lambda p: len(p.events) >= sent, 2)
+    finally:
+        serve.kill()
+        peer.close()
+    markers = [(m.t_us, m.stimulus_id, m.phase) for m in peer.of(protocols.Marker)]
+    return peer.events, markers, serve.summary()
+
+
+def test_serve_two_threads_stream_the_same_events() -> None:
+    """``--threads 2`` (neurons one tick behind the mechanics, on a thread of their own)
+    streams exactly the events and markers of one thread: same times, same channels, and the
+    board time and the accounting end where they do."""
+    args = ("--size", "16x16", "--duration", "1.5", "--seed", "6", "--rest", "0.05",
+            "--snr-db", "10")
+    one = _udp_run(*args)
+    two = _udp_run(*args, "--threads", "2")
+    for ev, _, summary in (one, two):
+        assert summary["board_time_s"] == 1.5 and summary["dropped"] == 0
+        assert summary["generated"] == summary["sent"] == len(ev) > 0
+    assert np.array_equal(one[0], two[0])
+    assert one[1] == two[1] and len(one[1]) > 0

@@ -57,8 +57,10 @@ def add_model_options(parser: argparse.ArgumentParser, snr_default: float = math
                              "awgn(x, snr, 'measured') every step (runs away below ~24 dB)")
     parser.add_argument("--seed", type=int, default=0, help="noise seed (default: 0)")
     parser.add_argument("--threads", type=int, default=1, metavar="N",
-                        help="threads for the neurons (diffusion noise; the same spikes as one "
-                             "thread); worth it from a few thousand channels (default: 1)")
+                        help="threads for the model (diffusion noise), worth it from a few "
+                             "thousand channels: offline the neurons share them (the same "
+                             "spikes as one thread); serve steps the mechanics on one and the "
+                             "neurons on the others, one tick behind (default: 1)")
 
 
 def noise_from_args(args: argparse.Namespace) -> NoiseParams:

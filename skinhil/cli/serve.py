@@ -161,8 +161,8 @@ def run(args: argparse.Namespace) -> int:
     if not args.quiet and not args.json:
         model = board.sensor.model
         print(f"skinhil serve: board {args.board_id} on {where}; skin {format_size(model.size)}"
-              f" ({model.n_springs} channels), model on {board.sensor.threads} thread"
-              f"{'s' if board.sensor.threads > 1 else ''}; Ctrl-C stops",
+              f" ({model.n_springs} channels), model on {board.config.threads} thread"
+              f"{'s' if board.config.threads > 1 else ''}; Ctrl-C stops",
               file=sys.stderr, flush=True)
     try:
         summary = board.run(args.duration_s, stop,
