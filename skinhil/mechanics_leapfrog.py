@@ -5,7 +5,9 @@ masses, axial springs and dampers plus the geometric stiffness ``T/L (I − e e�
 baseline tension), never assembled: each step makes one pass over the springs, reading the
 displacements and velocities of its two masses and adding its force to both, so a step costs
 O(springs) time and memory where the exact ZOH of :mod:`skinhil.mechanics_linear` costs
-O(dof²). The model uses it above ``EXACT_MAX_FREE_DOFS`` free degrees of freedom
+O(dof²). The pass goes run by run (:func:`spring_runs`: the springs of one kind along a row
+of the grid), each run reading and updating its masses as contiguous slices, so the compiler
+vectorises it: a third less time per step at 32x32 than spring by spring. The model uses it above ``EXACT_MAX_FREE_DOFS`` free degrees of freedom
 (:mod:`skinhil.skin`).
 
 Scheme (kick-drift leapfrog, velocities at half steps; ``h = dt``, ``m`` the nodal mass):
@@ -58,64 +60,135 @@ below ``(ω·h)²/24`` ≈ 0.3 %."""
 TINY = 1e-150
 """State components below this are flushed to zero (subnormals are ~100x slower on x86)."""
 
-LeapfrogOperands = tuple[np.ndarray, np.ndarray, np.ndarray, float, float, float,
-                         np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
-"""``LeapfrogMechanics.operands``: springs, unit vectors e, T/L, k, c, 1/m, free masses, then
-the state q, v, w (velocity at the step start), f_prev; arrays updated in place."""
+SAME_DIRECTION = 1e-12
+"""Springs whose rest unit vectors differ by at most this (per component) share a run's
+direction (the rest positions of a regular mesh give the same direction to within rounding)."""
+
+RUN_FIELDS = 5
+"""Columns of a run table: first spring, spring stride, first mass i, first mass j, length."""
+
+LeapfrogOperands = tuple[np.ndarray, np.ndarray, np.ndarray, float, float, np.ndarray,
+                         np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                         np.ndarray]
+"""``LeapfrogMechanics.operands``: the run table, each run's unit vector e and T/L, k, c,
+1/m per mass (0 on fixed masses), then the state q, v, w (velocity at the step start),
+f_prev, and scratch: acc (3, n_masses) and (5, longest run); arrays updated in place, the
+state stored by component (3, n_masses)."""
 
 
-@numba.njit(cache=True, fastmath=True, nogil=True)
+def spring_runs(springs: np.ndarray, e: np.ndarray,
+                t_over_l: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Group the springs into runs for :func:`leapfrog_kernel`: spring ``s0 + t·ds`` of a
+    run joins masses ``i0 + t`` and ``j0 + t`` (t = 0 .. length − 1) along one direction
+    ``e`` with one ``T/L``. On a grid the springs of one kind along a row (and the column
+    springs of a whole layer) form one run, so the kernel reads the masses of a run as
+    contiguous slices, which the compiler turns into vector instructions, and scatters the
+    forces the same way. Any spring list works: a spring with no such neighbour is a run of
+    one.
+
+    Returns the (n_runs, 5) int64 table (s0, ds, i0, j0, length), each run's e (n_runs, 3)
+    and T/L (n_runs,) in 1/m·N.
+    """
+    where = {(int(i), int(j)): s for s, (i, j) in enumerate(springs)}
+    taken = np.zeros(len(springs), dtype=bool)
+    runs = []
+    for s, (i, j) in enumerate(springs):
+        if taken[s]:
+            continue
+        taken[s] = True
+        last, stride, length = s, 0, 1
+        while True:
+            nxt = where.get((int(i) + length, int(j) + length))
+            if (nxt is None or taken[nxt] or nxt <= last or (stride and nxt - last != stride)
+                    or np.abs(e[nxt] - e[s]).max() > SAME_DIRECTION
+                    or abs(t_over_l[nxt] - t_over_l[s]) > SAME_DIRECTION * abs(t_over_l[s])):
+                break
+            stride, last = nxt - last, nxt
+            taken[nxt] = True
+            length += 1
+        runs.append((s, stride or 1, int(i), int(j), length))
+    table = np.array(runs, dtype=np.int64).reshape(-1, RUN_FIELDS)
+    first = table[:, 0]
+    return table, np.ascontiguousarray(e[first]), np.ascontiguousarray(t_over_l[first])
+
+
+@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
 def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: int,
-                    springs: np.ndarray, e: np.ndarray, t_over_l: np.ndarray, k: float,
-                    c: float, inv_m: float, free: np.ndarray, q: np.ndarray, v: np.ndarray,
-                    w: np.ndarray, f_prev: np.ndarray) -> None:  # pragma: no cover - compiled
+                    runs: np.ndarray, run_e: np.ndarray, run_tl: np.ndarray, k: float,
+                    c: float, inv_m: np.ndarray, q: np.ndarray, v: np.ndarray, w: np.ndarray,
+                    f_prev: np.ndarray, acc: np.ndarray,
+                    scratch: np.ndarray) -> None:  # pragma: no cover - compiled
     """forces (n, n_masses, 3) N held per step of ``dt`` (s), each in ``substeps`` leapfrog
     steps → out (n, n_springs) N; the operands after ``substeps`` are
     :attr:`LeapfrogMechanics.operands`."""
-    n_masses = q.shape[0]
-    acc = np.zeros((n_masses, 3))
     h = dt / substeps
+    qx, qy, qz = q[0], q[1], q[2]
+    wx, wy, wz = w[0], w[1], w[2]
+    gx, gy, gz = acc[0], acc[1], acc[2]
+    ke_s, ax_s, dx_s, dy_s, dz_s = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4]
+    n_masses = q.shape[1]
     for step in range(forces.shape[0]):
         fs = forces[step]
+        row = out[step]
         for sub in range(substeps):
             acc[:] = 0.0
-            row = out[step]
-            for s in range(springs.shape[0]):
-                i = springs[s, 0]
-                j = springs[s, 1]
-                ex = e[s, 0]
-                ey = e[s, 1]
-                ez = e[s, 2]
-                dx = q[j, 0] - q[i, 0]
-                dy = q[j, 1] - q[i, 1]
-                dz = q[j, 2] - q[i, 2]
-                ext = ex * dx + ey * dy + ez * dz
-                rate = (ex * (w[j, 0] - w[i, 0]) + ey * (w[j, 1] - w[i, 1])
-                        + ez * (w[j, 2] - w[i, 2]))
+            for r in range(runs.shape[0]):
+                s0, ds, i0, j0, n = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3], runs[r, 4]
+                ex, ey, ez, tl = run_e[r, 0], run_e[r, 1], run_e[r, 2], run_tl[r]
+                qxi, qyi, qzi = qx[i0:i0 + n], qy[i0:i0 + n], qz[i0:i0 + n]
+                qxj, qyj, qzj = qx[j0:j0 + n], qy[j0:j0 + n], qz[j0:j0 + n]
+                wxi, wyi, wzi = wx[i0:i0 + n], wy[i0:i0 + n], wz[i0:i0 + n]
+                wxj, wyj, wzj = wx[j0:j0 + n], wy[j0:j0 + n], wz[j0:j0 + n]
+                for t in range(n):  # extension and its rate along e; axial force
+                    dx = qxj[t] - qxi[t]
+                    dy = qyj[t] - qyi[t]
+                    dz = qzj[t] - qzi[t]
+                    ext = ex * dx + ey * dy + ez * dz
+                    rate = (ex * (wxj[t] - wxi[t]) + ey * (wyj[t] - wyi[t])
+                            + ez * (wzj[t] - wzi[t]))
+                    ke = k * ext
+                    ke_s[t] = ke
+                    ax_s[t] = ke + c * rate - tl * ext
+                    dx_s[t] = dx
+                    dy_s[t] = dy
+                    dz_s[t] = dz
                 if sub == 0:
-                    row[s] = k * ext
-                tl = t_over_l[s]
-                axial = k * ext + c * rate - tl * ext
-                fx = axial * ex + tl * dx
-                fy = axial * ey + tl * dy
-                fz = axial * ez + tl * dz
-                acc[i, 0] += fx
-                acc[i, 1] += fy
-                acc[i, 2] += fz
-                acc[j, 0] -= fx
-                acc[j, 1] -= fy
-                acc[j, 2] -= fz
-            for m in free:
-                for a in range(3):
+                    for t in range(n):
+                        row[s0 + ds * t] = ke_s[t]
+                # the spring's force (axial along e, tension across) on mass i, and minus it
+                # on mass j: two loops, since the masses i of a run may be its masses j
+                gxi, gyi, gzi = gx[i0:i0 + n], gy[i0:i0 + n], gz[i0:i0 + n]
+                gxj, gyj, gzj = gx[j0:j0 + n], gy[j0:j0 + n], gz[j0:j0 + n]
+                if tl == 0.0:  # no tension: the force is axial
+                    for t in range(n):
+                        gxi[t] += ax_s[t] * ex
+                        gyi[t] += ax_s[t] * ey
+                        gzi[t] += ax_s[t] * ez
+                    for t in range(n):
+                        gxj[t] -= ax_s[t] * ex
+                        gyj[t] -= ax_s[t] * ey
+                        gzj[t] -= ax_s[t] * ez
+                else:
+                    for t in range(n):
+                        gxi[t] += ax_s[t] * ex + tl * dx_s[t]
+                        gyi[t] += ax_s[t] * ey + tl * dy_s[t]
+                        gzi[t] += ax_s[t] * ez + tl * dz_s[t]
+                    for t in range(n):
+                        gxj[t] -= ax_s[t] * ex + tl * dx_s[t]
+                        gyj[t] -= ax_s[t] * ey + tl * dy_s[t]
+                        gzj[t] -= ax_s[t] * ez + tl * dz_s[t]
+            for a in range(3):
+                qa, va, wa, fa, ga = q[a], v[a], w[a], f_prev[a], acc[a]
+                for m in range(n_masses):
                     f_now = fs[m, a]
-                    am = (acc[m, a] + 0.5 * (f_prev[m, a] + f_now)) * inv_m
-                    f_prev[m, a] = f_now
-                    vm = v[m, a] + h * am
-                    qm = q[m, a] + h * vm
+                    am = (ga[m] + 0.5 * (fa[m] + f_now)) * inv_m[m]
+                    fa[m] = f_now
+                    vm = va[m] + h * am
+                    qm = qa[m] + h * vm
                     wm = vm + 0.5 * h * am
-                    v[m, a] = vm if abs(vm) > TINY else 0.0
-                    q[m, a] = qm if abs(qm) > TINY else 0.0
-                    w[m, a] = wm if abs(wm) > TINY else 0.0
+                    va[m] = vm if abs(vm) > TINY else 0.0
+                    qa[m] = qm if abs(qm) > TINY else 0.0
+                    wa[m] = wm if abs(wm) > TINY else 0.0
 
 
 def fastest_rates(mesh: Mesh, mass_kg: float, stiffness_n_per_m: float,
@@ -157,20 +230,21 @@ class LeapfrogMechanics:
         self.substeps = substeps_for(self.omega_max, self.gamma_max, dt_s)
         self.n_masses = n
         self.n_springs = mesh.springs.shape[0]
-        self.q = np.zeros((n, 3))
-        self.v = np.zeros((n, 3))
-        self.w = np.zeros((n, 3))
-        self.f_prev = np.zeros((n, 3))
+        runs, run_e, run_tl = spring_runs(mesh.springs, e, tension_n / length)
+        inv_m = np.where(mesh.fixed, 0.0, 1.0 / mass_kg)  # fixed masses never move
+        state = np.zeros((4, 3, n))
+        self.q, self.v, self.w, self.f_prev = (s.T for s in state)
+        """Displacement (m), velocity (m/s) at the half step and at the step start, and the
+        last input (N): (n_masses, 3) views of the state the kernel keeps by component."""
+        self._state = state
+        scratch = np.zeros((5, int(runs[:, 4].max())))
         self.operands: LeapfrogOperands = (
-            np.ascontiguousarray(mesh.springs), np.ascontiguousarray(e),
-            np.ascontiguousarray(tension_n / length), float(stiffness_n_per_m),
-            float(damping_n_s_per_m), 1.0 / mass_kg, np.ascontiguousarray(mesh.free),
-            self.q, self.v, self.w, self.f_prev)
+            runs, run_e, run_tl, float(stiffness_n_per_m), float(damping_n_s_per_m), inv_m,
+            state[0], state[1], state[2], state[3], np.zeros((3, n)), scratch)
 
     def reset(self) -> None:
         """Back to rest: zero displacement, velocity and held input."""
-        for arr in (self.q, self.v, self.w, self.f_prev):
-            arr[:] = 0.0
+        self._state[:] = 0.0
 
     def advance(self, forces_n: np.ndarray) -> np.ndarray:
         """Step ``len(forces_n)`` steps; ``forces_n`` is (n, n_masses, 3) N; returns
