@@ -7,8 +7,8 @@ displacements and velocities of its two masses and adding its force to both, so 
 O(springs) time and memory where the exact ZOH of :mod:`skinhil.mechanics_linear` costs
 O(dof²). The pass goes run by run (:func:`spring_runs`: the springs of one kind along a row
 of the grid), each run reading and updating its masses as contiguous slices, so the compiler
-vectorises it: a third less time per step at 32x32 than spring by spring. The model uses it above ``EXACT_MAX_FREE_DOFS`` free degrees of freedom
-(:mod:`skinhil.skin`).
+vectorises it: a quarter less time per step at 32x32 than spring by spring. The model uses it
+above ``EXACT_MAX_FREE_DOFS`` free degrees of freedom (:mod:`skinhil.skin`).
 
 Scheme (kick-drift leapfrog, velocities at half steps; ``h = dt``, ``m`` the nodal mass):
 
