@@ -12,7 +12,9 @@ default 10 dB), spikes to events, and the events encoded for the wire
 - memory: the peak of the bytes allocated (tracemalloc, kernels compiled beforehand) while
   the model, the timeline and the encoder are built and run for 20 ticks;
 - the real-time factor of the whole loop (simulated s per wall s; >= 1 keeps real time),
-  on one thread and, with ``--threads 2``, with the neurons on two;
+  on one thread and, with ``--threads 2``, as ``serve --threads 2`` runs it: the mechanics
+  on one thread and the neurons on another, two ticks behind
+  (:class:`skinhil.pipeline.SensorPipeline`);
 - the growth: the time per step of the whole loop against the springs, as the exponent of a
   least-squares fit of log(time) on log(springs) over the leapfrog sizes (1 = linear).
 
@@ -48,6 +50,7 @@ from machine import describe, load_average  # noqa: E402
 
 import protocols  # noqa: E402
 from skinhil.geometry import format_size, parse_size  # noqa: E402
+from skinhil.pipeline import SensorPipeline  # noqa: E402
 from skinhil.sensor import SkinSensor  # noqa: E402
 from skinhil.skin import SkinModel, SkinParams  # noqa: E402
 from skinhil.timeline import Timeline  # noqa: E402
@@ -99,11 +102,13 @@ def _best_per_tick(fn, seconds: float, repeats: int) -> float:  # type: ignore[n
 
 def measure(size: tuple[int, int], threads: int, snr_db: float, seconds: float,
             repeats: int) -> SizeResult:
-    warm = SkinSensor(SkinModel(SkinParams(size=(3, 3))), DT_S, snr_db=snr_db, threads=threads)
+    warm = SkinSensor(SkinModel(SkinParams(size=(3, 3))), DT_S, snr_db=snr_db, threads=max(1, threads - 1))
     warm.advance_schedule(Timeline(DT_S, size=(3, 3)).schedule, 10)  # kernels compiled first
     tracemalloc.start()
     model = SkinModel(SkinParams(size=size))
-    sensor = SkinSensor(model, DT_S, snr_db=snr_db, seed=0, threads=threads)
+    # as the board: more than one thread pipelines the mechanics and the neurons
+    sensor = SkinSensor(model, DT_S, snr_db=snr_db, seed=0, threads=max(1, threads - 1))
+    pipeline = SensorPipeline(sensor) if threads > 1 else None
     timeline = Timeline(DT_S, size=size)
     encoder = protocols.SerialEncoder(step_us=int(round(DT_S * 1e6)), n_channels=model.n_springs)
     counts = {"events": 0}
@@ -112,9 +117,12 @@ def measure(size: tuple[int, int], threads: int, snr_db: float, seconds: float,
         first = sensor.step_index
         t_s = (first + np.arange(STEPS_PER_TICK)) * DT_S
         forces = timeline.forces(t_s)
-        _, spikes = sensor.advance(forces)
+        if pipeline is None:
+            _, spikes = sensor.advance(forces)
+        else:
+            spikes, first = pipeline.advance(forces)
         events = sensor.events(spikes, first)
-        encoder.events(events, int(round((first + STEPS_PER_TICK) * DT_S * 1e6)))
+        encoder.events(events, int(round((first + len(spikes)) * DT_S * 1e6)))
         counts["events"] += len(events)
         return forces, spikes
 
@@ -126,6 +134,8 @@ def measure(size: tuple[int, int], threads: int, snr_db: float, seconds: float,
     start = sensor.step_index
     loop_us = _best_per_tick(tick, seconds, repeats)
     events_per_s = counts["events"] / ((sensor.step_index - start) * DT_S)
+    if pipeline is not None:
+        pipeline.flush()
 
     # the parts, each alone on a block the loop produced while a stimulus pressed
     forces, spikes = tick()
@@ -149,7 +159,7 @@ def measure(size: tuple[int, int], threads: int, snr_db: float, seconds: float,
         t_end[0] += STEPS_PER_TICK * int(round(DT_S * 1e6))
 
     encode_us = _best_per_tick(encode, seconds / 8, repeats)
-    return SizeResult(size, sensor.threads, model.n_springs, model.linear_regime,
+    return SizeResult(size, threads, model.n_springs, model.linear_regime,
                       mech_us / STEPS_PER_TICK, neur_us / STEPS_PER_TICK, events_us, encode_us,
                       loop_us, memory / 1e6, events_per_s)
 

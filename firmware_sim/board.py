@@ -7,9 +7,9 @@ Per publish tick ``k`` (default 1 ms = 10 steps of 0.1 ms), due at ``t0 + (k+1)�
    (:class:`skinhil.timeline.Timeline`), a block (steps, 77, 3) N;
 2. model: ``SkinStepper.advance`` then ``NeuronPopulation.step_block``
    (:class:`skinhil.sensor.SkinSensor`): spikes (steps, 338). With ``threads`` > 1 the
-   neurons run one tick behind the mechanics, on threads of their own
-   (:class:`skinhil.pipeline.SensorPipeline`): the tick publishes the spikes of the tick
-   before, one tick more latency for up to twice the skin in real time;
+   neurons run two ticks behind the mechanics, on threads of their own
+   (:class:`skinhil.pipeline.SensorPipeline`): the tick publishes the spikes of two ticks
+   before, two ticks more latency for a tick that costs the larger stage, not the sum;
 3. events: spikes → events stamped with board time in µs (step resolution) → counted as
    generated → the event FIFO (or dropped by reason, :mod:`firmware_sim.counters`);
 4. host commands received since the last tick are executed and answered (ACK/NACK);
@@ -102,7 +102,7 @@ class BoardConfig:
     """The skin's top layer (rows, cols) of masses; 6x6 is the paper's 338-channel skin."""
     threads: int = 1
     """Threads the model runs on. 1: mechanics then neurons, each tick. N > 1: the mechanics
-    on the board's thread and the neurons on N − 1 others, one tick behind
+    on the board's thread and the neurons on N − 1 others, two ticks behind
     (:class:`skinhil.pipeline.SensorPipeline`); pays off from a few thousand channels, where
     one core cannot keep real time."""
     schedule_mode: int = Timeline.SCHEDULE_RANDOM
@@ -254,7 +254,7 @@ class Board:
     # -- records ------------------------------------------------------------------------
     def board_time_us(self) -> int:
         """Board time (µs): the end of the last step whose spikes are out (with a pipeline,
-        one tick behind the mechanics)."""
+        two ticks behind the mechanics)."""
         steps = self.sensor.step_index if self.pipeline is None else self.pipeline.spike_index
         return steps * self._dt_us
 
@@ -484,7 +484,9 @@ class Board:
         if self.pipeline is None:
             self.sensor.advance(self.timeline.forces(t_s))
         else:
-            for _ in range(2):  # the second call steps the neurons too
+            # the second call starts the neurons on the first block and reset() waits for
+            # them: one block of noise draws, as on one thread, so the same spikes follow
+            for _ in range(2):
                 self.pipeline.advance(self.timeline.forces(t_s))
         for entry in self.timeline.schedule.entries[:1]:  # a stimulus while it is active
             Schedule((ScheduledStimulus(0.0, entry.stimulus, 0),)).force_at(
@@ -504,7 +506,7 @@ class Board:
         transmit queue (it holds at most ``tx_target_s`` and one frame more, plus these
         records: events counted as sent always reach the wire)."""
         if self.pipeline is not None and self.pipeline.in_flight:
-            self._publish(*self.pipeline.flush())  # the last tick's spikes
+            self._publish(*self.pipeline.flush())  # the last two ticks' spikes
         link = self.link
         if link is None:
             return

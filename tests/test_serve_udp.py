@@ -59,7 +59,7 @@ def _udp_run(*args: str) -> tuple[np.ndarray, list[tuple[int, int, int]], dict[s
 
 
 def test_serve_two_threads_stream_the_same_events() -> None:
-    """``--threads 2`` (neurons one tick behind the mechanics, on a thread of their own)
+    """``--threads 2`` (neurons two ticks behind the mechanics, on a thread of their own)
     streams exactly the events and markers of one thread: same times, same channels, and the
     board time and the accounting end where they do."""
     args = ("--size", "16x16", "--duration", "1.5", "--seed", "6", "--rest", "0.05",

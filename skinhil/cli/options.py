@@ -60,7 +60,7 @@ def add_model_options(parser: argparse.ArgumentParser, snr_default: float = math
                         help="threads for the model (diffusion noise), worth it from a few "
                              "thousand channels: offline the neurons share them (the same "
                              "spikes as one thread); serve steps the mechanics on one and the "
-                             "neurons on the others, one tick behind (default: 1)")
+                             "neurons on the others, two ticks behind (default: 1)")
 
 
 def noise_from_args(args: argparse.Namespace) -> NoiseParams:
