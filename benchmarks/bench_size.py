@@ -102,7 +102,8 @@ def _best_per_tick(fn, seconds: float, repeats: int) -> float:  # type: ignore[n
 
 def measure(size: tuple[int, int], threads: int, snr_db: float, seconds: float,
             repeats: int) -> SizeResult:
-    warm = SkinSensor(SkinModel(SkinParams(size=(3, 3))), DT_S, snr_db=snr_db, threads=max(1, threads - 1))
+    warm = SkinSensor(SkinModel(SkinParams(size=(3, 3))), DT_S, snr_db=snr_db,
+                      threads=max(1, threads - 1))
     warm.advance_schedule(Timeline(DT_S, size=(3, 3)).schedule, 10)  # kernels compiled first
     tracemalloc.start()
     model = SkinModel(SkinParams(size=size))
@@ -128,6 +129,8 @@ def measure(size: tuple[int, int], threads: int, snr_db: float, seconds: float,
 
     for _ in range(20):  # compile, and let the random schedule start
         tick()
+    if pipeline is not None:  # stopping tracemalloc while the worker allocates crashes CPython
+        pipeline.flush()
     _, memory = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     counts["events"] = 0

@@ -34,7 +34,8 @@ class SensorPipeline:
     ``sensor.threads`` threads of their own) two blocks behind, concurrently.
 
     ``spike_index`` counts the steps whose spikes have come out; ``sensor.step_index`` the
-    steps the mechanics have taken (``in_flight`` more).
+    steps the mechanics have taken (``in_flight`` more). :meth:`flush` before starting or
+    stopping ``tracemalloc``: CPython crashes when tracing stops while the worker allocates.
     """
 
     def __init__(self, sensor: SkinSensor) -> None:
