@@ -48,7 +48,7 @@ from firmware_sim.fifo import EventFifo
 from firmware_sim.link import BoardLink
 from skinhil.errors import ConfigError, TransportError
 from skinhil.geometry import PAPER_SIZE, MeshSize
-from skinhil.neurons import NoiseParams
+from skinhil.neurons import NoiseParams, check_threads
 from skinhil.pipeline import SensorPipeline
 from skinhil.sensor import SkinSensor
 from skinhil.skin import SkinModel, SkinParams
@@ -137,6 +137,7 @@ class BoardConfig:
             raise ConfigError("status period must be > 0 s")
         if not 0 <= self.spin_s < self.tick_s:
             raise ConfigError(f"spin {self.spin_s!r} s must lie in [0, tick {self.tick_s!r} s)")
+        check_threads(self.threads)
         return self
 
 
@@ -317,7 +318,7 @@ class Board:
                 if math.isnan(snr) or snr == -math.inf:
                     reason = why.BAD_ARGUMENT
                 else:
-                    self.sensor.set_snr(snr)
+                    (self.sensor if self.pipeline is None else self.pipeline).set_snr(snr)
             elif op in (codes.QUERY_STATUS, codes.PING):
                 pass  # QUERY_STATUS: the status follows the ACK
             else:

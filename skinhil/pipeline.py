@@ -12,7 +12,8 @@ interpreter lock, so the two really run at once.
 
 The same spikes as :meth:`skinhil.sensor.SkinSensor.advance`, block for block (same
 arithmetic and the same noise draws, in the same order), two calls late; a change of the
-noise level reaches the first block whose neurons have not started. The board uses this with
+noise level (:meth:`SensorPipeline.set_snr`) reaches the first block whose neurons start
+after it. The board uses this with
 ``threads`` > 1 (:class:`firmware_sim.board.Board`) for skins of thousands of sensors, where
 one core cannot keep real time.
 """
@@ -24,6 +25,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 
+from skinhil.neurons import check_snr_db
 from skinhil.sensor import SkinSensor
 
 log = logging.getLogger(__name__)
@@ -45,6 +47,7 @@ class SensorPipeline:
         self._running: Future[np.ndarray] | None = None
         self._running_steps = 0
         self._queued: np.ndarray | None = None
+        self._snr_db: float | None = None
         self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="skinhil-neurons")
 
     @property
@@ -75,8 +78,18 @@ class SensorPipeline:
         out.append(self._take()[0])
         return np.concatenate(out), first
 
+    def set_snr(self, snr_db: float) -> None:
+        """Change the noise level (dB; inf for none) from the next block whose neurons start
+        on (the worker may be reading the level of the block it runs: change it here, not
+        through the sensor)."""
+        check_snr_db(snr_db)
+        self._snr_db = snr_db
+
     def _start(self) -> None:
-        """The neurons start on the queued block, on the worker."""
+        """The neurons start on the queued block, on the worker (idle now)."""
+        if self._snr_db is not None:
+            self.sensor.set_snr(self._snr_db)
+            self._snr_db = None
         if self._queued is not None:
             self._running = self._worker.submit(self.sensor.neurons.step_block, self._queued,
                                                 self.sensor.dt_s)

@@ -35,12 +35,12 @@ def test_pipeline_gives_the_same_spikes_two_blocks_late(size: tuple[int, int]) -
             else:
                 got.append(spikes)
                 firsts.append(first)
-            # a change of noise reaches the neurons' next block to start: in the pipeline
+            # a change of noise reaches the next block whose neurons start: in the pipeline
             # the block after the next call's, so the same change is made one call later
             if i == 60:
                 one.set_snr(20.0)
             if i == 61:
-                pipe.sensor.set_snr(20.0)
+                pipe.set_snr(20.0)
         spikes, first = pipe.flush()
         assert first == sum(blocks[:-2]) and len(spikes) == sum(blocks[-2:])
         got.extend(np.split(spikes, [blocks[-2]]))
