@@ -71,3 +71,36 @@ def test_serve_two_threads_stream_the_same_events() -> None:
         assert summary["generated"] == summary["sent"] == len(ev) > 0
     assert np.array_equal(one[0], two[0])
     assert one[1] == two[1] and len(one[1]) > 0
+
+
+def test_serve_two_threads_answers_commands_and_keeps_the_account() -> None:
+    """Host commands reach a pipelined board (``--threads 2``): a new SNR and a stimulus
+    started by the host are acknowledged, the stimulus' onset marker arrives after every event
+    before its time, and every status closes the account."""
+    peer = UdpPeer(versions=(2,))
+    serve = ServeProcess("--udp", f"127.0.0.1:{peer.port}", "--size", "12x12", "--threads",
+                         "2", "--host-driven", "--duration", "2.0", "--json")
+    try:
+        assert peer.wait_for(lambda p: p.of(protocols.Status) or serve.exited, 60)
+        assert not serve.exited, serve.stderr
+        codes = protocols.CommandCode
+        t_snr = peer.command(codes.SET_SNR, 0.0)
+        t_stim = peer.command(codes.SET_STIMULUS, 10)  # paper stimulus A
+        assert serve.wait(60) == 0, serve.stderr
+        sent = serve.summary()["sent"]
+        assert peer.wait_for(lambda p: len(p.events) >= sent, 2)
+    finally:
+        serve.kill()
+        peer.close()
+    acks = {a.token: a for a in peer.of(protocols.Ack)}
+    assert acks[t_snr].ok and acks[t_stim].ok
+    onsets = [m for m in peer.of(protocols.Marker) if m.stimulus_id == 10
+              and m.phase == protocols.MarkerPhase.ONSET]
+    assert len(onsets) == 1
+    i_onset = peer.records.index(onsets[0])
+    before = peer.events[: peer.events_before[i_onset]]
+    assert len(before) == 0 or before["t"].max() < onsets[0].t_us
+    assert np.any(peer.events["t"] >= onsets[0].t_us)  # the press and the noise fire
+    for st in peer.of(protocols.Status):
+        assert st.events_generated == st.events_sent + st.events_dropped + st.events_queued
+    assert serve.summary()["generated"] == serve.summary()["sent"] == len(peer.events)
