@@ -172,15 +172,42 @@ def next_normal_pair(state: np.ndarray) -> tuple[float, float]:  # pragma: no co
     return z1, z2
 
 
+@numba.njit
+def _finish_pair(spill: np.ndarray, lo: np.uint64,
+                 hi: np.uint64) -> tuple[float, float]:  # pragma: no cover - compiled
+    # the pair of the word's halves lo, hi when one of them is rejected by the fast test:
+    # each half as _normal_from_bits takes it, the stream in spill (updated)
+    z1, s0, s1, s2, s3 = _normal_from_bits(lo, spill[0], spill[1], spill[2], spill[3], spill)
+    spill[0], spill[1], spill[2], spill[3] = s0, s1, s2, s3
+    z2, s0, s1, s2, s3 = _normal_from_bits(hi, spill[0], spill[1], spill[2], spill[3], spill)
+    spill[0], spill[1], spill[2], spill[3] = s0, s1, s2, s3
+    return z1, z2
+
+
 @numba.njit(cache=True)
 def fill_normal_pairs(state: np.ndarray, first: np.ndarray,
                       second: np.ndarray) -> None:  # pragma: no cover - compiled
     """Fill ``first[i], second[i]`` with pair ``i`` of standard normals from the stream
-    ``state`` (4 uint64, updated): the same draws as ``next_normal_pair`` in a loop."""
+    ``state`` (4 uint64, updated): the same draws as ``next_normal_pair`` in a loop, with
+    one test for the pair's fast path and the rare rest (5 % of pairs) out of line."""
     spill = np.empty(4, dtype=np.uint64)
     s0, s1, s2, s3 = state[0], state[1], state[2], state[3]
+    m7, m25 = np.uint64(127), np.uint64(0x1FFFFFF)
     for i in range(first.shape[0]):
-        first[i], second[i], s0, s1, s2, s3 = normal_pair(s0, s1, s2, s3, spill)
+        w, s0, s1, s2, s3 = xoshiro_step(s0, s1, s2, s3)
+        lo = w & np.uint64(0xFFFFFFFF)
+        hi = w >> np.uint64(32)
+        iz1 = np.int64(lo & m7)
+        hz1 = np.int64((lo >> np.uint64(7)) & m25) - 16777216
+        iz2 = np.int64(hi & m7)
+        hz2 = np.int64((hi >> np.uint64(7)) & m25) - 16777216
+        if abs(hz1) < ZIG_KN25[iz1] and abs(hz2) < ZIG_KN25[iz2]:
+            first[i] = hz1 * ZIG_WN25[iz1]
+            second[i] = hz2 * ZIG_WN25[iz2]
+        else:
+            spill[0], spill[1], spill[2], spill[3] = s0, s1, s2, s3
+            first[i], second[i] = _finish_pair(spill, lo, hi)
+            s0, s1, s2, s3 = spill[0], spill[1], spill[2], spill[3]
     state[0], state[1], state[2], state[3] = s0, s1, s2, s3
 
 
