@@ -1,9 +1,12 @@
 """``skinhil serve --udp`` on loopback (127.0.0.1): whole packets in every datagram, every
 event and marker arrives, commands are answered, and the loss accounting is exact; the 6x6
-skin in the narrow format (version 1) and a 32x32 skin (15,730 channels) in the wide one."""
+skin in the narrow format (version 1) and a 32x32 skin (15,730 channels) in the wide one; a
+board on two threads (``--threads 2``) streams what one thread does and answers commands."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -44,16 +47,25 @@ def test_serve_udp_stream_is_complete_and_exact(size: str, version: int,
     assert [a.ok for a in peer.of(protocols.Ack) if a.token == token] == [True]
 
 
-def _udp_run(*args: str) -> tuple[np.ndarray, list[tuple[int, int, int]], dict[str, Any]]:
+@contextmanager
+def _udp_board(*args: str) -> Iterator[tuple[UdpPeer, ServeProcess]]:
+    """``skinhil serve --udp ARGS --json`` into a UdpPeer; when the block ends the board has
+    finished and every event it sent is decoded."""
     peer = UdpPeer(versions=(2,))
     serve = ServeProcess("--udp", f"127.0.0.1:{peer.port}", "--json", *args)
     try:
+        yield peer, serve
         assert serve.wait(120) == 0, serve.stderr
         sent = serve.summary()["sent"]
         assert peer.wait_for(lambda p: len(p.events) >= sent, 2)
     finally:
         serve.kill()
         peer.close()
+
+
+def _udp_run(*args: str) -> tuple[np.ndarray, list[tuple[int, int, int]], dict[str, Any]]:
+    with _udp_board(*args) as (peer, serve):
+        pass
     markers = [(m.t_us, m.stimulus_id, m.phase) for m in peer.of(protocols.Marker)]
     return peer.events, markers, serve.summary()
 
@@ -77,21 +89,13 @@ def test_serve_two_threads_answers_commands_and_keeps_the_account() -> None:
     """Host commands reach a pipelined board (``--threads 2``): a new SNR and a stimulus
     started by the host are acknowledged, the stimulus' onset marker arrives after every event
     before its time, and every status closes the account."""
-    peer = UdpPeer(versions=(2,))
-    serve = ServeProcess("--udp", f"127.0.0.1:{peer.port}", "--size", "12x12", "--threads",
-                         "2", "--host-driven", "--duration", "2.0", "--json")
-    try:
+    with _udp_board("--size", "12x12", "--threads", "2", "--host-driven", "--duration",
+                    "2.0") as (peer, serve):
         assert peer.wait_for(lambda p: p.of(protocols.Status) or serve.exited, 60)
         assert not serve.exited, serve.stderr
         codes = protocols.CommandCode
         t_snr = peer.command(codes.SET_SNR, 0.0)
         t_stim = peer.command(codes.SET_STIMULUS, 10)  # paper stimulus A
-        assert serve.wait(60) == 0, serve.stderr
-        sent = serve.summary()["sent"]
-        assert peer.wait_for(lambda p: len(p.events) >= sent, 2)
-    finally:
-        serve.kill()
-        peer.close()
     acks = {a.token: a for a in peer.of(protocols.Ack)}
     assert acks[t_snr].ok and acks[t_stim].ok
     onsets = [m for m in peer.of(protocols.Marker) if m.stimulus_id == 10
