@@ -35,18 +35,24 @@ Signed-By: /usr/share/keyrings/debian-archive-keyring.gpg
 EOF
 apt_sid=(-o "Dir::Etc::SourceList=$root/sid.sources" -o Dir::Etc::SourceParts=/dev/null
          -o "Dir::State::Lists=$root/lists" -o APT::Sandbox::User=root)
-command -v patchelf > /dev/null || apt-get install -y -qq patchelf > /dev/null
+if ! command -v patchelf > /dev/null; then
+    apt-get update -qq
+    apt-get install -y -qq patchelf > /dev/null
+fi
 apt-get "${apt_sid[@]}" update -qq
 (cd "$root/debs" && apt-get "${apt_sid[@]}" download -qq user-mode-linux libc6)
 dpkg -x "$root"/debs/user-mode-linux_*.deb "$root/uml"
 dpkg -x "$root"/debs/libc6_*.deb "$root/libc"
 mkdir -p "$root/lib"
 cp "$root"/libc/usr/lib/x86_64-linux-gnu/{ld-linux-x86-64.so.2,libc.so.6,libm.so.6} "$root/lib/"
-install -m 755 "$root/uml/usr/bin/linux.uml" /usr/local/bin/linux
+install -m 755 "$root/uml/usr/bin/linux.uml" "$root/linux.uml"
 patchelf --set-interpreter "$root/lib/ld-linux-x86-64.so.2" --set-rpath "$root/lib" \
-    /usr/local/bin/linux
+    "$root/linux.uml"
+# `linux` is Debian's alternative (/usr/bin/linux): point it at this kernel
+update-alternatives --quiet --install /usr/bin/linux linux "$root/linux.uml" 200
+update-alternatives --quiet --set linux "$root/linux.uml"
 cp -r "$root"/uml/usr/lib/uml/modules/* /usr/lib/uml/modules/
-rm -rf "$root/debs" "$root/uml/usr/lib/uml/modules"
+rm -rf "$root/debs" "$root/uml" "$root/libc"
 hash -r
 if ! boots; then
     echo "Debian unstable's user-mode Linux does not boot either" >&2
