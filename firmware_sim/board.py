@@ -493,10 +493,7 @@ class Board:
             Schedule((ScheduledStimulus(0.0, entry.stimulus, 0),)).force_at(
                 t_s, entry.stimulus.size)
         self.sensor.events(np.zeros((n, self.sensor.model.n_springs), dtype=bool), 0)
-        if self.pipeline is None:
-            self.sensor.reset()
-        else:
-            self.pipeline.reset()
+        (self.sensor if self.pipeline is None else self.pipeline).reset()
         if self.link is not None:
             self.link.warm_up(self.status())
 

@@ -87,7 +87,7 @@ def spring_runs(springs: np.ndarray, e: np.ndarray,
     one.
 
     Returns the (n_runs, 5) int64 table (s0, ds, i0, j0, length), each run's e (n_runs, 3)
-    and T/L (n_runs,) in 1/m·N.
+    and T/L (n_runs,) in N/m.
     """
     where = {(int(i), int(j)): s for s, (i, j) in enumerate(springs)}
     taken = np.zeros(len(springs), dtype=bool)

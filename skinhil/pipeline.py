@@ -13,22 +13,18 @@ interpreter lock, so the two really run at once.
 The same spikes as :meth:`skinhil.sensor.SkinSensor.advance`, block for block (same
 arithmetic and the same noise draws, in the same order), two calls late; a change of the
 noise level (:meth:`SensorPipeline.set_snr`) reaches the first block whose neurons start
-after it. The board uses this with
-``threads`` > 1 (:class:`firmware_sim.board.Board`) for skins of thousands of sensors, where
-one core cannot keep real time.
+after it. The board uses this with ``threads`` > 1 (:class:`firmware_sim.board.Board`) for
+skins of thousands of sensors, where one core cannot keep real time.
 """
 
 from __future__ import annotations
 
-import logging
 from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 
 from skinhil.neurons import check_snr_db
 from skinhil.sensor import SkinSensor
-
-log = logging.getLogger(__name__)
 
 
 class SensorPipeline:

@@ -138,13 +138,20 @@ def next_normal(state: np.ndarray) -> float:  # pragma: no cover - compiled
 
 
 @numba.njit(inline="always")
+def _layer_and_value(bits: np.uint64) -> tuple[np.int64, np.int64]:  # pragma: no cover
+    # 32 random bits → the ziggurat layer (7 bits) and the signed value (25 bits); the fast
+    # path accepts when abs(value) < ZIG_KN25[layer], giving value * ZIG_WN25[layer]
+    return (np.int64(bits & np.uint64(127)),
+            np.int64((bits >> np.uint64(7)) & np.uint64(0x1FFFFFF)) - 16777216)
+
+
+@numba.njit(inline="always")
 def _normal_from_bits(bits: np.uint64, s0: np.uint64, s1: np.uint64, s2: np.uint64,
                       s3: np.uint64, spill: np.ndarray) -> tuple[
                           float, np.uint64, np.uint64, np.uint64, np.uint64]:  # pragma: no cover
     # a standard normal from 32 random bits (7 for the layer, 25 for the signed value) and
     # the stream state, updated; the rare rejections draw more words through ``spill``
-    iz = np.int64(bits & np.uint64(127))
-    hz = np.int64((bits >> np.uint64(7)) & np.uint64(0x1FFFFFF)) - 16777216
+    iz, hz = _layer_and_value(bits)
     if abs(hz) < ZIG_KN25[iz]:
         return hz * ZIG_WN25[iz], s0, s1, s2, s3
     spill[0], spill[1], spill[2], spill[3] = s0, s1, s2, s3
@@ -192,15 +199,12 @@ def fill_normal_pairs(state: np.ndarray, first: np.ndarray,
     one test for the pair's fast path and the rare rest (5 % of pairs) out of line."""
     spill = np.empty(4, dtype=np.uint64)
     s0, s1, s2, s3 = state[0], state[1], state[2], state[3]
-    m7, m25 = np.uint64(127), np.uint64(0x1FFFFFF)
     for i in range(first.shape[0]):
         w, s0, s1, s2, s3 = xoshiro_step(s0, s1, s2, s3)
         lo = w & np.uint64(0xFFFFFFFF)
         hi = w >> np.uint64(32)
-        iz1 = np.int64(lo & m7)
-        hz1 = np.int64((lo >> np.uint64(7)) & m25) - 16777216
-        iz2 = np.int64(hi & m7)
-        hz2 = np.int64((hi >> np.uint64(7)) & m25) - 16777216
+        iz1, hz1 = _layer_and_value(lo)
+        iz2, hz2 = _layer_and_value(hi)
         if abs(hz1) < ZIG_KN25[iz1] and abs(hz2) < ZIG_KN25[iz2]:
             first[i] = hz1 * ZIG_WN25[iz1]
             second[i] = hz2 * ZIG_WN25[iz2]
