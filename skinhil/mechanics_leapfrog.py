@@ -72,7 +72,7 @@ LeapfrogOperands = tuple[np.ndarray, np.ndarray, np.ndarray, float, float, np.nd
                          np.ndarray]
 """``LeapfrogMechanics.operands``: the run table, each run's unit vector e and T/L, k, c,
 1/m per mass (0 on fixed masses), then the state q, v, w (velocity at the step start),
-f_prev, and scratch: acc (3, n_masses) and (5, longest run); arrays updated in place, the
+f_prev, and scratch: acc (3, n_masses) and (4, longest run); arrays updated in place, the
 state stored by component (3, n_masses)."""
 
 
@@ -125,7 +125,7 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
     qx, qy, qz = q[0], q[1], q[2]
     wx, wy, wz = w[0], w[1], w[2]
     gx, gy, gz = acc[0], acc[1], acc[2]
-    ke_s, ax_s, dx_s, dy_s, dz_s = scratch[0], scratch[1], scratch[2], scratch[3], scratch[4]
+    ke_s, fx_s, fy_s, fz_s = scratch[0], scratch[1], scratch[2], scratch[3]
     n_masses = q.shape[1]
     by_component = np.empty((forces.shape[0], 3, n_masses))  # contiguous per component
     for step in range(forces.shape[0]):
@@ -144,7 +144,7 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
                 qxj, qyj, qzj = qx[j0:j0 + n], qy[j0:j0 + n], qz[j0:j0 + n]
                 wxi, wyi, wzi = wx[i0:i0 + n], wy[i0:i0 + n], wz[i0:i0 + n]
                 wxj, wyj, wzj = wx[j0:j0 + n], wy[j0:j0 + n], wz[j0:j0 + n]
-                for t in range(n):  # extension and its rate along e; axial force
+                for t in range(n):  # extension, its rate along e, the spring's force
                     dx = qxj[t] - qxi[t]
                     dy = qyj[t] - qyi[t]
                     dz = qzj[t] - qzi[t]
@@ -153,10 +153,10 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
                             + ez * (wzj[t] - wzi[t]))
                     ke = k * ext
                     ke_s[t] = ke
-                    ax_s[t] = ke + c * rate - tl * ext
-                    dx_s[t] = dx
-                    dy_s[t] = dy
-                    dz_s[t] = dz
+                    ax = ke + c * rate - tl * ext  # axial, along e; tension across
+                    fx_s[t] = ax * ex + tl * dx
+                    fy_s[t] = ax * ey + tl * dy
+                    fz_s[t] = ax * ez + tl * dz
                 if sub == 0:
                     if ds == 1:  # a slice: the compiler vectorises the copy
                         contiguous = row[s0:s0 + n]
@@ -169,24 +169,14 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
                 # on mass j: two loops, since the masses i of a run may be its masses j
                 gxi, gyi, gzi = gx[i0:i0 + n], gy[i0:i0 + n], gz[i0:i0 + n]
                 gxj, gyj, gzj = gx[j0:j0 + n], gy[j0:j0 + n], gz[j0:j0 + n]
-                if tl == 0.0:  # no tension: the force is axial
-                    for t in range(n):
-                        gxi[t] += ax_s[t] * ex
-                        gyi[t] += ax_s[t] * ey
-                        gzi[t] += ax_s[t] * ez
-                    for t in range(n):
-                        gxj[t] -= ax_s[t] * ex
-                        gyj[t] -= ax_s[t] * ey
-                        gzj[t] -= ax_s[t] * ez
-                else:
-                    for t in range(n):
-                        gxi[t] += ax_s[t] * ex + tl * dx_s[t]
-                        gyi[t] += ax_s[t] * ey + tl * dy_s[t]
-                        gzi[t] += ax_s[t] * ez + tl * dz_s[t]
-                    for t in range(n):
-                        gxj[t] -= ax_s[t] * ex + tl * dx_s[t]
-                        gyj[t] -= ax_s[t] * ey + tl * dy_s[t]
-                        gzj[t] -= ax_s[t] * ez + tl * dz_s[t]
+                for t in range(n):
+                    gxi[t] += fx_s[t]
+                    gyi[t] += fy_s[t]
+                    gzi[t] += fz_s[t]
+                for t in range(n):
+                    gxj[t] -= fx_s[t]
+                    gyj[t] -= fy_s[t]
+                    gzj[t] -= fz_s[t]
             for a in range(3):
                 qa, va, wa, fa, ga, fsa = q[a], v[a], w[a], f_prev[a], acc[a], fs[a]
                 for m in range(n_masses):
@@ -247,7 +237,7 @@ class LeapfrogMechanics:
         """Displacement (m), velocity (m/s) at the half step and at the step start, and the
         last input (N): (n_masses, 3) views of the state the kernel keeps by component."""
         self._state = state
-        scratch = np.zeros((5, int(runs[:, 4].max())))
+        scratch = np.zeros((4, int(runs[:, 4].max())))
         self.operands: LeapfrogOperands = (
             runs, run_e, run_tl, float(stiffness_n_per_m), float(damping_n_s_per_m), inv_m,
             state[0], state[1], state[2], state[3], np.zeros((3, n)), scratch)
