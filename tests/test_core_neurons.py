@@ -8,7 +8,7 @@ import pytest
 from skinhil import IzhikevichParams, NeuronPopulation, events_to_raster, raster_to_events
 from skinhil.errors import ConfigError
 from skinhil.neurons import NoiseParams
-from skinhil.rng import fill_normal, seed_states
+from skinhil.rng import ZIG_R, fill_normal, seed_states
 
 
 def _euler_reference(current: float, n_steps: int, dt_ms: float) -> list[int]:
@@ -81,12 +81,19 @@ def test_measured_noise_variance_is_measured_awgn() -> None:
 def test_ziggurat_is_standard_normal() -> None:
     from scipy import stats
 
-    out = np.empty(400_000)
+    out = np.empty(2_000_000)
     fill_normal(seed_states(11, 1)[0], out)
     assert stats.kstest(out, "norm").pvalue > 1e-3
-    assert abs(out.var() - 1) < 0.01
-    tail = (np.abs(out) > 3.5).mean()  # beyond the ziggurat's base layer
-    assert abs(tail - 2 * stats.norm.sf(3.5)) < 1.5e-4
+    assert abs(out.var() - 1) < 0.005
+    # the density bin by bin, layer edges and wedges included (0.025 wide over ±4.5)
+    edges = np.concatenate([[-np.inf], np.linspace(-4.5, 4.5, 361), [np.inf]])
+    seen, _ = np.histogram(out, edges)
+    expected = np.diff(stats.norm.cdf(edges)) * out.size
+    assert stats.chisquare(seen, expected * seen.sum() / expected.sum()).pvalue > 1e-3
+    for x in (3.5, ZIG_R):  # the outer layers, and the tail beyond the base layer's edge
+        tail = (np.abs(out) > x).sum()
+        mean = 2 * stats.norm.sf(x) * out.size
+        assert abs(tail - mean) < 4 * np.sqrt(mean)
 
 
 def test_snr_inf_is_deterministic_and_seed_reproducible() -> None:
