@@ -7,7 +7,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from skinhil import SkinModel, SkinParams
-from skinhil.mechanics_leapfrog import LeapfrogMechanics
+from skinhil.mechanics_leapfrog import LeapfrogMechanics, moving_ranges
 from skinhil.mechanics_linear import assemble, free_block, free_dofs, sensor_matrix
 from skinhil.neurons import NeuronPopulation
 from skinhil.sensor import SkinSensor
@@ -59,6 +59,21 @@ def _error_vs_exact(dt: float, tension_n: float) -> float:
     exact, leap = (SkinModel(SkinParams(size=(8, 8), tension_n=tension_n, linear_stepper=how))
                    .simulate(stim, 0.05, dt) for how in ("exact", "leapfrog"))
     return float(np.abs(exact - leap).max() / np.abs(exact).max())
+
+
+def test_only_free_masses_are_stepped_and_fixed_springs_read_zero() -> None:
+    model = SkinModel(SkinParams(size=(12, 9)))
+    ranges = moving_ranges(model.mesh.fixed)
+    stepped = np.concatenate([np.arange(m0, m0 + n) for m0, n in ranges])
+    assert np.array_equal(stepped, model.mesh.free)  # each free mass once, in order
+    assert len(ranges) == (12 - 2) + (11 - 2)  # the inner rows of layers 1 and 2
+    mech = LeapfrogMechanics(model.mesh, 1e-4, 50.0, 0.05, 0.0, 1e-4)
+    push = np.zeros((200, model.n_masses, 3))
+    push[:, model.mesh.free, 2] = -0.01
+    out = mech.advance(push)
+    between_fixed = model.mesh.fixed[model.mesh.springs].all(axis=1)
+    assert np.all(out[:, between_fixed] == 0.0) and np.abs(out[:, ~between_fixed]).max() > 0
+    assert np.all(mech.q[model.mesh.fixed] == 0.0)
 
 
 def test_leapfrog_is_second_order() -> None:
