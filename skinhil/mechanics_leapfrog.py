@@ -143,11 +143,13 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
     gx, gy, gz = acc[0], acc[1], acc[2]
     ke_s, fx_s, fy_s, fz_s = scratch[0], scratch[1], scratch[2], scratch[3]
     n_masses = q.shape[1]
-    by_component = np.empty((forces.shape[0], 3, n_masses))  # contiguous per component
+    # the input on the moving masses, contiguous per component (no other is read)
+    by_component = np.empty((forces.shape[0], 3, n_masses))
     for step in range(forces.shape[0]):
-        for m in range(n_masses):
-            for a in range(3):
-                by_component[step, a, m] = forces[step, m, a]
+        for mr in range(moving.shape[0]):
+            for m in range(moving[mr, 0], moving[mr, 0] + moving[mr, 1]):
+                for a in range(3):
+                    by_component[step, a, m] = forces[step, m, a]
     for step in range(forces.shape[0]):
         fs = by_component[step]
         row = out[step]
