@@ -88,13 +88,14 @@ def state_space(mesh: Mesh, mass_kg: float, stiffness_n_per_m: float,
 
 
 def zoh(a: np.ndarray, b: np.ndarray, dt_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """Exact zero-order-hold discretisation ``(Ad, Bd)`` of ``x' = A x + B u`` at ``dt_s``."""
-    n, m = b.shape
-    big = np.zeros((n + m, n + m))
-    big[:n, :n] = a
-    big[:n, n:] = b
+    """Exact zero-order-hold discretisation ``(Ad, Bd)`` of ``x' = A x + B u`` at ``dt_s``;
+    ``a`` (..., n, n) and ``b`` (..., n, m) may hold a stack of systems (one call)."""
+    n, m = b.shape[-2:]
+    big = np.zeros(a.shape[:-2] + (n + m, n + m))
+    big[..., :n, :n] = a
+    big[..., :n, n:] = b
     phi = expm(big * dt_s)
-    return phi[:n, :n].copy(), phi[:n, n:].copy()
+    return phi[..., :n, :n].copy(), phi[..., :n, n:].copy()
 
 
 def sensor_matrix(mesh: Mesh, stiffness_n_per_m: float) -> sparse.csr_array:
@@ -213,13 +214,15 @@ def modal_form(k_free: np.ndarray, mass_kg: float, damping_per_stiffness_s: floa
     modal force ``(Φᵀ f)_m``.
     """
     lam, phi = np.linalg.eigh(k_free)
-    mad = np.empty((4, lam.size))
-    mbd = np.empty((2, lam.size))
-    for m, lm in enumerate(lam):
-        a = np.array([[0.0, 1.0], [-lm / mass_kg, -damping_per_stiffness_s * lm / mass_kg]])
-        ad, bd = zoh(a, np.array([[0.0], [1.0 / mass_kg]]), dt_s)
-        mad[:, m] = ad.ravel()
-        mbd[:, m] = bd[:, 0]
+    a = np.zeros((lam.size, 2, 2))  # one oscillator per mode, discretised in one call
+    a[:, 0, 1] = 1.0
+    a[:, 1, 0] = -lam / mass_kg
+    a[:, 1, 1] = -damping_per_stiffness_s * lam / mass_kg
+    b = np.zeros((lam.size, 2, 1))
+    b[:, 1, 0] = 1.0 / mass_kg
+    ad, bd = zoh(a, b, dt_s)
+    mad = np.ascontiguousarray(ad.reshape(lam.size, 4).T)
+    mbd = np.ascontiguousarray(bd[:, :, 0].T)
     return np.ascontiguousarray(phi), mad, mbd
 
 
@@ -236,11 +239,9 @@ class LinearMechanics:
                  damping_n_s_per_m: float, tension_n: float, dt_s: float) -> None:
         a, b = state_space(mesh, mass_kg, stiffness_n_per_m, damping_n_s_per_m, tension_n)
         self.a, self.b = a, b
-        self.ad, self.bd = zoh(a, b, dt_s)
         self.cy = sensor_matrix(mesh, stiffness_n_per_m)
         self.ke, self.ii, self.jj = spring_slots(mesh, stiffness_n_per_m)
         self.dofs = free_dofs(mesh)
-        self.bd_t = np.ascontiguousarray(self.bd.T)
         self.dt_s = dt_s
         self.x = np.zeros(a.shape[0])
         self.modal = tension_n == 0.0
@@ -248,7 +249,10 @@ class LinearMechanics:
         """What the compiled modal step takes after the forces and the output (None when
         not modal); their contents are the stepper's state, updated in place."""
         n = self.dofs.size
-        if self.modal:
+        if not self.modal:  # the full state space, discretised once (the modal form: below)
+            self.ad, self.bd = zoh(a, b, dt_s)
+            self.bd_t = np.ascontiguousarray(self.bd.T)
+        else:
             k_free = -a[n:, :n] * mass_kg
             self.phi, self.mad, self.mbd = modal_form(
                 k_free, mass_kg, damping_n_s_per_m / stiffness_n_per_m, dt_s)

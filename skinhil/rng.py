@@ -51,7 +51,7 @@ def _top_gap(r: float, n_layers: int) -> float:
 def _ziggurat_edge(n_layers: int) -> tuple[float, float]:
     """``(r, area)``: the base layer's edge and every layer's area for ``n_layers`` layers."""
     lo, hi = 2.0, 6.0
-    for _ in range(100):  # bisection to the last bit
+    for _ in range(64):  # bisection to the last bit (4 / 2^64)
         mid = 0.5 * (lo + hi)
         if _top_gap(mid, n_layers) > 0.0:
             lo = mid
