@@ -477,23 +477,25 @@ class Board:
     def warm_up(self) -> None:
         """Run the model and every link code path once off the clock (compiles or loads the
         numba kernels: a cold compile inside a tick is a stall of about a second), then
-        reset the model to rest."""
+        reset the model to rest with its noise streams where they were: the board then
+        plays exactly what the same seed gives offline
+        (:func:`skinhil.receiver.training.board_stream`)."""
         if self.sensor.step_index:
             return
+        streams = self.sensor.neurons.noise_streams()
         n = self.config.steps_per_tick
         t_s = np.arange(n) * self.config.dt_s
         if self.pipeline is None:
             self.sensor.advance(self.timeline.forces(t_s))
         else:
-            # the second call starts the neurons on the first block and reset() waits for
-            # them: one block of noise draws, as on one thread, so the same spikes follow
-            for _ in range(2):
+            for _ in range(2):  # the second call starts the neurons on the first block
                 self.pipeline.advance(self.timeline.forces(t_s))
         for entry in self.timeline.schedule.entries[:1]:  # a stimulus while it is active
             Schedule((ScheduledStimulus(0.0, entry.stimulus, 0),)).force_at(
                 t_s, entry.stimulus.size)
         self.sensor.events(np.zeros((n, self.sensor.model.n_springs), dtype=bool), 0)
-        (self.sensor if self.pipeline is None else self.pipeline).reset()
+        (self.sensor if self.pipeline is None else self.pipeline).reset()  # waits for them
+        self.sensor.neurons.restore_noise_streams(streams)
         if self.link is not None:
             self.link.warm_up(self.status())
 

@@ -319,6 +319,15 @@ class NeuronPopulation:
         self.v[:] = self.params.c_mv
         self.u[:] = self.params.b * self.params.c_mv
 
+    def noise_streams(self) -> np.ndarray:
+        """A copy of the noise streams' state, for :meth:`restore_noise_streams`."""
+        return self._rng.copy()
+
+    def restore_noise_streams(self, streams: np.ndarray) -> None:
+        """Put the noise streams back where :meth:`noise_streams` saw them: the draws made
+        since then are drawn again."""
+        self._rng[:] = streams
+
     def set_snr(self, snr_db: float) -> None:
         """Change the noise level (dB; inf for none) from the next step on."""
         self._noise_var = self.noise.variance(snr_db)

@@ -15,6 +15,7 @@ from harness.peers import UdpPeer
 from harness.serve import ServeProcess
 
 import protocols
+from skinhil.receiver.training import board_stream
 
 
 @pytest.mark.parametrize(("size", "version", "duration_s"),
@@ -73,7 +74,8 @@ def _udp_run(*args: str) -> tuple[np.ndarray, list[tuple[int, int, int]], dict[s
 def test_serve_two_threads_stream_the_same_events() -> None:
     """``--threads 2`` (neurons two ticks behind the mechanics, on a thread of their own)
     streams exactly the events and markers of one thread: same times, same channels, and the
-    board time and the accounting end where they do."""
+    board time and the accounting end where they do; and both stream exactly what the same
+    seed gives offline (the board's warm-up leaves the noise streams where they were)."""
     args = ("--size", "16x16", "--duration", "1.5", "--seed", "6", "--rest", "0.05",
             "--snr-db", "10")
     one = _udp_run(*args)
@@ -83,6 +85,12 @@ def test_serve_two_threads_stream_the_same_events() -> None:
         assert summary["generated"] == summary["sent"] == len(ev) > 0
     assert np.array_equal(one[0], two[0])
     assert one[1] == two[1] and len(one[1]) > 0
+    blocks = list(board_stream(1.5, 10.0, 0.05, 6, size=(16, 16)))
+    offline = np.concatenate([ev for ev, _, _ in blocks])
+    assert np.array_equal(one[0]["t"], offline["t"])
+    assert np.array_equal(one[0]["addr"], offline["addr"])
+    assert [(t, i, phase.name.lower()) for t, i, phase in one[1]] == [
+        (m.t_us, m.stimulus_id, m.phase) for _, ms, _ in blocks for m in ms]
 
 
 def test_serve_two_threads_answers_commands_and_keeps_the_account() -> None:
