@@ -25,6 +25,7 @@ from skinhil.cli.listen import LivePrinter, class_names, print_summary, summary
 from skinhil.cli.options import DECODE_SNR_DB, snr_value
 from skinhil.cli.train import print_report
 from skinhil.errors import ConfigError
+from skinhil.kernel_cache import source_hash
 from skinhil.receiver import Receiver
 from skinhil.receiver.model_file import load_window_decoder
 from skinhil.receiver.session import run_against_board, serve_command
@@ -40,7 +41,9 @@ DEMO_REPS = 30
 data-limited below this: cross-validated window accuracy 83 % with 15 per condition, 97 %
 with 30 (``skinhil train --reps``, seed 0)."""
 MODEL_FORMAT_TAG = "v3"
-"""Bumped when the cached model must be retrained."""
+"""Bumped when the cached model's file format changes; the file name also carries the hash
+of the package sources (:func:`skinhil.kernel_cache.source_hash`), so a model is retrained
+once after any change of the code that simulated, cut and fitted its windows."""
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -94,8 +97,8 @@ def board_warming(baud: int, snr_db: float, seed: int) -> Iterator[None]:
 def cached_model(snr_db: float, quiet: bool, baud: int, seed: int) -> Path:
     """The cached demo model for ``snr_db``, trained now (with a progress bar) if missing,
     while the board's kernels warm up for a board at ``baud`` and ``seed``."""
-    path = cache_dir() / (f"demo-decoder-{snr_db:g}dB-rest{DEMO_REST_S:g}s-"
-                          f"{MODEL_FORMAT_TAG}.npz")
+    stem = f"demo-decoder-{snr_db:g}dB-rest{DEMO_REST_S:g}s-{MODEL_FORMAT_TAG}"
+    path = cache_dir() / f"{stem}-{source_hash()}.npz"
     if path.exists():
         return path
     print(f"training the demo model at {snr_db:g} dB (first use; cached in {path.parent})",
@@ -109,6 +112,9 @@ def cached_model(snr_db: float, quiet: bool, baud: int, seed: int) -> Path:
     tmp = path.with_name(path.name + ".partial.npz")
     decoder.save(tmp)
     os.replace(tmp, path)
+    for old in path.parent.glob(f"{stem}*.npz"):  # models of earlier sources
+        if old != path:
+            old.unlink(missing_ok=True)
     return path
 
 

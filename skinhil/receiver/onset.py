@@ -6,8 +6,10 @@ The rule, per simulation step ``k`` (board time ``k·dt``):
    (steps ``k−W+1 .. k``);
 2. a running baseline of ``c`` (mean ``μ`` and standard deviation ``σ``, exponential
    weighting with time constant ``baseline_tau_s``) is kept from the steps outside the
-   refractory periods (the warm-up ``warmup_s`` only learns it); it is updated at the end
-   of every ``UPDATE_S`` of board time (blocks aligned to absolute step numbers), so the
+   refractory periods and the ``W − 1`` steps before an onset (the warm-up ``warmup_s``
+   only learns it); it is updated at the end of every ``UPDATE_S`` of board time (blocks
+   aligned to absolute step numbers) from the steps known by then to be no such step (the
+   last ``W − 1`` wait for the next update: an onset may still follow them), so the
    threshold is fixed within such a block and the result does not depend on how the stream
    was chunked;
 3. an onset is detected at the first step with ``c[k] ≥ μ + max(z·σ, min_excess_spikes)``,
@@ -55,6 +57,8 @@ class OnsetDetector:
         self._n_base = 0
         self._refractory_until = 0
         self._pending = np.zeros(3)  # baseline steps, sum, sum of squares since last update
+        self._held_steps = np.zeros(0, dtype=np.int64)  # baseline steps an onset may exclude
+        self._held_counts = np.zeros(0)
 
     @property
     def threshold(self) -> float:
@@ -88,7 +92,9 @@ class OnsetDetector:
         counts = csum[w:] - csum[:-w]  # counts[j]: the window ending at step start + j
         self._tail = joined[len(joined) - (w - 1):]
         thr = self.threshold
-        steps = start + np.arange(n)
+        # the baseline candidates: the steps held back from the last block, then this one's
+        steps = np.concatenate([self._held_steps, start + np.arange(n)])
+        values = np.concatenate([self._held_counts, counts])
         baseline = steps >= self._refractory_until
         onsets: list[int] = []
         pos = 0
@@ -104,7 +110,10 @@ class OnsetDetector:
             self._refractory_until = start + hit + self.refractory_steps
             baseline &= ~((steps > start + hit - w) & (steps < self._refractory_until))
             pos = hit + 1
-        vals = counts[baseline]
+        # the last W − 1 steps wait: an onset in the next block would exclude them
+        hold = baseline & (steps > start + n - w)
+        vals = values[baseline & ~hold]
+        self._held_steps, self._held_counts = steps[hold], values[hold]
         self._pending += (vals.shape[0], float(vals.sum()), float(np.sum(vals ** 2)))
         self.step_index = start + n
         if self.step_index % self.update_steps == 0:
