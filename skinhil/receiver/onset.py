@@ -6,10 +6,8 @@ The rule, per simulation step ``k`` (board time ``k·dt``):
    (steps ``k−W+1 .. k``);
 2. a running baseline of ``c`` (mean ``μ`` and standard deviation ``σ``, exponential
    weighting with time constant ``baseline_tau_s``) is kept from the steps outside the
-   refractory periods and the ``W − 1`` steps before an onset (the warm-up ``warmup_s``
-   only learns it); it is updated at the end of every ``UPDATE_S`` of board time (blocks
-   aligned to absolute step numbers) from the steps known by then to be no such step (the
-   last ``W − 1`` wait for the next update: an onset may still follow them), so the
+   refractory periods (the warm-up ``warmup_s`` only learns it); it is updated at the end
+   of every ``UPDATE_S`` of board time (blocks aligned to absolute step numbers), so the
    threshold is fixed within such a block and the result does not depend on how the stream
    was chunked;
 3. an onset is detected at the first step with ``c[k] ≥ μ + max(z·σ, min_excess_spikes)``,
@@ -57,8 +55,6 @@ class OnsetDetector:
         self._n_base = 0
         self._refractory_until = 0
         self._pending = np.zeros(3)  # baseline steps, sum, sum of squares since last update
-        self._held_steps = np.zeros(0, dtype=np.int64)  # baseline steps an onset may exclude
-        self._held_counts = np.zeros(0)
 
     @property
     def threshold(self) -> float:
@@ -92,9 +88,7 @@ class OnsetDetector:
         counts = csum[w:] - csum[:-w]  # counts[j]: the window ending at step start + j
         self._tail = joined[len(joined) - (w - 1):]
         thr = self.threshold
-        # the baseline candidates: the steps held back from the last block, then this one's
-        steps = np.concatenate([self._held_steps, start + np.arange(n)])
-        values = np.concatenate([self._held_counts, counts])
+        steps = start + np.arange(n)
         baseline = steps >= self._refractory_until
         onsets: list[int] = []
         pos = 0
@@ -108,12 +102,11 @@ class OnsetDetector:
             hit = lo + int(above[0])
             onsets.append(start + hit)
             self._refractory_until = start + hit + self.refractory_steps
-            baseline &= ~((steps > start + hit - w) & (steps < self._refractory_until))
+            # the refractory period leaves the baseline; the steps before the onset stay in
+            # it (whether they could be excluded would depend on where the chunk began)
+            baseline &= ~((steps >= start + hit) & (steps < self._refractory_until))
             pos = hit + 1
-        # the last W − 1 steps wait: an onset in the next block would exclude them
-        hold = baseline & (steps > start + n - w)
-        vals = values[baseline & ~hold]
-        self._held_steps, self._held_counts = steps[hold], values[hold]
+        vals = counts[baseline]
         self._pending += (vals.shape[0], float(vals.sum()), float(np.sum(vals ** 2)))
         self.step_index = start + n
         if self.step_index % self.update_steps == 0:
