@@ -9,7 +9,7 @@ Run: ``python benchmarks/bench_core.py`` (pinned to one core). Reports
 - ``SkinModel.simulate`` of paper stimulus A (0.5 s on the 0.1 ms grid) against scipy's
   ``solve_ivp`` RK45 at its default tolerances on the same equations (``x' = A x + B u(t)``,
   the stimulus profile evaluated at any t, output on the same 0.1 ms grid) (target ≥ 2x);
-- the same 450 trials kept as events (:func:`skinhil.trials.simulate_trial_events`): wall
+- the same 450 trials kept as events (:func:`skinhil.model.trials.simulate_trial_events`): wall
   time, events, and the peak of the memory allocated while they run (tracemalloc: numpy's
   and Python's allocations; target ≤ 250 MB), beside the dense raster's.
 """
@@ -36,9 +36,9 @@ from skinhil import (  # noqa: E402
     paper_stimuli,
     random_schedule,
 )
-from skinhil.mechanics_linear import free_dofs, state_space  # noqa: E402
-from skinhil.sensor import SkinSensor  # noqa: E402
-from skinhil.trials import simulate_trial_events, simulate_trials  # noqa: E402
+from skinhil.model.mechanics.linear import free_dofs, state_space  # noqa: E402
+from skinhil.model.sensor import SkinSensor  # noqa: E402
+from skinhil.model.trials import simulate_trial_events, simulate_trials  # noqa: E402
 
 REPEATS = 3
 """Each figure is the best of this many runs: the machine is a shared VM whose speed varies."""

@@ -3,7 +3,7 @@
 For each top-layer size (default 6x6, 16x16, 26x26, 32x32, 48x48) it steps the board's loop
 as :meth:`firmware_sim.board.Board.tick` does, without pacing and without a transport: per
 1 ms tick of ten 0.1 ms steps, the default random schedule's forces
-(:class:`skinhil.timeline.Timeline`), the model (mechanics and neurons, noise at ``--snr-db``,
+(:class:`skinhil.model.timeline.Timeline`), the model (mechanics and neurons, noise at ``--snr-db``,
 default 10 dB), spikes to events, and the events encoded for the wire
 (:class:`protocols.SerialEncoder`, wide format above 338 channels). It reports
 
@@ -14,7 +14,7 @@ default 10 dB), spikes to events, and the events encoded for the wire
 - the real-time factor of the whole loop (simulated s per wall s; >= 1 keeps real time),
   on one thread and, with ``--threads 2``, as ``serve --threads 2`` runs it: the mechanics
   on one thread and the neurons on another, two ticks behind
-  (:class:`skinhil.pipeline.SensorPipeline`);
+  (:class:`skinhil.model.pipeline.SensorPipeline`);
 - the growth: the time per step of the whole loop against the springs, as the exponent of a
   least-squares fit of log(time) on log(springs) over the leapfrog sizes (1 = linear).
 
@@ -49,11 +49,11 @@ import numpy as np  # noqa: E402
 from machine import describe, load_average  # noqa: E402
 
 import protocols  # noqa: E402
-from skinhil.geometry import format_size, parse_size  # noqa: E402
-from skinhil.pipeline import SensorPipeline  # noqa: E402
-from skinhil.sensor import SkinSensor  # noqa: E402
-from skinhil.skin import SkinModel, SkinParams  # noqa: E402
-from skinhil.timeline import Timeline  # noqa: E402
+from skinhil.model.geometry import format_size, parse_size  # noqa: E402
+from skinhil.model.pipeline import SensorPipeline  # noqa: E402
+from skinhil.model.sensor import SkinSensor  # noqa: E402
+from skinhil.model.skin import SkinModel, SkinParams  # noqa: E402
+from skinhil.model.timeline import Timeline  # noqa: E402
 
 DT_S = 1e-4
 STEPS_PER_TICK = 10

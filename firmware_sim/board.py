@@ -4,11 +4,11 @@ Per publish tick ``k`` (default 1 ms = 10 steps of 0.1 ms), due at ``t0 + (k+1)�
 (:class:`firmware_sim.clock.TickClock`), in this order:
 
 1. stimulus: the external forces of the timeline at each step's start time
-   (:class:`skinhil.timeline.Timeline`), a block (steps, 77, 3) N;
+   (:class:`skinhil.model.timeline.Timeline`), a block (steps, 77, 3) N;
 2. model: ``SkinStepper.advance`` then ``NeuronPopulation.step_block``
-   (:class:`skinhil.sensor.SkinSensor`): spikes (steps, 338). With ``threads`` > 1 the
+   (:class:`skinhil.model.sensor.SkinSensor`): spikes (steps, 338). With ``threads`` > 1 the
    neurons run two ticks behind the mechanics, on threads of their own
-   (:class:`skinhil.pipeline.SensorPipeline`): the tick publishes the spikes of two ticks
+   (:class:`skinhil.model.pipeline.SensorPipeline`): the tick publishes the spikes of two ticks
    before, two ticks more latency for a tick that costs the larger stage, not the sum;
 3. events: spikes → events stamped with board time in µs (step resolution) → counted as
    generated → the event FIFO (or dropped by reason, :mod:`firmware_sim.counters`);
@@ -47,13 +47,13 @@ from firmware_sim.counters import BoardCounters
 from firmware_sim.fifo import EventFifo
 from firmware_sim.link import BoardLink
 from skinhil.errors import ConfigError, TransportError
-from skinhil.geometry import PAPER_SIZE, MeshSize
-from skinhil.neurons import NoiseParams, check_threads
-from skinhil.pipeline import SensorPipeline
-from skinhil.sensor import SkinSensor
-from skinhil.skin import SkinModel, SkinParams
-from skinhil.stimuli import Schedule, ScheduledStimulus
-from skinhil.timeline import MarkerEvent, Timeline
+from skinhil.model.geometry import PAPER_SIZE, MeshSize
+from skinhil.model.neurons import NoiseParams, check_threads
+from skinhil.model.pipeline import SensorPipeline
+from skinhil.model.sensor import SkinSensor
+from skinhil.model.skin import SkinModel, SkinParams
+from skinhil.model.stimuli import Schedule, ScheduledStimulus
+from skinhil.model.timeline import MarkerEvent, Timeline
 from skinhil.transports import Transport
 
 log = logging.getLogger(__name__)
@@ -103,7 +103,7 @@ class BoardConfig:
     threads: int = 1
     """Threads the model runs on. 1: mechanics then neurons, each tick. N > 1: the mechanics
     on the board's thread and the neurons on N − 1 others, two ticks behind
-    (:class:`skinhil.pipeline.SensorPipeline`); pays off from a few thousand channels, where
+    (:class:`skinhil.model.pipeline.SensorPipeline`); pays off from a few thousand channels, where
     one core cannot keep real time."""
     schedule_mode: int = Timeline.SCHEDULE_RANDOM
     """0: host-driven only, 1: default random schedule, 2: schedule file."""

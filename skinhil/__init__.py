@@ -5,10 +5,10 @@ importable from here; see the submodules for the equations.
 """
 
 # isort: off
-import skinhil.kernel_cache  # noqa: F401  (keys numba's cache on the sources: first of all)
+import skinhil.model.kernel_cache  # noqa: F401  (keys numba's cache on the sources: first of all)
 # isort: on
 from skinhil.events import EVENT_DTYPE, make_events
-from skinhil.neurons import (
+from skinhil.model.neurons import (
     IzhikevichParams,
     NeuronPopulation,
     NoiseParams,
@@ -16,9 +16,9 @@ from skinhil.neurons import (
     raster_to_events,
     simulate_spikes,
 )
-from skinhil.psp import PSPFilterBank, PSPParams, psp_kernel
-from skinhil.skin import SkinModel, SkinParams, SkinStepper
-from skinhil.stimuli import (
+from skinhil.model.psp import PSPFilterBank, PSPParams, psp_kernel
+from skinhil.model.skin import SkinModel, SkinParams, SkinStepper
+from skinhil.model.stimuli import (
     Schedule,
     ScheduledStimulus,
     Stimulus,
@@ -28,7 +28,7 @@ from skinhil.stimuli import (
     paper_stimuli,
     random_schedule,
 )
-from skinhil.trials import simulate_trial_events, simulate_trials
+from skinhil.model.trials import simulate_trial_events, simulate_trials
 
 __version__ = "0.1.0"
 

@@ -14,8 +14,8 @@ from skinhil.analysis.decoding_snr import (
     trial_standard_error,
 )
 from skinhil.decoding import FeatureSpec
-from skinhil.stimuli import direction_conditions
-from skinhil.trials import simulate_trials
+from skinhil.model.stimuli import direction_conditions
+from skinhil.model.trials import simulate_trials
 
 
 def test_feature_set_columns_equal_a_channel_subset_spec() -> None:

@@ -8,7 +8,7 @@ from harness.peers import PtyPeer
 
 import protocols
 from firmware_sim.board import Board, BoardConfig
-from skinhil.timeline import Timeline
+from skinhil.model.timeline import Timeline
 from skinhil.transports import SerialTransport
 
 

@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from skinhil.stimuli import Schedule, ScheduledStimulus, direction_conditions
-from skinhil.timeline import EXTEND_AHEAD_S, Timeline
+from skinhil.model.stimuli import Schedule, ScheduledStimulus, direction_conditions
+from skinhil.model.timeline import EXTEND_AHEAD_S, Timeline
 
 DT_S = 1e-4
 DT_US = 100

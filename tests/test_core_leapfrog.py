@@ -7,11 +7,11 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from skinhil import SkinModel, SkinParams
-from skinhil.mechanics_leapfrog import LeapfrogMechanics, moving_ranges
-from skinhil.mechanics_linear import assemble, free_block, free_dofs, sensor_matrix
-from skinhil.neurons import NeuronPopulation
-from skinhil.sensor import SkinSensor
-from skinhil.stimuli import at_size, direction_conditions, paper_stimuli, random_schedule
+from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, moving_ranges
+from skinhil.model.mechanics.linear import assemble, free_block, free_dofs, sensor_matrix
+from skinhil.model.neurons import NeuronPopulation
+from skinhil.model.sensor import SkinSensor
+from skinhil.model.stimuli import at_size, direction_conditions, paper_stimuli, random_schedule
 
 
 def _solve_ivp_reference(model: SkinModel, force: np.ndarray, dt: float) -> np.ndarray:

@@ -7,7 +7,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from skinhil import SkinModel, SkinParams, Stimulus, paper_stimuli
-from skinhil.mechanics_geometric import GeometricMechanics, _spring_forces
+from skinhil.model.mechanics.geometric import GeometricMechanics, _spring_forces
 
 
 def _zoh_reference(rhs, x0: np.ndarray, stim: Stimulus, dt: float, n: int,

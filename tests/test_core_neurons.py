@@ -7,8 +7,8 @@ import pytest
 
 from skinhil import IzhikevichParams, NeuronPopulation, events_to_raster, raster_to_events
 from skinhil.errors import ConfigError
-from skinhil.neurons import NoiseParams
-from skinhil.rng import ZIG_R, fill_normal, seed_states
+from skinhil.model.neurons import NoiseParams
+from skinhil.model.rng import ZIG_R, fill_normal, seed_states
 
 
 def _euler_reference(current: float, n_steps: int, dt_ms: float) -> list[int]:

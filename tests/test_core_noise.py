@@ -1,6 +1,6 @@
 """The default neuron noise: a step-invariant diffusion (σ·sqrt(dt/dt_ref)·N(0,1) per step).
 
-Checks the three properties the noise definition promises (skinhil/neurons.py): the σ added
+Checks the three properties the noise definition promises (skinhil/model/neurons.py): the σ added
 per step is the documented one, no SNR down to −10 dB runs away, and the spike statistics at
 10 dB do not depend on the step.
 """
@@ -13,9 +13,9 @@ from scipy import stats
 
 from skinhil import NeuronPopulation, SkinModel
 from skinhil.errors import ConfigError
-from skinhil.neurons import NoiseParams
-from skinhil.sensor import SkinSensor
-from skinhil.stimuli import Schedule, ScheduledStimulus, builtin_catalog, direction_conditions
+from skinhil.model.neurons import NoiseParams
+from skinhil.model.sensor import SkinSensor
+from skinhil.model.stimuli import Schedule, ScheduledStimulus, builtin_catalog, direction_conditions
 
 
 @pytest.mark.parametrize(("snr_db", "dt_ms"), [(10.0, 0.1), (10.0, 0.025), (0.0, 1.0),

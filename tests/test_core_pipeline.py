@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from skinhil import SkinModel, SkinParams
-from skinhil.pipeline import SensorPipeline
-from skinhil.sensor import SkinSensor
-from skinhil.timeline import Timeline
+from skinhil.model.pipeline import SensorPipeline
+from skinhil.model.sensor import SkinSensor
+from skinhil.model.timeline import Timeline
 
 DT_S = 1e-4
 

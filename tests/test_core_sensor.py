@@ -3,8 +3,8 @@
 import numpy as np
 
 from skinhil import NeuronPopulation, SkinModel, Stimulus, paper_stimuli
-from skinhil.sensor import SkinSensor
-from skinhil.stimuli import Schedule, ScheduledStimulus
+from skinhil.model.sensor import SkinSensor
+from skinhil.model.stimuli import Schedule, ScheduledStimulus
 
 DT_S = 1e-4
 

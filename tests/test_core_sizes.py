@@ -5,7 +5,7 @@ import pytest
 
 from skinhil import SkinModel, SkinParams, Stimulus
 from skinhil.errors import ConfigError
-from skinhil.geometry import (
+from skinhil.model.geometry import (
     build_mesh,
     layer_shapes,
     mass_count,
@@ -14,9 +14,9 @@ from skinhil.geometry import (
     parse_size,
     spring_count,
 )
-from skinhil.sensor import SkinSensor
-from skinhil.stimuli import at_size, builtin_catalog, paper_stimuli
-from skinhil.timeline import Timeline
+from skinhil.model.sensor import SkinSensor
+from skinhil.model.stimuli import at_size, builtin_catalog, paper_stimuli
+from skinhil.model.timeline import Timeline
 
 
 @pytest.mark.parametrize("size", [(3, 3), (6, 6), (4, 7), (16, 16), (26, 26)])
@@ -98,9 +98,9 @@ def test_schedule_of_another_size_is_refused() -> None:
 
 
 def test_trial_events_are_the_raster_s_spikes() -> None:
-    from skinhil.neurons import raster_to_events
-    from skinhil.stimuli import direction_conditions
-    from skinhil.trials import simulate_trial_events, simulate_trials
+    from skinhil.model.neurons import raster_to_events
+    from skinhil.model.stimuli import direction_conditions
+    from skinhil.model.trials import simulate_trial_events, simulate_trials
 
     stims = direction_conditions()[7:9]
     raster = simulate_trials(stims, 3, duration_s=0.12, snr_db=10.0, seed=4)

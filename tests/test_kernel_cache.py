@@ -1,9 +1,9 @@
 """No compiled kernel runs stale code: numba's cache is keyed on all the package sources.
 
-A fused kernel of ``skinhil.sensor`` inlines ``skinhil.neurons._euler_step``. numba alone keys
-the fused kernel's cache entry on ``sensor.py`` only, so after an edit of ``neurons.py`` it
-would load the old compiled code. Here a copy of the packages runs the kernel in one process,
-the callee's constant is changed, and a new process must see the change.
+A fused kernel of ``skinhil.model.sensor`` inlines ``skinhil.model.neurons._euler_step``.
+numba alone keys the fused kernel's cache entry on ``sensor.py`` only, so after an edit of
+``neurons.py`` it would load the old compiled code. Here a copy of the packages runs the
+kernel in one process, the callee's constant is changed, and a new process must see the change.
 """
 
 from __future__ import annotations
@@ -14,14 +14,14 @@ import subprocess
 import sys
 from pathlib import Path
 
-from skinhil.kernel_cache import KERNEL_PACKAGES, source_hash
+from skinhil.model.kernel_cache import KERNEL_PACKAGES, source_hash
 
 REPO = Path(__file__).resolve().parent.parent
 
 RUN_FUSED_KERNEL = """
 import numpy as np
 import numba
-from skinhil.sensor import SkinSensor
+from skinhil.model.sensor import SkinSensor
 sensor = SkinSensor(dt_s=1e-4)  # no noise: deterministic
 springs, spikes = sensor.advance(np.zeros((20, 77, 3)))  # the one-call compiled block
 print(int(spikes.sum()), numba.config.CACHE_DIR)
@@ -46,7 +46,7 @@ def test_edit_of_an_inlined_callee_in_another_file_is_seen(tmp_path: Path) -> No
     assert cache_before.is_relative_to(tmp_path)
     assert any(cache_before.rglob("sensor._modal_sensor_kernel*.nbi"))  # cached on disk
 
-    neurons = tmp_path / "skinhil" / "neurons.py"
+    neurons = tmp_path / "skinhil" / "model" / "neurons.py"
     text = neurons.read_text()
     old = "v[i] = vv + dt_ms * (0.04 * vv * vv + 5.0 * vv + 140.0 - uu + gain * current[i])"
     assert text.count(old) == 1

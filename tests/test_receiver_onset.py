@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import skinhil
+from skinhil.model.sensor import SkinSensor
 from skinhil.receiver import OnsetDetector, OnsetParams
-from skinhil.sensor import SkinSensor
 
 DT_S = 1e-4
 

@@ -9,7 +9,7 @@ from harness.peers import PtyPeer
 from harness.serve import ServeProcess, realtime_args
 
 import protocols
-from skinhil.timeline import Timeline
+from skinhil.model.timeline import Timeline
 
 DT_US = 100
 

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from skinhil.errors import ModelFileError
-from skinhil.geometry import spring_count
+from skinhil.model.geometry import spring_count
 from skinhil.receiver.model_file import load_window_decoder
 from skinhil.receiver.training import train_decoder
 

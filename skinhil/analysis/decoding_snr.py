@@ -28,9 +28,9 @@ from tqdm.auto import tqdm
 
 from skinhil.decoding import CVResult, DirectionDecoder, FeatureSpec, cross_validate
 from skinhil.errors import ConfigError
-from skinhil.skin import SkinModel
-from skinhil.stimuli import direction_conditions
-from skinhil.trials import simulate_trials
+from skinhil.model.skin import SkinModel
+from skinhil.model.stimuli import direction_conditions
+from skinhil.model.trials import simulate_trials
 
 PAPER_SNRS_DB: tuple[float, ...] = (0.0, 5.0, 10.0, 15.0, 20.0, 30.0, math.inf)
 """The SNRs (dB) of Figure 4G."""

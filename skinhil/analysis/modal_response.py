@@ -5,7 +5,7 @@ Why: a K x C sweep simulates the paper stimuli at hundreds of parameter points; 
 
 How (``linear`` mechanics without baseline tension, ``M = m I``): the damping is then
 proportional to the stiffness, ``C = (c/k) K``, so the modes of ``K``
-(:func:`skinhil.mechanics_linear.modal_form`, ``K = Φ diag(λ) Φᵀ``) decouple the equations
+(:func:`skinhil.model.mechanics.linear.modal_form`, ``K = Φ diag(λ) Φᵀ``) decouple the equations
 into 75 oscillators, each discretised by the same exact zero-order hold as
 :class:`skinhil.SkinModel`. Every stimulus here has peak forces ``F_s`` and a time profile
 ``p(t)`` (Figure 1D), so mode m's response is ``(Φᵀ F_s)_m · h_m(t)`` with ``h_m`` the mode's
@@ -26,10 +26,16 @@ import numpy as np
 from scipy.signal import lfilter
 
 from skinhil.errors import ConfigError
-from skinhil.geometry import Mesh, build_mesh, format_size
-from skinhil.mechanics_linear import assemble, free_block, free_dofs, modal_form, sensor_matrix
-from skinhil.skin import SkinParams
-from skinhil.stimuli import Stimulus
+from skinhil.model.geometry import Mesh, build_mesh, format_size
+from skinhil.model.mechanics.linear import (
+    assemble,
+    free_block,
+    free_dofs,
+    modal_form,
+    sensor_matrix,
+)
+from skinhil.model.skin import SkinParams
+from skinhil.model.stimuli import Stimulus
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.stimuli import Stimulus
+from skinhil.model.stimuli import Stimulus
 
 
 @dataclass(frozen=True)

@@ -43,8 +43,8 @@ from skinhil.analysis.information import InformationMeasures, information_measur
 from skinhil.analysis.modal_response import reduced_responses, supports
 from skinhil.analysis.phases import PhaseWindows
 from skinhil.errors import ConfigError
-from skinhil.skin import Mechanics, SkinModel, SkinParams
-from skinhil.stimuli import at_size, paper_stimuli
+from skinhil.model.skin import Mechanics, SkinModel, SkinParams
+from skinhil.model.stimuli import at_size, paper_stimuli
 
 logger = logging.getLogger(__name__)
 

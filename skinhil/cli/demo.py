@@ -25,12 +25,12 @@ from skinhil.cli.listen import LivePrinter, class_names, print_summary, summary
 from skinhil.cli.options import DECODE_SNR_DB, snr_value
 from skinhil.cli.train import print_report
 from skinhil.errors import ConfigError
-from skinhil.kernel_cache import source_hash
+from skinhil.model.kernel_cache import source_hash
+from skinhil.model.timeline import DEFAULT_REST_S
 from skinhil.receiver import Receiver
 from skinhil.receiver.model_file import load_window_decoder
 from skinhil.receiver.session import run_against_board, serve_command
 from skinhil.receiver.training import train_decoder
-from skinhil.timeline import DEFAULT_REST_S
 from skinhil.transports import PtyMasterTransport
 
 DEFAULT_DURATION_S = 20.0
@@ -42,7 +42,7 @@ data-limited below this: cross-validated window accuracy 83 % with 15 per condit
 with 30 (``skinhil train --reps``, seed 0)."""
 MODEL_FORMAT_TAG = "v3"
 """Bumped when the cached model's file format changes; the file name also carries the hash
-of the package sources (:func:`skinhil.kernel_cache.source_hash`), so a model is retrained
+of the package sources (:func:`skinhil.model.kernel_cache.source_hash`), so a model is retrained
 once after any change of the code that simulated, cut and fitted its windows."""
 
 

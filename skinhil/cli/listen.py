@@ -19,7 +19,7 @@ import numpy as np
 from skinhil.cli.options import add_size_option
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.errors import ConfigError
-from skinhil.geometry import spring_count
+from skinhil.model.geometry import spring_count
 from skinhil.receiver import (
     BusReceiver,
     Receiver,
@@ -262,6 +262,6 @@ def run(args: argparse.Namespace) -> int:
 
 def class_names() -> dict[int, str]:
     """Display names of the direction classes (stimulus id → name)."""
-    from skinhil.stimuli import direction_conditions
+    from skinhil.model.stimuli import direction_conditions
 
     return {i: s.name for i, s in enumerate(direction_conditions())}

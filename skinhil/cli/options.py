@@ -6,9 +6,9 @@ import argparse
 import math
 
 from skinhil.errors import ConfigError
-from skinhil.geometry import PAPER_SIZE, MeshSize, parse_size
-from skinhil.neurons import NoiseParams
-from skinhil.skin import SkinModel, SkinParams
+from skinhil.model.geometry import PAPER_SIZE, MeshSize, parse_size
+from skinhil.model.neurons import NoiseParams
+from skinhil.model.skin import SkinModel, SkinParams
 
 DECODE_SNR_DB = 10.0
 """Default noise level (dB) of ``skinhil train`` and ``skinhil demo``: the paper's operating

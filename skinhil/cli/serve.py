@@ -16,9 +16,9 @@ from firmware_sim.clock import request_realtime
 from skinhil.cli.options import add_model_options, noise_from_args
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.errors import ConfigError
-from skinhil.geometry import format_size
-from skinhil.stimuli import load_schedule
-from skinhil.timeline import Timeline
+from skinhil.model.geometry import format_size
+from skinhil.model.stimuli import load_schedule
+from skinhil.model.timeline import Timeline
 
 LIVE_WINDOW_TICKS = 1000
 """The live status's lateness p99 is over this many most recent ticks (its max is over the

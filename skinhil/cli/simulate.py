@@ -12,8 +12,8 @@ from tqdm.auto import tqdm
 
 from skinhil.cli.options import add_model_options, model_from_args, noise_from_args
 from skinhil.errors import ConfigError
-from skinhil.sensor import SkinSensor
-from skinhil.stimuli import Schedule, ScheduledStimulus, builtin_catalog, load_schedule
+from skinhil.model.sensor import SkinSensor
+from skinhil.model.stimuli import Schedule, ScheduledStimulus, builtin_catalog, load_schedule
 
 BLOCK_S = 0.05
 """Simulated seconds per progress-bar update."""

@@ -9,8 +9,8 @@ from pathlib import Path
 
 from skinhil.cli.options import DECODE_SNR_DB, add_size_option, snr_value
 from skinhil.errors import ConfigError
+from skinhil.model.timeline import DEFAULT_REST_S
 from skinhil.receiver.training import BIN_S, WINDOW_S, TrainingReport, train_decoder
-from skinhil.timeline import DEFAULT_REST_S
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:

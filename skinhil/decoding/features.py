@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.psp import PSPFilterBank, PSPParams
+from skinhil.model.psp import PSPFilterBank, PSPParams
 
 DEFAULT_N_CHANNELS = 338
 """Sensor count of the paper's skin (one per spring)."""

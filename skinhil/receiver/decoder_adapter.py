@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from skinhil.psp import PSPParams
+from skinhil.model.psp import PSPParams
 
 
 class WindowDecoder:

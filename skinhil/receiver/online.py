@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from skinhil.errors import ModelFileError
-from skinhil.psp import PSPFilterBank, PSPParams
+from skinhil.model.psp import PSPFilterBank, PSPParams
 from skinhil.receiver.decoder_adapter import WindowDecoder
 from skinhil.receiver.onset import OnsetDetector
 from skinhil.receiver.params import OnsetParams

@@ -31,12 +31,12 @@ import numpy as np
 
 import protocols
 from skinhil.errors import TransportError
+from skinhil.model.stimuli import direction_conditions
 from skinhil.receiver.clock import BoardClock
 from skinhil.receiver.decoder_adapter import WindowDecoder
 from skinhil.receiver.online import OnlineClassifier
 from skinhil.receiver.params import ReceiverParams
 from skinhil.receiver.scoring import ScoredDecision, scoreboard_for
-from skinhil.stimuli import direction_conditions
 from skinhil.transports import Transport
 
 log = logging.getLogger(__name__)

@@ -5,8 +5,8 @@ Protocol (what the board does, simulated offline and faster than real time):
 1. a continuous board stream: a seeded random sequence of the 9 direction conditions
    (classes 0..8), like the board's default one but balanced (each condition ``reps`` times,
    shuffled, :func:`balanced_schedule`), ``rest_s`` of rest after each, played by the board's
-   own :class:`skinhil.timeline.Timeline` (same markers) and felt by one
-   :class:`skinhil.sensor.SkinSensor` at ``snr_db`` — so every stimulus starts from the state
+   own :class:`skinhil.model.timeline.Timeline` (same markers) and felt by one
+   :class:`skinhil.model.sensor.SkinSensor` at ``snr_db`` — so every stimulus starts from the state
    the previous one left (adaptation, noise, PSP tails);
 2. its spikes, as events, go through the receiver's own onset and window code
    (:class:`~skinhil.receiver.online.OnsetWindows`): windows start at the *detected* onset;
@@ -36,14 +36,14 @@ from tqdm.auto import tqdm
 
 from skinhil.decoding import DirectionDecoder, FeatureSpec, cross_validate
 from skinhil.errors import ConfigError
-from skinhil.geometry import PAPER_SIZE, MeshSize, spring_count
+from skinhil.model.geometry import PAPER_SIZE, MeshSize, spring_count
+from skinhil.model.sensor import SkinSensor
+from skinhil.model.skin import SkinModel, SkinParams
+from skinhil.model.stimuli import Schedule, ScheduledStimulus, at_size, direction_conditions
+from skinhil.model.timeline import DEFAULT_REST_S, MarkerEvent, Timeline
 from skinhil.receiver.online import OnsetWindows
 from skinhil.receiver.params import ReceiverParams
 from skinhil.receiver.scoring import scoreboard_for
-from skinhil.sensor import SkinSensor
-from skinhil.skin import SkinModel, SkinParams
-from skinhil.stimuli import Schedule, ScheduledStimulus, at_size, direction_conditions
-from skinhil.timeline import DEFAULT_REST_S, MarkerEvent, Timeline
 
 log = logging.getLogger(__name__)
 

@@ -27,9 +27,9 @@ from skinhil.analysis.pca import PhasePCA
 from skinhil.analysis.phases import PhaseWindows
 from skinhil.analysis.sweep import SweepResult, SweepSpec, log_values, run_sweep
 from skinhil.decoding import CVResult, FeatureSpec
-from skinhil.skin import Mechanics, SkinModel, SkinParams
-from skinhil.stimuli import direction_conditions, paper_stimuli
-from skinhil.trials import simulate_trials
+from skinhil.model.skin import Mechanics, SkinModel, SkinParams
+from skinhil.model.stimuli import direction_conditions, paper_stimuli
+from skinhil.model.trials import simulate_trials
 
 logger = logging.getLogger(__name__)
 

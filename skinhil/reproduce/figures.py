@@ -15,7 +15,8 @@ import numpy as np
 
 from skinhil.analysis.sweep import SweepResult
 from skinhil.errors import ConfigError
-from skinhil.psp import PSPFilterBank
+from skinhil.model.psp import PSPFilterBank
+from skinhil.model.stimuli import direction_conditions, paper_stimuli
 from skinhil.reproduce import claims
 from skinhil.reproduce.compute import (
     ALL_SET,
@@ -27,7 +28,6 @@ from skinhil.reproduce.compute import (
     MechanicsResults,
     sensor_set_name,
 )
-from skinhil.stimuli import direction_conditions, paper_stimuli
 
 FIGURES: dict[str, str] = {
     "fig1E_variance_explained.png": "1E: variance-explained curves per phase",

@@ -14,6 +14,8 @@ from skinhil.analysis.decoding_snr import CHANCE, split_standard_error, trial_st
 from skinhil.analysis.pca import N_SIR_COMPONENTS
 from skinhil.analysis.sweep import SweepResult
 from skinhil.decoding import CVResult
+from skinhil.model.skin import SkinModel, SkinParams
+from skinhil.model.stimuli import paper_stimuli
 from skinhil.reproduce import claims
 from skinhil.reproduce.compute import (
     ALL_SET,
@@ -28,8 +30,6 @@ from skinhil.reproduce.compute import (
     sensor_set_name,
 )
 from skinhil.reproduce.figures import FIGURES
-from skinhil.skin import SkinModel, SkinParams
-from skinhil.stimuli import paper_stimuli
 
 CLAIM_KEYS: tuple[str, ...] = ("1E-F", "2A", "2B", "2C", "3F", "4F", "4G")
 """The paper's claims checked, one REPORT.md row each per mechanics."""
@@ -87,8 +87,8 @@ def _claims_table(results: Sequence[MechanicsResults]) -> list[str]:
     counts = ", ".join(f"{r.mechanics} **{sum(v.reproduced for v, _ in rows[r.mechanics])} "
                        f"of {len(CLAIM_KEYS)}**" for r in results)
     return lines + ["", f"Claims reproduced: {counts}. The default mechanics is chosen from "
-                    "these counts and the board's real-time budget: see `skinhil/skin.py` and "
-                    "the README.", ""]
+                    "these counts and the board's real-time budget: see "
+                    "`skinhil/model/skin.py` and the README.", ""]
 
 
 def _decoding_tables(r: MechanicsResults, config: ReproduceConfig) -> list[str]:

@@ -18,9 +18,9 @@ from tqdm.auto import tqdm
 
 from skinhil.errors import ConfigError
 from skinhil.events import make_events
-from skinhil.neurons import IzhikevichParams, NeuronPopulation, NoiseParams, _dt_us
-from skinhil.skin import SkinModel
-from skinhil.stimuli import Stimulus
+from skinhil.model.neurons import IzhikevichParams, NeuronPopulation, NoiseParams, _dt_us
+from skinhil.model.skin import SkinModel
+from skinhil.model.stimuli import Stimulus
 
 BLOCK_STEPS = 500
 """Steps of spikes held at a time (a block of 50 trials at 6x6 is 8.5 MB of bools)."""

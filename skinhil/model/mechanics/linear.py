@@ -23,7 +23,7 @@ import numpy as np
 from scipy import sparse
 from scipy.linalg import expm
 
-from skinhil.geometry import Mesh
+from skinhil.model.geometry import Mesh
 
 
 def spring_frames(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:

@@ -33,7 +33,7 @@ All use ``onset_s = 0``, ``indentation_s = 0.25`` and ``decay_tau_s = 0.1`` by d
 
 Mesh sizes: a :class:`Stimulus` names masses by number on a mesh of a given top-layer size
 (``size``, default the paper's 6x6), which validates the numbers; a model takes only stimuli of
-its own size (:meth:`skinhil.skin.SkinModel.check_stimulus`). The built-in stimuli are defined
+its own size (:meth:`skinhil.model.skin.SkinModel.check_stimulus`). The built-in stimuli are defined
 on the paper's 6x6 numbering; :func:`at_size` (and
 ``builtin_catalog(size)``) moves them to another size keeping each pushed mass's place
 relative to the centre of its layer: layer, row and column are kept and the row (column) is
@@ -59,7 +59,7 @@ import numba
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.geometry import (
+from skinhil.model.geometry import (
     PAPER_SIZE,
     MeshSize,
     check_size,
@@ -82,7 +82,7 @@ USER_STIMULUS_ID_BASE = 100
 class Stimulus:
     """A touch: peak force vectors (N) on numbered masses and the Figure 1D profile.
 
-    ``forces`` maps a 1-based mass number (:mod:`skinhil.geometry`) to ``(fx, fy, fz)`` in
+    ``forces`` maps a 1-based mass number (:mod:`skinhil.model.geometry`) to ``(fx, fy, fz)`` in
     newtons, on a mesh whose top layer is ``size`` (rows, cols) masses.
     ``onset_s`` is when the force starts, ``indentation_s`` how long it lasts and
     ``decay_tau_s`` its exponential decay constant during the indentation.

@@ -1,17 +1,17 @@
 """The ``linear`` mechanics for large meshes: a leapfrog stepper of cost O(springs) per step.
 
-Same equations as :mod:`skinhil.mechanics_linear` (``M q'' + C q' + K q = f`` on the free
+Same equations as :mod:`skinhil.model.mechanics.linear` (``M q'' + C q' + K q = f`` on the free
 masses, axial springs and dampers plus the geometric stiffness ``T/L (I − e eᵀ)`` of a
 baseline tension), never assembled: each step makes one pass over the springs, reading the
 displacements and velocities of its two masses and adding its force to both, so a step costs
-O(springs) time and memory where the exact ZOH of :mod:`skinhil.mechanics_linear` costs
+O(springs) time and memory where the exact ZOH of :mod:`skinhil.model.mechanics.linear` costs
 O(dof²). The pass goes run by run (:func:`spring_runs`: the springs of one kind along a row
 of the grid), each run reading and updating its masses as contiguous slices, so the compiler
 vectorises it: a third less time per step at 32x32 than spring by spring. Only what can
 move is stepped: the free masses (:func:`moving_ranges`) and the runs with a free mass; the
 springs between fixed masses (all of layer 3's, the edges') read 0 (26x26: 38 -> 32 µs per
 step). The model uses it above ``EXACT_MAX_FREE_DOFS`` free degrees of freedom
-(:mod:`skinhil.skin`).
+(:mod:`skinhil.model.skin`).
 
 Scheme (kick-drift leapfrog, velocities at half steps; ``h = dt``, ``m`` the nodal mass):
 
@@ -51,8 +51,8 @@ import numba
 import numpy as np
 from scipy.sparse.linalg import eigsh
 
-from skinhil.geometry import Mesh
-from skinhil.mechanics_linear import assemble, free_block, spring_frames
+from skinhil.model.geometry import Mesh
+from skinhil.model.mechanics.linear import assemble, free_block, spring_frames
 
 STABILITY_BOUND = 0.9
 """Substeps are chosen so that ``γ·h + (ω·h)²/4`` stays below this (the scheme's limit is 1)."""

@@ -23,10 +23,10 @@ import numpy as np
 
 from skinhil.errors import ConfigError
 from skinhil.events import EVENT_DTYPE
-from skinhil.geometry import format_size
-from skinhil.mechanics_leapfrog import LeapfrogMechanics, LeapfrogOperands, leapfrog_kernel
-from skinhil.mechanics_linear import LinearMechanics, _advance_modal_kernel
-from skinhil.neurons import (
+from skinhil.model.geometry import format_size
+from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, LeapfrogOperands, leapfrog_kernel
+from skinhil.model.mechanics.linear import LinearMechanics, _advance_modal_kernel
+from skinhil.model.neurons import (
     IzhikevichParams,
     KernelOperands,
     NeuronPopulation,
@@ -34,8 +34,8 @@ from skinhil.neurons import (
     _izhikevich_kernel,
     raster_to_events,
 )
-from skinhil.skin import SkinModel
-from skinhil.stimuli import Schedule, ScheduleOperands, add_schedule_forces
+from skinhil.model.skin import SkinModel
+from skinhil.model.stimuli import Schedule, ScheduleOperands, add_schedule_forces
 
 
 @numba.njit(cache=True)
@@ -110,7 +110,7 @@ MAX_CHANNELS = int(np.iinfo(EVENT_DTYPE["addr"]).max) + 1
 
 class SkinSensor:
     """Skin mechanics plus one noisy Izhikevich neuron per spring, at step ``dt_s`` (s);
-    ``noise`` and ``threads`` as in :class:`~skinhil.neurons.NeuronPopulation`."""
+    ``noise`` and ``threads`` as in :class:`~skinhil.model.neurons.NeuronPopulation`."""
 
     def __init__(self, model: SkinModel | None = None, dt_s: float = 1e-4,
                  snr_db: float = math.inf, seed: int | None = None,

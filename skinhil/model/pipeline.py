@@ -10,7 +10,7 @@ waits for the worker unless the neurons take longer than a block, so a block cos
 of the two stages, not their sum, for two blocks of latency. Both kernels release the
 interpreter lock, so the two really run at once.
 
-The same spikes as :meth:`skinhil.sensor.SkinSensor.advance`, block for block (same
+The same spikes as :meth:`skinhil.model.sensor.SkinSensor.advance`, block for block (same
 arithmetic and the same noise draws, in the same order), two calls late; a change of the
 noise level (:meth:`SensorPipeline.set_snr`) reaches the first block whose neurons start
 after it. The board uses this with ``threads`` > 1 (:class:`firmware_sim.board.Board`) for
@@ -23,8 +23,8 @@ from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 
-from skinhil.neurons import check_snr_db
-from skinhil.sensor import SkinSensor
+from skinhil.model.neurons import check_snr_db
+from skinhil.model.sensor import SkinSensor
 
 
 class SensorPipeline:

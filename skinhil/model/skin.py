@@ -27,12 +27,12 @@ Defaults and their reasoning (the paper gives the structure, not SI values):
   reproduction runs both, and ``--mechanics geometric`` (``simulate``, ``serve``) gives the
   mechanics that reproduces the paper, at 6x real time.
 - ``size = (6, 6)``: the paper's top layer; any ``rows x cols`` >= 3x3 builds the same
-  pyramid (:mod:`skinhil.geometry`).
+  pyramid (:mod:`skinhil.model.geometry`).
 - ``linear_stepper = "auto"``: how the linear mechanics is stepped, one rule: the exact ZOH
-  (:mod:`skinhil.mechanics_linear`: per-mode when there is no tension) while the mesh has at
+  (:mod:`skinhil.model.mechanics.linear`: per-mode when there is no tension) while the mesh has at
   most ``EXACT_MAX_FREE_DOFS`` (200) free degrees of freedom — every top layer up to 8x8,
   the paper's 6x6 (75) among them, whose results are exact at any step — and the
-  second-order leapfrog of :mod:`skinhil.mechanics_leapfrog` above it, whose step costs
+  second-order leapfrog of :mod:`skinhil.model.mechanics.leapfrog` above it, whose step costs
   O(springs) where the exact one costs O(dof²) per step and O(dof³) to set up (at 16x16,
   1,095 free degrees of freedom, a dense step would cost ~20x a leapfrog step). ``"exact"``
   or ``"leapfrog"`` force one regime (the exact one needs dense matrices: fine to a few
@@ -51,11 +51,11 @@ from typing import Literal, Protocol
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.geometry import PAPER_SIZE, MeshSize, build_mesh, check_size, format_size
-from skinhil.mechanics_geometric import GeometricMechanics, max_stable_dt
-from skinhil.mechanics_leapfrog import LeapfrogMechanics
-from skinhil.mechanics_linear import LinearMechanics
-from skinhil.stimuli import Schedule, Stimulus
+from skinhil.model.geometry import PAPER_SIZE, MeshSize, build_mesh, check_size, format_size
+from skinhil.model.mechanics.geometric import GeometricMechanics, max_stable_dt
+from skinhil.model.mechanics.leapfrog import LeapfrogMechanics
+from skinhil.model.mechanics.linear import LinearMechanics
+from skinhil.model.stimuli import Schedule, Stimulus
 
 Mechanics = Literal["linear", "geometric"]
 LinearStepper = Literal["auto", "exact", "leapfrog"]
@@ -119,7 +119,7 @@ class SkinStepper(Protocol):
 
 
 class SkinModel:
-    """The 3-layer mass-spring-damper skin (see :mod:`skinhil.geometry` for the numbering).
+    """The 3-layer mass-spring-damper skin (see :mod:`skinhil.model.geometry` for the numbering).
 
     Attributes: ``springs`` (n_springs, 2) 0-based mass indices, ``positions`` (n_masses, 3)
     m, ``fixed`` (n_masses,) bool, ``size`` (rows, cols) of the top layer, ``params``; at the
@@ -178,7 +178,7 @@ class SkinModel:
                               f"{format_size(stimulus.size)} skin, this one is "
                               f"{format_size(self.size)}: define it for "
                               f"{format_size(self.size)} (built-ins: "
-                              "skinhil.stimuli.at_size)")
+                              "skinhil.model.stimuli.at_size)")
         on_fixed = [m for m in stimulus.forces if self.fixed[m - 1]]
         if on_fixed:
             free = ", ".join(f"M{i + 1}" for i in self.mesh.free)

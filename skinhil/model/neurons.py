@@ -42,7 +42,7 @@ The per-step order, for every step k of length dt (ms), each trial independently
 3. threshold: where ``v ≥ 30``: a spike in step k, ``v ← c``, ``u ← u + d``.
 
 A spike in step k is stamped with the step's start time ``k·dt`` (see
-:func:`raster_to_events`). Noise comes from :mod:`skinhil.rng`, one seeded stream per trial
+:func:`raster_to_events`). Noise comes from :mod:`skinhil.model.rng`, one seeded stream per trial
 and block of 1,024 channels (:data:`CHANNEL_BLOCK`).
 """
 
@@ -58,7 +58,7 @@ import numpy as np
 
 from skinhil.errors import ConfigError
 from skinhil.events import make_events
-from skinhil.rng import fill_normal_pairs, seed_states
+from skinhil.model.rng import fill_normal_pairs, seed_states
 
 KernelOperands = tuple[np.ndarray, np.ndarray, float, float, float, float, float, float, bool,
                        float, float, np.ndarray, np.ndarray]

@@ -27,7 +27,7 @@ import math
 import numba
 import numpy as np
 
-from skinhil.geometry import Mesh
+from skinhil.model.geometry import Mesh
 
 RK4_STABILITY_RADIUS = 2.5
 """|λ|·dt bound used for RK4 (its real-axis limit is 2.785, imaginary-axis 2.828)."""

@@ -1,7 +1,7 @@
 """Where numba caches the compiled kernels: one directory per version of the sources.
 
 numba keys a cached kernel on its own source file only (that file's modification time and
-size). A kernel that calls or inlines kernels of other files — ``skinhil.sensor``'s fused
+size). A kernel that calls or inlines kernels of other files — ``skinhil.model.sensor``'s fused
 kernels run those of ``mechanics_linear``, ``neurons``, ``stimuli`` and ``rng`` — would keep
 running the old callee after that other file changed. So, before any kernel is defined,
 :func:`configure` points numba's cache at ``<base>/<hash>``, ``<hash>`` a digest of every
@@ -35,7 +35,7 @@ KERNEL_PACKAGES: tuple[str, ...] = ("skinhil", "protocols", "firmware_sim")
 KEEP_VERSIONS = 4
 """Cache directories of other source versions kept (most recently used first)."""
 
-_ROOT = Path(__file__).resolve().parent.parent
+_ROOT = Path(__file__).resolve().parents[2]
 
 
 def source_files(root: Path = _ROOT) -> list[Path]:

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from skinhil.geometry import PAPER_SIZE, MeshSize
-from skinhil.stimuli import (
+from skinhil.model.geometry import PAPER_SIZE, MeshSize
+from skinhil.model.stimuli import (
     Schedule,
     ScheduledStimulus,
     Stimulus,
@@ -56,7 +56,7 @@ class Timeline:
     ``dt_s`` is the simulation step (s): marker times are rounded up to the first step at
     or after the phase change, which is where the force changes in the stepped model.
     ``size`` is the skin's top layer (rows, cols): the built-in stimuli are moved to it
-    (:func:`skinhil.stimuli.at_size`) and a file schedule must be defined for it.
+    (:func:`skinhil.model.stimuli.at_size`) and a file schedule must be defined for it.
     """
 
     SCHEDULE_NONE = 0
