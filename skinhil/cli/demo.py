@@ -27,6 +27,7 @@ from skinhil.cli.train import print_report
 from skinhil.errors import ConfigError
 from skinhil.model.kernel_cache import source_hash
 from skinhil.model.timeline import DEFAULT_REST_S
+from skinhil.output_files import atomic_path
 from skinhil.receiver import Receiver
 from skinhil.receiver.model_file import load_window_decoder
 from skinhil.receiver.session import run_against_board, serve_command
@@ -109,9 +110,8 @@ def cached_model(snr_db: float, quiet: bool, baud: int, seed: int) -> Path:
     if not quiet:
         print_report(report, class_names())
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".partial.npz")
-    decoder.save(tmp)
-    os.replace(tmp, path)
+    with atomic_path(path) as tmp:
+        decoder.save(tmp)
     for old in path.parent.glob(f"{stem}*.npz"):  # models of earlier sources
         if old != path:
             old.unlink(missing_ok=True)
