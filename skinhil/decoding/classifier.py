@@ -38,6 +38,7 @@ from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC
 
 from skinhil.decoding.features import FeatureSpec
+from skinhil.decoding.model_file import load_decoder, save_decoder
 from skinhil.errors import ConfigError, ModelFileError
 
 logger = logging.getLogger(__name__)
@@ -139,8 +140,6 @@ class DirectionDecoder(ClassifierMixin, BaseEstimator):  # type: ignore[misc]
 
     def save(self, path: str | Path) -> None:
         """Write the fitted decoder as plain data (see :mod:`skinhil.decoding.model_file`)."""
-        from skinhil.decoding.model_file import save_decoder
-
         self._check_fitted()
         save_decoder(self, path)
 
@@ -150,9 +149,19 @@ class DirectionDecoder(ClassifierMixin, BaseEstimator):  # type: ignore[misc]
         """Read a decoder written by :meth:`save`; refuse pickles, corrupted, mismatched
         (``n_channels``/``dt_s`` of the stream, when given) or other-version files with
         :class:`ModelFileError`."""
-        from skinhil.decoding.model_file import load_decoder
-
-        return load_decoder(cls, path, n_channels=n_channels, dt_s=dt_s)
+        content = load_decoder(path)
+        decoder = cls(spec=content.spec, C=content.C, max_iter=content.max_iter, tol=content.tol)
+        decoder.spec_ = content.spec
+        decoder.classes_ = content.arrays["classes"]
+        decoder.coef_ = content.arrays["coef"]
+        decoder.intercept_ = content.arrays["intercept"]
+        decoder.mean_ = content.arrays["mean"]
+        decoder.scale_ = content.arrays["scale"]
+        decoder.n_features_in_ = content.n_features
+        if n_channels is not None or dt_s is not None:
+            decoder.check_stream(content.spec.n_channels if n_channels is None else n_channels,
+                                 content.spec.dt_s if dt_s is None else dt_s)
+        return decoder
 
     def check_stream(self, n_channels: int, dt_s: float) -> None:
         """Raise ModelFileError unless the decoder was made for this channel count and step."""

@@ -21,20 +21,48 @@ from __future__ import annotations
 import hashlib
 import json
 import zipfile
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from skinhil.decoding.features import FeatureSpec
 from skinhil.errors import ConfigError, ModelFileError
 
-if TYPE_CHECKING:
-    from skinhil.decoding.classifier import DirectionDecoder
-
 FORMAT = "skinhil-direction-decoder"
 FORMAT_VERSION = 1
 ARRAYS = ("coef", "intercept", "mean", "scale", "classes")
+
+
+class FittedDecoder(Protocol):
+    """What a decoder file holds: the fitted arrays and parameters of a one-vs-one linear SVM
+    (:class:`skinhil.decoding.DirectionDecoder` is one; this module knows no class)."""
+
+    C: float
+    max_iter: int
+    tol: float
+    spec_: FeatureSpec
+    classes_: np.ndarray
+    coef_: np.ndarray
+    intercept_: np.ndarray
+    mean_: np.ndarray
+    scale_: np.ndarray
+    n_features_in_: int
+
+
+@dataclass(frozen=True)
+class DecoderFile:
+    """The checked content of a decoder file: parameters, feature spec and plain arrays
+    (``coef`` (n_pairs, n_features), ``intercept`` (n_pairs,), ``mean`` and ``scale``
+    (n_features,) float64, ``classes`` (n_classes,))."""
+
+    spec: FeatureSpec
+    C: float
+    max_iter: int
+    tol: float
+    n_features: int
+    arrays: dict[str, np.ndarray]
 
 
 def _digest(arrays: dict[str, np.ndarray], header: dict[str, Any]) -> str:
@@ -48,7 +76,7 @@ def _digest(arrays: dict[str, np.ndarray], header: dict[str, Any]) -> str:
     return h.hexdigest()
 
 
-def save_decoder(decoder: DirectionDecoder, path: str | Path) -> None:
+def save_decoder(decoder: FittedDecoder, path: str | Path) -> None:
     """Write a fitted decoder to ``path`` (conventionally ``*.npz``)."""
     classes = np.asarray(decoder.classes_)
     if classes.dtype.kind in "iub":
@@ -122,8 +150,7 @@ def _read(p: Path) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     return header, arrays
 
 
-def load_decoder(cls: type[DirectionDecoder], path: str | Path, n_channels: int | None = None,
-                 dt_s: float | None = None) -> DirectionDecoder:
+def load_decoder(path: str | Path) -> DecoderFile:
     """Read and check a decoder file (see module docstring)."""
     p = Path(path)
     where = f"decoder file {str(p)!r}"
@@ -144,8 +171,7 @@ def load_decoder(cls: type[DirectionDecoder], path: str | Path, n_channels: int 
             raise ModelFileError(f"{where} uses decision scheme {params.get('scheme')!r}; "
                                  "this skinhil reads 'ovo'")
         n_features, n_classes = int(header["n_features"]), int(header["n_classes"])
-        decoder = cls(spec=spec, C=float(params["C"]), max_iter=int(params["max_iter"]),
-                      tol=float(params["tol"]))
+        c, max_iter, tol = float(params["C"]), int(params["max_iter"]), float(params["tol"])
     except (KeyError, TypeError, ValueError) as exc:
         raise ModelFileError(f"{where} has an invalid header: {exc}") from None
     if n_classes < 2:
@@ -163,14 +189,5 @@ def load_decoder(cls: type[DirectionDecoder], path: str | Path, n_channels: int 
     for name in ("coef", "intercept", "mean", "scale"):
         if arrays[name].dtype != np.float64 or not np.all(np.isfinite(arrays[name])):
             raise ModelFileError(f"{where}: array {name!r} is not finite float64")
-    decoder.spec_ = spec
-    decoder.classes_ = arrays["classes"]
-    decoder.coef_ = arrays["coef"]
-    decoder.intercept_ = arrays["intercept"]
-    decoder.mean_ = arrays["mean"]
-    decoder.scale_ = arrays["scale"]
-    decoder.n_features_in_ = n_features
-    if n_channels is not None or dt_s is not None:
-        decoder.check_stream(spec.n_channels if n_channels is None else n_channels,
-                             spec.dt_s if dt_s is None else dt_s)
-    return decoder
+    return DecoderFile(spec=spec, C=c, max_iter=max_iter, tol=tol, n_features=n_features,
+                       arrays={name: arrays[name] for name in ARRAYS})
