@@ -2,7 +2,7 @@
 
 numba keys a cached kernel on its own source file only (that file's modification time and
 size). A kernel that calls or inlines kernels of other files — ``skinhil.model.sensor``'s fused
-kernels run those of ``mechanics_linear``, ``neurons``, ``stimuli`` and ``rng`` — would keep
+kernels run those of ``mechanics.linear``, ``neurons``, ``stimuli`` and ``rng`` — would keep
 running the old callee after that other file changed. So, before any kernel is defined,
 :func:`configure` points numba's cache at ``<base>/<hash>``, ``<hash>`` a digest of every
 source file of the packages that hold kernels (:data:`KERNEL_PACKAGES`): an edit anywhere in
