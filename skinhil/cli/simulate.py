@@ -14,6 +14,7 @@ from skinhil.cli.options import add_model_options, model_from_args, noise_from_a
 from skinhil.errors import ConfigError
 from skinhil.model.sensor import SkinSensor
 from skinhil.model.stimuli import Schedule, ScheduledStimulus, builtin_catalog, load_schedule
+from skinhil.nwb import require_pynwb, write_simulation
 
 BLOCK_S = 0.05
 """Simulated seconds per progress-bar update."""
@@ -25,7 +26,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         description="Simulate the skin and its neurons offline and write an .npz file with "
                     "spring forces (N, float32, n_steps x n_springs, 338 at 6x6), spike "
                     "events (t µs, addr, p) and the stimulus markers; numpy reads it with "
-                    "np.load(path).")
+                    "np.load(path). An --out ending in .nwb writes an NWB file instead "
+                    "(pynwb: pip install \"skinhil[nwb]\"): one unit per sensor, the "
+                    "stimuli as trials, the forces as a TimeSeries.")
     src = p.add_mutually_exclusive_group()
     src.add_argument("--stimulus", default="A", metavar="NAME",
                      help="built-in stimulus: A..E (Fig 3) or e.g. 0deg_0.5N (Fig 4) "
@@ -33,7 +36,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     src.add_argument("--schedule", type=Path, metavar="TOML", help="schedule file")
     p.add_argument("--duration", dest="duration_s", type=float, metavar="SECONDS",
                    help="simulated time (default: until 0.25 s after the last stimulus ends)")
-    p.add_argument("--out", type=Path, default=Path("run.npz"), help="output file (run.npz)")
+    p.add_argument("--out", type=Path, default=Path("run.npz"),
+                   help="output file: .npz (default run.npz) or .nwb")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-forces", dest="forces", action="store_false",
                    help="do not keep the spring forces (n_steps x n_springs floats: 14 GB for "
@@ -53,6 +57,8 @@ def _schedule(args: argparse.Namespace) -> Schedule:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.out.suffix == ".nwb":
+        require_pynwb()
     schedule = _schedule(args)
     duration = args.duration_s if args.duration_s is not None else schedule.duration_s + 0.25
     if not (math.isfinite(duration) and duration > 0):
@@ -83,9 +89,14 @@ def run(args: argparse.Namespace) -> int:
             "duration_s": n_steps * args.dt_s,
             "stimuli": [e.stimulus.name for e in schedule.entries],
             "params": {k: v for k, v in vars(model.params).items()}}
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    np.savez_compressed(args.out, forces_n=forces, events=ev, markers=markers,
-                        meta=np.array(json.dumps(meta)))
+    if args.out.suffix == ".nwb":
+        write_simulation(args.out, mesh=model.mesh, schedule=schedule, events=ev,
+                         forces_n=forces if args.forces else None, dt_s=args.dt_s,
+                         description=f"skinhil simulate: {json.dumps(meta)}")
+    else:
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        np.savez_compressed(args.out, forces_n=forces, events=ev, markers=markers,
+                            meta=np.array(json.dumps(meta)))
     rate = len(ev) / (n_steps * args.dt_s) / model.n_springs
     print(f"wrote {args.out}: {n_steps} steps of {args.dt_s * 1e3:g} ms, {len(ev)} spikes "
           f"({rate:.1f} Hz per sensor), peak |force| {peak:.3g} N")

@@ -1,0 +1,91 @@
+"""An offline simulation (``skinhil simulate --out run.nwb``) as an NWB file."""
+
+from __future__ import annotations
+
+import datetime
+import math
+import uuid
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from skinhil.errors import ConfigError
+from skinhil.model.geometry import Mesh
+from skinhil.model.stimuli import Schedule
+from skinhil.output_files import atomic_path
+
+LAYER_NAMES = {1: "layer 1", 2: "layer 2", 3: "layer 3", 12: "layers 1-2", 23: "layers 2-3"}
+"""The ``layer`` column of a unit: an in-layer spring, or one between two layers."""
+
+
+def require_pynwb() -> None:
+    """Raise :class:`ConfigError` (one line, the pip command) when pynwb is not installed."""
+    try:
+        import pynwb  # noqa: F401
+    except ImportError:
+        raise ConfigError('NWB files need pynwb, which is not installed: '
+                          'pip install "skinhil[nwb]"') from None
+
+
+def _add_units(nwb: Any, mesh: Mesh, events: np.ndarray) -> None:
+    """One unit per sensor: its spike times (s) and its spring's metadata."""
+    nwb.add_unit_column("spring", "sensor (spring) address, 0-based, as on the wire")
+    nwb.add_unit_column("mass_i", "first mass the spring joins, 1-based number M1..")
+    nwb.add_unit_column("mass_j", "second mass the spring joins, 1-based number M1..")
+    nwb.add_unit_column("layer", "the layer the spring lies in, or the two layers it joins")
+    nwb.add_unit_column("rest_length_m", "the spring's rest length (m)")
+    order = np.argsort(events["addr"], kind="stable")
+    addr = events["addr"][order]
+    times = events["t"][order] * 1e-6
+    bounds = np.searchsorted(addr, np.arange(mesh.springs.shape[0] + 1))
+    for s, (i, j) in enumerate(mesh.springs):
+        rest = float(np.linalg.norm(mesh.positions[j] - mesh.positions[i]))
+        nwb.add_unit(spike_times=times[bounds[s]:bounds[s + 1]], spring=s,
+                     mass_i=int(i) + 1, mass_j=int(j) + 1,
+                     layer=LAYER_NAMES.get(int(mesh.layer_of_spring[s]), "?"),
+                     rest_length_m=rest)
+
+
+def _add_trials(nwb: Any, schedule: Schedule) -> None:
+    """The stimuli as trials: onset to end of the indentation, with their forces."""
+    nwb.add_trial_column("stimulus_id", "ground-truth stimulus id (the wire's marker id)")
+    nwb.add_trial_column("stimulus", "stimulus name")
+    nwb.add_trial_column("forces", "peak force vector (N) on each pushed mass, 1-based")
+    nwb.add_trial_column("force_n", "magnitude of the summed peak force vector (N)")
+    nwb.add_trial_column("angle_deg", "in-plane angle of the summed peak force (degrees)")
+    for entry in schedule.entries:
+        vectors = np.array(list(entry.stimulus.forces.values()), dtype=float).reshape(-1, 3)
+        total = vectors.sum(axis=0)
+        text = "; ".join(f"M{m}: ({fx:g}, {fy:g}, {fz:g})"
+                         for m, (fx, fy, fz) in entry.stimulus.forces.items())
+        nwb.add_trial(start_time=float(entry.onset_s), stop_time=float(entry.end_s),
+                      stimulus_id=int(entry.stimulus_id), stimulus=entry.stimulus.name,
+                      forces=text, force_n=float(np.linalg.norm(total)),
+                      angle_deg=float(math.degrees(math.atan2(total[1], total[0]))))
+
+
+def write_simulation(path: Path, *, mesh: Mesh, schedule: Schedule, events: np.ndarray,
+                     forces_n: np.ndarray | None, dt_s: float, description: str) -> Path:
+    """Write a simulation to ``path`` (.nwb, atomically) and return the path written.
+
+    ``events``: EVENT_DTYPE (``t`` µs, ``addr``); ``forces_n``: (n_steps, n_springs) N at
+    ``dt_s`` (s) from time 0, or None to leave them out.
+    """
+    require_pynwb()
+    from pynwb import NWBHDF5IO, NWBFile, TimeSeries
+
+    nwb = NWBFile(session_description=description, identifier=str(uuid.uuid4()),
+                  session_start_time=datetime.datetime.now(datetime.UTC),
+                  source_script="skinhil simulate", source_script_file_name="skinhil")
+    _add_units(nwb, mesh, events)
+    _add_trials(nwb, schedule)
+    if forces_n is not None and forces_n.size:
+        nwb.add_acquisition(TimeSeries(
+            name="spring_forces", data=forces_n, unit="N", rate=1.0 / dt_s,
+            starting_time=0.0,
+            description="force across each spring (N, tension positive), one column per "
+                        "sensor in wire address order"))
+    with atomic_path(path) as tmp, NWBHDF5IO(str(tmp), "w") as io:
+        io.write(nwb)
+    return Path(path).absolute()
