@@ -56,3 +56,67 @@ def test_nwb_without_pynwb_is_one_error_line(tmp_path: Path) -> None:
     assert len(lines) == 1 and lines[0].startswith("skinhil: error:")
     assert 'pip install "skinhil[nwb]"' in lines[0]
     assert not (tmp_path / "run.nwb").exists()
+
+
+def test_listen_record_nwb_validates_and_holds_the_session(tmp_path: Path) -> None:
+    """A board on a pty, `listen --record session.nwb` on the other end: the file validates,
+    its spikes are the events the board generated, its trials the board's stimuli."""
+    import json
+    import math
+    import shutil
+    import signal
+    import time
+
+    import pytest
+    from harness.serve import RUN_DIR, ServeProcess, serve_env
+
+    from skinhil.decoding.model_file import save_decoder
+    from skinhil.receiver.training import train_decoder
+
+    if shutil.which("socat") is None:
+        pytest.skip("socat is not installed (apt-get install socat)")
+    decoder, _ = train_decoder(math.inf, reps=1, seed=0, rest_s=0.05, cross_validation=False)
+    model = tmp_path / "model.npz"
+    save_decoder(decoder, model)
+    board_end, host_end = tmp_path / "ttyBOARD", tmp_path / "ttyHOST"
+    socat = subprocess.Popen(["socat", f"pty,raw,echo=0,link={board_end}",
+                              f"pty,raw,echo=0,link={host_end}"])
+    session = tmp_path / "session.nwb"
+    board = None
+    try:
+        end = time.monotonic() + 10
+        while not (board_end.exists() and host_end.exists()):
+            assert time.monotonic() < end, "socat made no pty pair"
+            time.sleep(0.05)
+        listen = subprocess.Popen(
+            [sys.executable, "-m", "skinhil", "listen", "--port", str(host_end), "--model",
+             str(model), "--json", "--record", str(session)],
+            cwd=RUN_DIR, env=serve_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+            text=True)
+        time.sleep(2.0)
+        board = ServeProcess("--port", str(board_end), "--duration", "3", "--seed", "1",
+                             "--snr-db", "10", "--json")
+        assert board.wait(120) == 0, board.stderr
+        time.sleep(1.0)
+        listen.send_signal(signal.SIGINT)
+        out, err = listen.communicate(timeout=60)
+        assert listen.returncode == 0, err
+    finally:
+        if board is not None:
+            board.kill()
+        socat.kill()
+    generated = board.summary()["generated"]
+    info = [json.loads(line) for line in out.splitlines() if '"summary"' in line][-1]
+    assert info["link"]["events_decoded"] == generated > 0
+    assert validate(path=str(session)) == []
+    with NWBHDF5IO(str(session), "r") as io:
+        nwb = io.read()
+        units = nwb.units.to_dataframe()
+        assert len(units) == 338
+        assert sum(len(t) for t in units["spike_times"]) == generated
+        assert nwb.trials is not None, out[-2000:]
+        trials = nwb.trials.to_dataframe()
+        assert len(trials) >= 3
+        assert (trials["stop_time"] > trials["start_time"]).all()
+        assert set(trials["stimulus_id"]) <= set(range(9))
+        assert "decisions" in nwb.intervals

@@ -19,7 +19,9 @@ import numpy as np
 from skinhil.cli.options import add_size_option
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.errors import ConfigError
-from skinhil.model.geometry import spring_count
+from skinhil.model.geometry import build_mesh, spring_count
+from skinhil.model.skin import SkinParams
+from skinhil.nwb import require_pynwb, write_session
 from skinhil.receiver import (
     BusReceiver,
     Receiver,
@@ -53,7 +55,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--json", action="store_true",
                    help="one JSON object per line: decisions, link counters, summary")
     p.add_argument("--record", type=Path, metavar="FILE",
-                   help="save events (tonic-compatible) and decisions to this .npz")
+                   help="save events (tonic-compatible), markers and decisions to this .npz, "
+                        "or to NWB if it ends in .nwb (pip install \"skinhil[nwb]\")")
     add_size_option(p)
 
 
@@ -230,6 +233,8 @@ def run(args: argparse.Namespace) -> int:
     if several and args.record is not None:
         raise ConfigError("--record saves one board's session: use it with one board on "
                           "--port or --can")
+    if args.record is not None and args.record.suffix == ".nwb":
+        require_pynwb()
     decoder = load_window_decoder(args.model, n_channels=spring_count(args.size))
     transport = open_transport(args)
     names = class_names()
@@ -250,7 +255,14 @@ def run(args: argparse.Namespace) -> int:
     listen_until_stopped(args, receiver, lambda: receiver.link_report().as_dict(),
                          lambda: False)
     info = summary(receiver, time.monotonic() - t0)
-    if recorder is not None:
+    if recorder is not None and args.record.suffix == ".nwb":
+        p = SkinParams(size=args.size)
+        write_session(args.record, mesh=build_mesh(p.spacing_m, p.layer_gap_m, p.size),
+                      events=recorder.events, markers=recorder.markers,
+                      decisions=recorder.decisions, names=names,
+                      description=f"skinhil listen: {describe_transport(args)}, "
+                                  f"model {args.model}")
+    elif recorder is not None:
         recorder.save(args.record, {"model": str(args.model), "link": describe_transport(args),
                                     "summary": info})
     if args.json:

@@ -8,6 +8,7 @@ simulation, the spring forces as an acquisition ``TimeSeries`` (N, one column pe
 the simulation step). pynwb is an optional dependency: ``pip install "skinhil[nwb]"``.
 """
 
+from skinhil.nwb.session import write_session
 from skinhil.nwb.simulation import require_pynwb, write_simulation
 
-__all__ = ["require_pynwb", "write_simulation"]
+__all__ = ["require_pynwb", "write_session", "write_simulation"]

@@ -28,8 +28,9 @@ def require_pynwb() -> None:
                           'pip install "skinhil[nwb]"') from None
 
 
-def _add_units(nwb: Any, mesh: Mesh, events: np.ndarray) -> None:
-    """One unit per sensor: its spike times (s) and its spring's metadata."""
+def add_units(nwb: Any, mesh: Mesh, events: np.ndarray) -> None:
+    """One unit per sensor of ``mesh``: its spike times (s, from ``events``' ``t`` in µs)
+    and its spring's metadata."""
     nwb.add_unit_column("spring", "sensor (spring) address, 0-based, as on the wire")
     nwb.add_unit_column("mass_i", "first mass the spring joins, 1-based number M1..")
     nwb.add_unit_column("mass_j", "second mass the spring joins, 1-based number M1..")
@@ -78,7 +79,7 @@ def write_simulation(path: Path, *, mesh: Mesh, schedule: Schedule, events: np.n
     nwb = NWBFile(session_description=description, identifier=str(uuid.uuid4()),
                   session_start_time=datetime.datetime.now(datetime.UTC),
                   source_script="skinhil simulate", source_script_file_name="skinhil")
-    _add_units(nwb, mesh, events)
+    add_units(nwb, mesh, events)
     _add_trials(nwb, schedule)
     if forces_n is not None and forces_n.size:
         nwb.add_acquisition(TimeSeries(
