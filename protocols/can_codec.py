@@ -51,8 +51,8 @@ from protocols.status_layout import (
     status_words,
 )
 from protocols.versions import check_versions, refuse_version, wire_version
-from skinhil.errors import ProtocolError
-from skinhil.events import make_events
+from protocols.errors import ProtocolError
+from protocols.events import make_events
 
 log = logging.getLogger(__name__)
 

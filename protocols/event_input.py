@@ -6,7 +6,7 @@ import numba
 import numpy as np
 
 from protocols.constants import N_CHANNELS
-from skinhil.errors import ProtocolError
+from protocols.errors import ProtocolError
 
 # encoder state slots, the serial and the CAN encoders' alike
 E_SEQ, E_EPOCH, E_SYNC_VALID, E_SYNC_BASE, E_EVENTS, E_STEP_US, E_LAST_SYNC, E_VERSION = range(8)

@@ -8,7 +8,7 @@ import struct
 from typing import TypeVar
 
 from protocols.records import CommandCode
-from skinhil.errors import ProtocolError
+from protocols.errors import ProtocolError
 
 E = TypeVar("E", bound=enum.IntEnum)
 

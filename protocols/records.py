@@ -11,7 +11,7 @@ import enum
 
 import numpy as np
 
-from skinhil.events import EVENT_DTYPE
+from protocols.events import EVENT_DTYPE
 
 
 class CommandCode(enum.IntEnum):

@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 from protocols.records import Status
-from skinhil.errors import ProtocolError
+from protocols.errors import ProtocolError
 
 LINK_EVENTS = "link_events"
 

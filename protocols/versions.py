@@ -17,8 +17,8 @@ from protocols.constants import (
     WIDE_MAX_CHANNELS,
     WIDE_VERSION,
 )
-from skinhil.errors import ProtocolError
-from skinhil.events import EVENT_DTYPE
+from protocols.errors import ProtocolError
+from protocols.events import EVENT_DTYPE
 
 MAX_CHANNELS = min(WIDE_MAX_CHANNELS, int(np.iinfo(EVENT_DTYPE["addr"]).max) + 1)
 """Most channels a stream has here: the wide format's address range, capped by the event
