@@ -1,6 +1,6 @@
 """Compiled inner loops of the CAN codec: events frames out, whole frame batches in.
 
-Layouts are those of SPEC.md §5 (narrow, version 1) and §9 (wide, version 2: WIDE_EVENTS
+Layouts are those of SPEC.md §5 (narrow, version 3) and §9 (wide, version 4: WIDE_EVENTS
 frames of 24-bit words). State and counters are int64 arrays; the slot names are the
 constants below (counter slots are shared with :mod:`protocols.serial_kernels`).
 """
@@ -41,7 +41,7 @@ from protocols.versions import MAX_CHANNELS
 
 CLS_COMMAND, CLS_ACK, CLS_SYNC, CLS_STATUS, CLS_MARKER, CLS_EVENTS, CLS_WIDE = range(1, 8)
 """Frame classes: the 11-bit ID is ``class << 4 | board_id``. CLS_WIDE (wide events) belongs
-to a board only once it announced version 2 (a version-2 SYNC)."""
+to a board only once it announced version 4 (a version-4 SYNC)."""
 
 CLASSIC_MAX_EVENTS = 4
 FD_MAX_EVENTS = 40

@@ -86,4 +86,7 @@ def event_steps(events: np.ndarray, step_us: int, t_end_us: int, t_min_us: int,
     if code == _UNSORTED:
         order = np.lexsort((addr, steps))
         steps, addr = steps[order], addr[order]
+    if n > 1 and np.any((steps[1:] == steps[:-1]) & (addr[1:] == addr[:-1])):
+        raise ProtocolError("two events share a channel and a step: a channel spikes at most "
+                            "once per step; merge the duplicates before encoding")
     return steps, addr

@@ -1,7 +1,11 @@
-"""Serial framing primitives (compiled): CRC-16/CCITT-FALSE and COBS.
+"""Serial framing primitives (compiled): CRC-16/GENIBUS and COBS.
 
-A packet on the wire is ``COBS(body + CRC16(body) big-endian) + 0x00`` (SPEC.md §2); the
-CRC over a body followed by its CRC is zero, which is how a decoder checks it.
+A packet on the wire is ``COBS(body + CRC16(body) big-endian) + 0x00`` (SPEC.md §2). The CRC
+ends with a final XOR (0xFFFF), so the register over a body followed by its CRC is the fixed
+residue 0x1D0F, which is how a decoder checks it. Zero bytes appended to a packet (what
+``0x01`` bytes inserted before its delimiter decode to) move that register away from the
+residue for any count below 32,767: unlike a CRC without final XOR, whose residue 0 stays 0
+under appended zeros, this one never passes them.
 """
 
 from __future__ import annotations
@@ -21,15 +25,23 @@ def _crc_table() -> np.ndarray:
 
 
 CRC_TABLE = _crc_table()
-"""CRC-16/CCITT-FALSE table (polynomial 0x1021, MSB first)."""
+"""CRC-16 table (polynomial 0x1021, MSB first)."""
 
 CRC_INIT = 0xFFFF
-"""CRC-16/CCITT-FALSE initial value (no final XOR, no reflection)."""
+"""CRC-16/GENIBUS initial value (no reflection)."""
+
+CRC_XOROUT = 0xFFFF
+"""CRC-16/GENIBUS final XOR: the sent CRC is the register XOR this."""
+
+CRC_RESIDUE = 0x1D0F
+"""The register (:func:`crc16`) over a body followed by its sent CRC: a packet checks iff its
+decoded bytes give this value."""
 
 
 @numba.njit(cache=True, nogil=True)
 def crc16(buf: np.ndarray, start: int, stop: int) -> int:
-    """CRC-16/CCITT-FALSE of ``buf[start:stop]`` (uint8 array)."""
+    """CRC register (polynomial 0x1021, initial 0xFFFF, before the final XOR) over
+    ``buf[start:stop]`` (uint8 array); the sent CRC-16/GENIBUS is this XOR :data:`CRC_XOROUT`."""
     crc = CRC_INIT
     for i in range(start, stop):
         crc = ((crc << 8) & 0xFFFF) ^ CRC_TABLE[((crc >> 8) ^ buf[i]) & 0xFF]
@@ -43,7 +55,7 @@ def frame_into(body: np.ndarray, n: int, out: np.ndarray, pos: int) -> int:
     ``body`` must have room for two more bytes after ``n`` (the CRC is written there).
     ``out`` needs ``n + 2 + (n + 2) // 254 + 2`` free bytes.
     """
-    crc = crc16(body, 0, n)
+    crc = crc16(body, 0, n) ^ CRC_XOROUT
     body[n] = crc >> 8
     body[n + 1] = crc & 0xFF
     m = n + 2

@@ -15,7 +15,8 @@ that mounts it, find its cache without any environment). Only the
 
 Importing this module configures the cache (:data:`CACHE_DIR`); ``protocols/__init__.py``
 imports it first of all (the wire codecs stand alone: they need nothing of ``skinhil``);
-``skinhil`` and ``firmware_sim`` import it before they define a kernel. ``skinhil.model.kernel_cache`` re-exports it.
+``skinhil`` and ``firmware_sim`` import it before they define a kernel;
+``skinhil.model.kernel_cache`` re-exports it.
 """
 
 from __future__ import annotations

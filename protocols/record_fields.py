@@ -7,8 +7,8 @@ import math
 import struct
 from typing import TypeVar
 
-from protocols.records import CommandCode
 from protocols.errors import ProtocolError
+from protocols.records import CommandCode
 
 E = TypeVar("E", bound=enum.IntEnum)
 

@@ -1,8 +1,8 @@
 """Compiled inner loops of the serial codec: events packets out, whole byte streams in.
 
 State and counters live in small int64 arrays so the loops run without Python objects; the
-index constants below name their slots. Layouts are those of SPEC.md §3-§4 (narrow, version 1)
-and §9 (wide, version 2: WIDE_EVENTS packets of 24-bit words).
+index constants below name their slots. Layouts are those of SPEC.md §3-§4 (narrow, version 3)
+and §9 (wide, version 4: WIDE_EVENTS packets of 24-bit words).
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from protocols.constants import BITMAP_BYTES, N_CHANNELS, WIDE_VERSION
+from protocols.constants import BITMAP_BYTES, N_CHANNELS, PROTOCOL_VERSION, WIDE_VERSION
 from protocols.event_input import (
     E_EPOCH,
     E_EVENTS,
@@ -21,11 +21,11 @@ from protocols.event_input import (
     E_SYNC_VALID,
     E_VERSION,
 )
-from protocols.framing import cobs_decode, crc16, frame_into
+from protocols.framing import CRC_RESIDUE, cobs_decode, crc16, frame_into
 from protocols.versions import MAX_CHANNELS
 
 T_EVENTS, T_SYNC, T_STATUS, T_MARKER, T_COMMAND, T_ACK, T_WIDE = 0, 1, 2, 3, 4, 5, 6
-"""Packet types (high three bits of byte 0); T_WIDE carries wide (version 2) events."""
+"""Packet types (high three bits of byte 0); T_WIDE carries wide (version 4) events."""
 
 WIDE_ITEM_BYTES = 3
 """A wide event word: 24 bits, little-endian: bits 3..0 delta, bits 23..4 address."""
@@ -140,7 +140,7 @@ def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, sync_ever
     filled: one closes only when the body is full, when the next delta does not fit, or
     after the last event given; at most ``max_packets`` events packets are written. A SYNC
     is sent before a packet whose base is ``sync_every`` steps or more after the last SYNC
-    (or out of the 16-bit offset range). A version-2 encoder (``st[E_VERSION]``) writes
+    (or out of the 16-bit offset range). A version-4 encoder (``st[E_VERSION]``) writes
     WIDE_EVENTS packets instead. Returns ``(end in out, events consumed)``.
     """
     if st[E_VERSION] == WIDE_VERSION:
@@ -214,7 +214,7 @@ def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, sync_ever
 @numba.njit(cache=True, nogil=True)
 def _encode_wide(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, sync_every: int,
                  max_packets: int, out: np.ndarray) -> tuple[int, int]:
-    """:func:`encode_events` for version 2: WIDE_EVENTS packets of 24-bit words."""
+    """:func:`encode_events` for version 4: WIDE_EVENTS packets of 24-bit words."""
     n = steps.shape[0]
     pkt = np.empty(MAX_BODY + 8, dtype=np.uint8)
     pos = 0
@@ -243,8 +243,8 @@ def _encode_wide(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, sync_every
 
 @numba.njit(cache=True, nogil=True)
 def is_known_version(v: int) -> bool:
-    """Whether ``v`` is a protocol version the decoders read (1 narrow, 2 wide)."""
-    return v == 1 or v == WIDE_VERSION
+    """Whether ``v`` is a protocol version the decoders read (3 narrow, 4 wide)."""
+    return v == PROTOCOL_VERSION or v == WIDE_VERSION
 
 
 @numba.njit(cache=True, nogil=True)
@@ -256,9 +256,13 @@ def check_body(dec: np.ndarray, m: int) -> int:
     if typ == T_WIDE:
         if m < 4 + WIDE_ITEM_BYTES or (m - 4) % WIDE_ITEM_BYTES:
             return -1
+        last = -1
         for k in range(4, m, WIDE_ITEM_BYTES):
-            if (get_le(dec, k, WIDE_ITEM_BYTES) >> 4) >= MAX_CHANNELS:
+            word = get_le(dec, k, WIDE_ITEM_BYTES)
+            a = word >> 4
+            if a >= MAX_CHANNELS or (word & WIDE_MAX_DELTA == 0 and a <= last):
                 return -1
+            last = a
         return (m - 4) // WIDE_ITEM_BYTES
     if typ != T_EVENTS:
         if BODY_LEN[typ] != m:
@@ -270,16 +274,25 @@ def check_body(dec: np.ndarray, m: int) -> int:
         return -1
     k = 4
     count = 0
+    last = -1  # channel of the previous event in the current step (-1: none yet)
     while k < m:
         if k + 2 > m:
             return -1
-        a = (np.int64(dec[k]) | (np.int64(dec[k + 1]) << 8)) >> 7
+        w = np.int64(dec[k]) | (np.int64(dec[k + 1]) << 8)
+        a = w >> 7
+        if w & 0x7F:
+            last = -1
         if a < N_CHANNELS:
+            if a <= last:  # channels of one step ascend strictly (SPEC.md §3.1)
+                return -1
+            last = a
             count += 1
             k += 2
         elif a == BITMAP_ADDR:
-            if k + 2 + BITMAP_BYTES > m or dec[k + 1 + BITMAP_BYTES] & 0xFC:
+            if (k + 2 + BITMAP_BYTES > m or dec[k + 1 + BITMAP_BYTES] & 0xFC
+                    or last >= 0):
                 return -1
+            last = N_CHANNELS  # a bitmap holds its whole step
             for q in range(k + 2, k + 2 + BITMAP_BYTES):
                 v = dec[q]
                 while v:
@@ -295,7 +308,7 @@ def check_body(dec: np.ndarray, m: int) -> int:
 def try_frame(buf: np.ndarray, a: int, b: int, dec: np.ndarray) -> int:
     """Decode candidate ``buf[a:b]``: body length, -1 (bad COBS/CRC) or -2 (bad layout)."""
     n = cobs_decode(buf, a, b, dec)
-    if n < 4 or crc16(dec, 0, n) != 0:
+    if n < 4 or crc16(dec, 0, n) != CRC_RESIDUE:
         return -1
     if check_body(dec, n - 2) < 0:
         return -2

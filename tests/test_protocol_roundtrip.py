@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from protocol_examples import distinct_events
 
 from protocols import (
     Ack,
@@ -62,7 +63,7 @@ def event_streams(draw: st.DrawFn, wrap_bits: int) -> tuple[np.ndarray, list[int
         times += [t] * len(chans)
         addrs += chans
     ends = sorted(set(draw(st.lists(st.integers(start, t), max_size=6))))
-    ev = make_events(np.array(times, dtype=np.int64) * STEP, np.array(addrs))
+    ev = distinct_events(np.array(times, dtype=np.int64) * STEP, addrs)
     return ev, [e * STEP for e in ends if e > start] + [(t + 1) * STEP]
 
 
@@ -114,10 +115,33 @@ def test_bitmap_chosen_only_when_smaller() -> None:
     assert len(SerialDecoder().feed(SerialEncoder().events(full, 100)).events) == 338
 
 
-def test_duplicate_channel_in_a_step_round_trips() -> None:
+def _framed(body: bytes) -> bytes:
+    from protocols.framing import frame_into
+
+    buf = np.zeros(len(body) + 2, dtype=np.uint8)
+    buf[:len(body)] = np.frombuffer(body, dtype=np.uint8)
+    out = np.zeros(2 * len(body) + 16, dtype=np.uint8)
+    return out[:frame_into(buf, len(body), out, 0)].tobytes()
+
+
+def test_a_channel_twice_in_a_step_is_refused() -> None:
+    """A channel spikes at most once per step (SPEC.md §3.1): the encoder refuses a repeat and
+    the decoder counts a packet repeating a channel in a step (or out of ascending order, or
+    a bitmap sharing its step) as malformed, events and all."""
     ev = make_events(np.zeros(30, np.int64), np.r_[np.arange(29), 5])
-    got = SerialDecoder().feed(SerialEncoder().events(ev, 100)).events
-    np.testing.assert_array_equal(got, canonical(ev))
+    with pytest.raises(ProtocolError, match="once per step"):
+        SerialEncoder().events(ev, 100)
+    sync = SerialEncoder().events(make_events([0], [1]), 100).split(b"\x00")[0] + b"\x00"
+    words = {"repeat": [(5, 0), (5, 0)], "descending": [(9, 0), (5, 0)],
+             "ascending": [(5, 0), (9, 0), (5, 1)]}
+    for name, items in words.items():
+        body = bytes([0, 1, 0, 0]) + b"".join(  # EVENTS, epoch 0, seq 1, offset 0
+            ((a << 7) | d).to_bytes(2, "little") for a, d in items)
+        dec = SerialDecoder()
+        got = dec.feed(sync + _framed(body))
+        ok = name == "ascending"
+        assert len(got.events) == (3 if ok else 0), name
+        assert dec.counters.malformed == (0 if ok else 1), name
 
 
 statuses = st.builds(

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from protocol_examples import distinct_events
 
 import protocols
 from skinhil.errors import TransportError
-from skinhil.events import make_events
 from skinhil.transports import UdpTransport
 from skinhil.transports.udp import parse_address, split_packets
 
@@ -17,7 +17,7 @@ def _stream(n_events: int) -> bytes:
     enc = protocols.SerialEncoder()
     rng = np.random.default_rng(0)
     t = np.sort(rng.integers(0, 50_000, n_events)) * 100
-    return enc.events(make_events(t, rng.integers(0, 338, n_events)), int(t[-1]) + 100)
+    return enc.events(distinct_events(t, rng.integers(0, 338, n_events)), int(t[-1]) + 100)
 
 
 def test_datagrams_hold_whole_packets_and_decode_alone() -> None:
