@@ -279,7 +279,7 @@ def check_body(dec: np.ndarray, m: int) -> int:
         if k + 2 > m:
             return -1
         w = np.int64(dec[k]) | (np.int64(dec[k + 1]) << 8)
-        a = w >> 7
+        a = int(w >> 7)
         if w & 0x7F:
             last = -1
         if a < N_CHANNELS:
