@@ -102,10 +102,69 @@ def cobs_decode(buf: np.ndarray, start: int, stop: int, out: np.ndarray) -> int:
     return n
 
 
+MAX_SHIFT_BYTES = 2048
+"""Longest zero-byte shift :data:`X8N` tabulates (more than any candidate, 1032 bytes)."""
+
+
+def _x8n_table() -> np.ndarray:
+    table = np.zeros(MAX_SHIFT_BYTES + 1, dtype=np.int64)
+    r = 1
+    for n in range(MAX_SHIFT_BYTES + 1):
+        table[n] = r
+        r = ((r << 8) & 0xFFFF) ^ int(CRC_TABLE[(r >> 8) & 0xFF])
+    return table
+
+
+X8N = _x8n_table()
+"""``X8N[n]`` = x^(8n) modulo the CRC polynomial: the register after ``n`` zero bytes fed
+from register 1. The register after ``Y`` fed from ``s`` is ``s · X8N[len(Y)] ^ crc0(Y)``
+(``crc0``: from register 0), which lets a decoder check every suffix of a candidate at once."""
+
+
 @numba.njit(cache=True, nogil=True)
-def chain_starts(buf: np.ndarray, start: int, stop: int, valid: np.ndarray) -> None:
-    """``valid[k - start]`` = True where a COBS block chain starting at ``k`` ends at ``stop``."""
-    for k in range(stop - 1, start - 1, -1):
-        code = buf[k]
+def gf_mulmod(a: int, b: int) -> int:
+    """``a · b`` modulo the CRC polynomial 0x11021 (16-bit registers as GF(2) polynomials)."""
+    r = 0
+    for i in range(15, -1, -1):
+        r = ((r << 1) ^ (0x1021 if r & 0x8000 else 0)) & 0xFFFF
+        if (b >> i) & 1:
+            r ^= a
+    return r
+
+
+@numba.njit(cache=True, nogil=True)
+def suffix_checks(buf: np.ndarray, first: int, stop: int, prefix: np.ndarray,
+                  length: np.ndarray, reg: np.ndarray, passes: np.ndarray) -> None:
+    """Mark every start ``k`` in ``[first, stop)`` whose suffix ``buf[k:stop]`` is a COBS
+    block chain ending at ``stop`` that decodes to at least 4 bytes passing the CRC:
+    ``passes[k - first]``. Linear in ``stop - first`` (at most :data:`MAX_SHIFT_BYTES`):
+    prefix registers of the raw bytes give each block's register in O(1), and each suffix's
+    register follows from the next block's by one shift (``X8N``). Scratch arrays
+    ``prefix``, ``length``, ``reg`` hold ``stop - first + 1`` values."""
+    w = stop - first
+    r = 0
+    prefix[0] = 0
+    for i in range(w):
+        r = ((r << 8) & 0xFFFF) ^ CRC_TABLE[((r >> 8) ^ buf[first + i]) & 0xFF]
+        prefix[i + 1] = r
+    for k in range(stop - 1, first - 1, -1):
+        j = k - first
+        code = int(buf[k])
         nxt = k + code
-        valid[k - start] = code != 0 and (nxt == stop or (nxt < stop and valid[nxt - start]))
+        length[j] = -1
+        passes[j] = False
+        if code == 0 or nxt > stop or (nxt < stop and length[nxt - first] < 0):
+            continue
+        hl = code - 1  # the block's data bytes buf[k+1 : nxt], register from 0
+        head = prefix[nxt - first] ^ gf_mulmod(prefix[j + 1], X8N[hl])
+        if nxt == stop:
+            n = hl
+            rr = head
+        else:
+            sep = 1 if code < 255 else 0  # the zero the block stands for
+            tail = length[nxt - first]
+            n = hl + sep + tail
+            rr = gf_mulmod(head, X8N[sep + tail]) ^ reg[nxt - first]
+        length[j] = n
+        reg[j] = rr
+        passes[j] = n >= 4 and (gf_mulmod(CRC_INIT, X8N[n]) ^ rr) == CRC_RESIDUE

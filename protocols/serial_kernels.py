@@ -21,7 +21,7 @@ from protocols.event_input import (
     E_SYNC_VALID,
     E_VERSION,
 )
-from protocols.framing import CRC_RESIDUE, cobs_decode, crc16, frame_into
+from protocols.framing import CRC_RESIDUE, cobs_decode, crc16, frame_into, suffix_checks
 from protocols.versions import MAX_CHANNELS
 
 T_EVENTS, T_SYNC, T_STATUS, T_MARKER, T_COMMAND, T_ACK, T_WIDE = 0, 1, 2, 3, 4, 5, 6
@@ -316,21 +316,36 @@ def try_frame(buf: np.ndarray, a: int, b: int, dec: np.ndarray) -> int:
 
 
 @numba.njit(cache=True, nogil=True)
+def _grown(arr: np.ndarray, need: int) -> np.ndarray:
+    """``arr`` if it holds ``need`` rows, else a copy with at least twice its rows."""
+    if arr.shape[0] >= need:
+        return arr
+    out = np.empty((max(need, 2 * arr.shape[0]),) + arr.shape[1:], dtype=arr.dtype)
+    out[:arr.shape[0]] = arr
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
 def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
         np.ndarray, np.ndarray, int, np.ndarray, np.ndarray, int]:
     """Decode every zero-terminated candidate in ``buf`` (which ends with a zero).
 
     Returns ``(t_steps, addr, n_events, rec_bytes, rec_index, n_records)`` where event times
     are in µs; ``rec_index[r] = (offset, length, events decoded before it)`` of record ``r``.
+    Time and memory are linear in ``len(buf)``: a damaged candidate is resynchronised by one
+    pass over its suffixes (:func:`suffix_checks`), and the outputs grow with what decodes
+    (garbage costs no more than a few scratch arrays of one candidate's size).
     """
     n = buf.shape[0]
-    cap = 8 * n + 16
-    out_t = np.empty(cap, dtype=np.int64)
-    out_a = np.empty(cap, dtype=np.uint32)
-    rec = np.empty(n + 8, dtype=np.uint8)
-    rec_ix = np.empty((n // 4 + 2, 3), dtype=np.int64)
-    dec = np.empty(n + 8, dtype=np.uint8)
-    valid = np.empty(MAX_WIRE + 8, dtype=np.bool_)
+    out_t = np.empty(64, dtype=np.int64)
+    out_a = np.empty(64, dtype=np.uint32)
+    rec = np.empty(256, dtype=np.uint8)
+    rec_ix = np.empty((8, 3), dtype=np.int64)
+    dec = np.empty(MAX_WIRE + 8, dtype=np.uint8)
+    prefix = np.empty(MAX_WIRE + 8, dtype=np.int64)
+    length = np.empty(MAX_WIRE + 8, dtype=np.int64)
+    reg = np.empty(MAX_WIRE + 8, dtype=np.int64)
+    passes = np.empty(MAX_WIRE + 8, dtype=np.bool_)
     ne = 0
     nr = 0
     rpos = 0
@@ -359,14 +374,9 @@ def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
                     c[C_CRC] += 1
         if m < 0:
             # resynchronise inside the candidate: the longest suffix that is a good frame
-            chain_ok = valid
-            w0 = first
-            for k in range(b - 1, w0 - 1, -1):
-                code = buf[k]
-                nxt = k + code
-                chain_ok[k - w0] = code != 0 and (nxt == b or (nxt < b and chain_ok[nxt - w0]))
+            suffix_checks(buf, first, b, prefix, length, reg, passes)
             for k in range(a + 1, b):
-                if not chain_ok[k - w0]:
+                if not passes[k - first]:
                     continue
                 m = try_frame(buf, k, b, dec)
                 if m >= 0:
@@ -395,6 +405,10 @@ def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
             if st[D_SYNC_VALID] == 0 or (dec[0] & 0x1F) != st[D_EPOCH]:
                 c[C_UNTIMED] += check_body(dec, m)
                 continue
+        if typ == T_EVENTS or typ == T_WIDE:
+            grow = ne + check_body(dec, m)
+            out_t = _grown(out_t, grow)
+            out_a = _grown(out_a, grow)
         if typ == T_WIDE:
             t = st[D_BASE] + dec[2] + (np.int64(dec[3]) << 8)
             step = st[D_STEP_US]
@@ -438,6 +452,8 @@ def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
             st[D_VERSIONS] |= 1 << dec[2]
             c[C_SYNCS] += 1
         else:
+            rec = _grown(rec, rpos + m)
+            rec_ix = _grown(rec_ix, nr + 1)
             rec[rpos:rpos + m] = dec[:m]
             rec_ix[nr, 0] = rpos
             rec_ix[nr, 1] = m
