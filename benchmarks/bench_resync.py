@@ -4,13 +4,20 @@ Run: ``python benchmarks/bench_resync.py [--mb 32]`` (pinned to one core). For e
 feeds ``--mb`` MB to a fresh :class:`protocols.SerialDecoder` in one ``feed()`` call, in a
 fresh interpreter (after a small warm-up feed, so numba's compilation is not timed), and
 reports the rate in MB/s and the peak memory the call added (the peak resident size,
-``VmHWM``, reset just before it, less the resident size before it) as a multiple of its input. Targets (SPEC.md §6): every pattern at
-≥ 10 MB/s and ≤ 4x its input.
+``VmHWM``, reset just before it, less the resident size before it) as a multiple of its
+input. Targets (SPEC.md §6): every adversarial pattern at ≥ 10 MB/s and ≤ 4x its input.
 
 Patterns: ``runs01`` (``0x01`` × 1031 + ``0x00``: every suffix is a COBS chain), ``runsff``
 (``0xFF`` × 1031 + ``0x00``), ``longrun`` (no delimiter at all), ``storm`` (``0x00`` only),
 ``storm01`` (``0x01 0x00`` repeated), ``random`` (uniform bytes), ``packets`` (a real
 narrow stream, 20k events/s Poisson, for comparison).
+
+Measured (2 vCPU VM shared by other work, load average 0.50 before and 0.70 after; command
+``python benchmarks/bench_resync.py --mb 32``), MB/s and added memory / input:
+runs01 16.8 / 1.00, runsff 145.7 / 1.00, longrun 1584.9 / 0.99, storm 770.5 / 1.00,
+storm01 32.5 / 1.00, random 124.5 / 1.00; packets 43.3 / 9.48 (the decoded events
+themselves: 13.3 million of them, 11 bytes each, plus their time and address columns).
+Before the one-pass suffix check the 0x01 runs decoded at 0.2-0.3 MB/s (quadratic).
 """
 
 from __future__ import annotations
