@@ -243,22 +243,24 @@ def _events_count(blob: np.ndarray, o: int, ln: int, fd: bool, wide: bool) -> np
 
 @numba.njit(cache=True, nogil=True)
 def _layout_ok(cls: int, blob: np.ndarray, o: int, ln: int, fd: bool) -> bool:
+    """Whether a record frame of class ``cls`` has exactly its layout's length (SPEC.md §5:
+    a longer frame is malformed too) and valid fields."""
     if cls == CLS_SYNC:
         if fd:
-            return ln >= 10 and is_known_version(blob[o + 1] >> 4) and (
+            return ln == 12 and is_known_version(blob[o + 1] >> 4) and (
                 blob[o + 1] & 0x8) == 0 and get_le(blob, o + 2, 2) > 0
-        return ln >= 8 and get_le(blob, o + 1, 2) > 0
+        return ln == 8 and get_le(blob, o + 1, 2) > 0
     if cls == CLS_STATUS:
         if fd:
-            return ln >= 64
-        return ln >= 8 and (blob[o] >> 4) <= 7
+            return ln == 64
+        return ln == 8 and (blob[o] >> 4) <= 7
     if cls == CLS_MARKER:
         if fd:
-            return ln >= 12 and blob[o + 1] <= 1
-        return ln >= 8 and (blob[o] >> 4) <= 1
+            return ln == 12 and blob[o + 1] <= 1
+        return ln == 8 and (blob[o] >> 4) <= 1
     if cls == CLS_ACK:
-        return ln >= 6
-    return ln >= 8  # COMMAND
+        return ln == 6
+    return ln == 8  # COMMAND
 
 
 @numba.njit(cache=True, nogil=True)

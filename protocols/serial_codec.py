@@ -222,10 +222,7 @@ class SerialDecoder:
                                           dict(zip(STATUS_WORDS, v, strict=True)))
             return self._status.update(raw, link, decoded, WORD_WIDTHS, self.counters)
         if typ == k.T_MARKER:
-            _, _, t, sid, phase = _MARKER.unpack(body)
-            if phase not in MarkerPhase._value2member_map_:
-                self._c[k.C_MALFORMED] += 1
-                return None
+            _, _, t, sid, phase = _MARKER.unpack(body)  # phase checked by the layout check
             return Marker(int.from_bytes(t, "little"), sid, MarkerPhase(phase))
         if typ == k.T_COMMAND:
             _, _, token, op, bits = _COMMAND.unpack(body)
@@ -247,6 +244,8 @@ class SerialDecoder:
         lc.events_decoded = int(c[k.C_EVENTS])
         lc.events_untimed = int(c[k.C_UNTIMED])
         lc.syncs = int(c[k.C_SYNCS])
+        lc.command_seq_gaps = int(c[k.C_CMD_GAPS])
+        lc.commands_lost = int(c[k.C_CMD_LOST])
 
 
 

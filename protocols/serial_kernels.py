@@ -33,6 +33,9 @@ WIDE_ITEM_BYTES = 3
 WIDE_MAX_DELTA = 15
 """Largest step delta of a wide event word (4 bits)."""
 
+MAX_MARKER_PHASE = 1
+"""Largest MARKER phase (0 ONSET, 1 END); a larger one makes the packet malformed."""
+
 BITMAP_ADDR = 511
 """Address field value of a bitmap word."""
 
@@ -52,12 +55,13 @@ BODY_LEN = np.array([-1, 11, 60, 13, 9, 6, -1, -1], dtype=np.int64)
 """Exact body length of each fixed-size packet type (-1: variable or invalid)."""
 
 # decoder state slots (D_VERSIONS: bit v set once a SYNC of version v was received)
-D_HAVE_SEQ, D_SEQ, D_SYNC_VALID, D_EPOCH, D_BASE, D_STEP_US, D_VERSIONS = range(7)
-D_SIZE = 7
+(D_HAVE_SEQ, D_SEQ, D_SYNC_VALID, D_EPOCH, D_BASE, D_STEP_US, D_VERSIONS, D_HAVE_CMD_SEQ,
+ D_CMD_SEQ) = range(9)
+D_SIZE = 9
 # decoder counter slots (LinkCounters fields of the same names)
 (C_FRAMES_OK, C_CRC, C_MALFORMED, C_RESYNCS, C_DISCARDED, C_GAPS, C_LOST, C_DUPS,
- C_EVENTS, C_UNTIMED, C_SYNCS) = range(11)
-C_SIZE = 11
+ C_EVENTS, C_UNTIMED, C_SYNCS, C_CMD_GAPS, C_CMD_LOST) = range(13)
+C_SIZE = 13
 
 
 @numba.njit(cache=True, nogil=True)
@@ -269,6 +273,8 @@ def check_body(dec: np.ndarray, m: int) -> int:
             return -1
         if typ == T_SYNC and (not is_known_version(dec[2]) or get_le(dec, 3, 2) == 0):
             return -1
+        if typ == T_MARKER and dec[12] > MAX_MARKER_PHASE:
+            return -1
         return 0
     if m < 4:
         return -1
@@ -310,7 +316,7 @@ def try_frame(buf: np.ndarray, a: int, b: int, dec: np.ndarray) -> int:
     n = cobs_decode(buf, a, b, dec)
     if n < 4 or crc16(dec, 0, n) != CRC_RESIDUE:
         return -1
-    if check_body(dec, n - 2) < 0:
+    if n - 2 > MAX_BODY or check_body(dec, n - 2) < 0:
         return -2
     return n - 2
 
@@ -387,20 +393,32 @@ def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
                 c[C_DISCARDED] += b - first
                 continue
         seq = dec[1]
-        if st[D_HAVE_SEQ]:
-            gap = (seq - st[D_SEQ] - 1) & 0xFF
-            if gap == 0xFF:
-                c[C_DUPS] += 1
-                continue
-            if gap:
-                c[C_GAPS] += 1
-                c[C_LOST] += gap
-                if gap >= EPOCH_MOD:
-                    st[D_SYNC_VALID] = 0
-        st[D_HAVE_SEQ] = 1
-        st[D_SEQ] = seq
-        c[C_FRAMES_OK] += 1
         typ = dec[0] >> 5
+        if typ == T_COMMAND:  # a host's counter, kept apart from the board's (SPEC.md §6)
+            if st[D_HAVE_CMD_SEQ]:
+                gap = (seq - st[D_CMD_SEQ] - 1) & 0xFF
+                if gap == 0xFF:
+                    c[C_DUPS] += 1
+                    continue
+                if gap:
+                    c[C_CMD_GAPS] += 1
+                    c[C_CMD_LOST] += gap
+            st[D_HAVE_CMD_SEQ] = 1
+            st[D_CMD_SEQ] = seq
+        else:
+            if st[D_HAVE_SEQ]:
+                gap = (seq - st[D_SEQ] - 1) & 0xFF
+                if gap == 0xFF:
+                    c[C_DUPS] += 1
+                    continue
+                if gap:
+                    c[C_GAPS] += 1
+                    c[C_LOST] += gap
+                    if gap >= EPOCH_MOD:
+                        st[D_SYNC_VALID] = 0
+            st[D_HAVE_SEQ] = 1
+            st[D_SEQ] = seq
+        c[C_FRAMES_OK] += 1
         if typ == T_EVENTS or typ == T_WIDE:
             if st[D_SYNC_VALID] == 0 or (dec[0] & 0x1F) != st[D_EPOCH]:
                 c[C_UNTIMED] += check_body(dec, m)

@@ -172,10 +172,11 @@ def test_records_round_trip(layout: str, records: list, status: Status, where: i
     test_status_counters_unwrap_across_modulo: counters only make sense counting up)."""
     records.insert(min(where, len(records)), status)
     enc = SerialEncoder() if layout == "serial" else CanEncoder(5, fd=layout == "canfd")
+    host = SerialEncoder() if layout == "serial" else CanEncoder(5, fd=layout == "canfd")
     dec = SerialDecoder() if layout == "serial" else CanDecoder(5, fd=layout == "canfd")
     got = []
-    for rec in records:
-        method = {Status: enc.status, Marker: enc.marker, Command: enc.command,
+    for rec in records:  # commands come from a host: their own sequence numbers (SPEC.md §6)
+        method = {Status: enc.status, Marker: enc.marker, Command: host.command,
                   Ack: enc.ack}[type(rec)]
         got += dec.feed(method(rec)).records
     assert got == records
