@@ -276,7 +276,7 @@ def check_body(dec: np.ndarray, m: int) -> int:
         if typ == T_MARKER and dec[12] > MAX_MARKER_PHASE:
             return -1
         return 0
-    if m < 4:
+    if m <= 4:  # an EVENTS packet holds at least one event (SPEC.md §3.1)
         return -1
     k = 4
     count = 0
@@ -299,11 +299,14 @@ def check_body(dec: np.ndarray, m: int) -> int:
                     or last >= 0):
                 return -1
             last = N_CHANNELS  # a bitmap holds its whole step
+            before = count
             for q in range(k + 2, k + 2 + BITMAP_BYTES):
                 v = dec[q]
                 while v:
                     count += 1
                     v &= v - 1
+            if count == before:  # an empty bitmap (SPEC.md §3.1)
+                return -1
             k += 2 + BITMAP_BYTES
         else:
             return -1

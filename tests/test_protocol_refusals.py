@@ -104,3 +104,14 @@ def test_a_command_in_the_board_stream_keeps_the_board_sequence() -> None:
     dup = SerialDecoder()
     packet = SerialEncoder().command(Command(8, CommandCode.STOP, 0))
     assert len(dup.feed(packet + packet).records) == 1 and dup.counters.duplicates == 1
+
+
+def test_empty_events_and_empty_bitmap_are_malformed() -> None:
+    bitmap_word = ((511 << 7) | 0).to_bytes(2, "little")
+    bodies = {"no item": b"", "empty bitmap": bitmap_word + bytes(43),
+              "one bit": bitmap_word + b"\x01" + bytes(42)}
+    for name, items in bodies.items():
+        dec = SerialDecoder()
+        got = dec.feed(sync_packet() + framed(bytes([0, 1, 0, 0]) + items))
+        ok = name == "one bit"
+        assert len(got.events) == ok and dec.counters.malformed == (not ok), name
