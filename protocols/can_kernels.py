@@ -35,7 +35,7 @@ from protocols.serial_kernels import (
     get_le,
     is_known_version,
     put_le,
-    unwrap_near,
+    take_base,
 )
 from protocols.versions import MAX_CHANNELS
 
@@ -73,8 +73,8 @@ C_SIZE = 14
 
 # decoder state slots (D_VERSION: of the last SYNC; D_VERSIONS: bit v set once one was seen)
 (D_HAVE_SEQ, D_SEQ, D_SYNC_VALID, D_EPOCH, D_BASE, D_STEP_US, D_HAVE_CMD_SEQ,
- D_CMD_SEQ, D_VERSION, D_VERSIONS) = range(10)
-D_SIZE = 10
+ D_CMD_SEQ, D_VERSION, D_VERSIONS, D_CAND, D_HAVE_CAND) = range(12)
+D_SIZE = 12
 
 
 @numba.njit(cache=True, nogil=True)
@@ -359,7 +359,10 @@ def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: in
                 st[D_VERSION] = WIDE_VERSION if blob[fo] & 0x80 else PROTOCOL_VERSION
                 step, raw, bits = get_le(blob, fo + 1, 2), get_le(blob, fo + 3, 5), 40
             st[D_VERSIONS] |= 1 << st[D_VERSION]
-            st[D_BASE] = unwrap_near(st[D_BASE], raw, bits) if st[D_STEP_US] else raw
+            if st[D_STEP_US]:
+                st[D_SYNC_VALID] = take_base(st, D_BASE, D_CAND, D_HAVE_CAND, raw, bits)
+            else:
+                st[D_BASE] = raw
             st[D_STEP_US] = step
             c[C_SYNCS] += 1
         else:

@@ -199,10 +199,11 @@ class SerialDecoder:
                 self._c[k.C_DISCARDED] += cut
                 self._sync_counters()
             return DecodeResult.empty()
-        buf = np.frombuffer(pending, dtype=np.uint8, count=end + 1)  # no copy
-        t, a, ne, rec, rec_ix, nr = k.decode_stream(buf, self._st, self._c)
-        del buf  # releases the bytearray's buffer, which may then shrink
+        buf = np.empty(end + 1, dtype=np.uint8)
+        with memoryview(pending) as view:  # one copy, no lasting export of the bytearray
+            buf[:] = np.frombuffer(view[:end + 1], dtype=np.uint8)
         del pending[:end + 1]
+        t, a, ne, rec, rec_ix, nr = k.decode_stream(buf, self._st, self._c)
         refuse_version(int(self._st[k.D_VERSIONS]), self.versions)
         events = make_events(t[:ne], a[:ne])
         records: list[Record] = []

@@ -56,8 +56,8 @@ BODY_LEN = np.array([-1, 11, 60, 13, 9, 6, -1, -1], dtype=np.int64)
 
 # decoder state slots (D_VERSIONS: bit v set once a SYNC of version v was received)
 (D_HAVE_SEQ, D_SEQ, D_SYNC_VALID, D_EPOCH, D_BASE, D_STEP_US, D_VERSIONS, D_HAVE_CMD_SEQ,
- D_CMD_SEQ) = range(9)
-D_SIZE = 9
+ D_CMD_SEQ, D_CAND, D_HAVE_CAND) = range(11)
+D_SIZE = 11
 # decoder counter slots (LinkCounters fields of the same names)
 (C_FRAMES_OK, C_CRC, C_MALFORMED, C_RESYNCS, C_DISCARDED, C_GAPS, C_LOST, C_DUPS,
  C_EVENTS, C_UNTIMED, C_SYNCS, C_CMD_GAPS, C_CMD_LOST) = range(13)
@@ -88,6 +88,41 @@ def unwrap_near(previous: int, raw: int, bits: int) -> int:
     if delta >= mod >> 1:
         delta -= mod
     return previous + delta
+
+
+BASE_JUMP_BITS = 4
+"""A SYNC base further than 2**(width - BASE_JUMP_BITS) steps from the previous one is a jump
+(a board restart or a damaged SYNC, SPEC.md §6 rule 5)."""
+
+
+@numba.njit(cache=True, nogil=True)
+def take_base(st: np.ndarray, i_base: int, i_cand: int, i_have_cand: int, raw: int,
+              bits: int) -> bool:
+    """Set the time base (``st[i_base]``, steps) from a SYNC's ``raw`` base (sent modulo
+    ``2**bits``); return whether the time base is valid after it.
+
+    The first SYNC is taken as sent. Later ones are unwrapped near the previous base; one
+    that lands more than ``2**(bits - BASE_JUMP_BITS)`` steps away is a jump: it is held
+    as a candidate (``st[i_cand]``) and the time base is invalid until a SYNC either
+    continues the old base (the jump was damage) or lies near the candidate (a board
+    restart: the base re-anchors there). One damaged SYNC thus never shifts later times.
+    """
+    jump = 1 << (bits - BASE_JUMP_BITS)
+    prev = st[i_base]
+    u = unwrap_near(prev, raw, bits)
+    if abs(u - prev) <= jump:
+        st[i_base] = u
+        st[i_have_cand] = 0
+        return True
+    if st[i_have_cand]:
+        v = unwrap_near(st[i_cand], raw, bits)
+        if abs(v - st[i_cand]) <= jump:
+            st[i_base] = v
+            st[i_have_cand] = 0
+            return True
+    st[i_cand] = raw
+    st[i_have_cand] = 1
+    return False
 
 
 @numba.njit(cache=True, nogil=True)
@@ -468,7 +503,10 @@ def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
             st[D_SYNC_VALID] = 1
             st[D_EPOCH] = dec[0] & 0x1F
             raw = get_le(dec, 5, 6)
-            st[D_BASE] = unwrap_near(st[D_BASE], raw, 48) if st[D_STEP_US] else raw
+            if st[D_STEP_US]:
+                st[D_SYNC_VALID] = take_base(st, D_BASE, D_CAND, D_HAVE_CAND, raw, 48)
+            else:
+                st[D_BASE] = raw
             st[D_STEP_US] = get_le(dec, 3, 2)
             st[D_VERSIONS] |= 1 << dec[2]
             c[C_SYNCS] += 1
