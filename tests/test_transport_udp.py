@@ -80,3 +80,30 @@ def test_bad_addresses_and_options_say_what_to_write() -> None:
     with UdpTransport("127.0.0.1", 0, listen=True) as a, pytest.raises(TransportError,
                                                                         match="bind"):
         UdpTransport("127.0.0.1", a.port, listen=True)
+
+
+def test_a_starved_receive_buffer_is_reported(caplog) -> None:
+    """A receiver asks the kernel for its socket buffer and says when it got less (asked vs
+    granted, and the setting to raise); one that got what it asked says nothing."""
+    import logging
+    from pathlib import Path
+
+    from skinhil.transports import UdpTransport
+
+    rmem_max = int(Path("/proc/sys/net/core/rmem_max").read_text())
+    with caplog.at_level(logging.WARNING):
+        starved = UdpTransport("127.0.0.1", 0, listen=True, rcvbuf_bytes=4 * rmem_max)
+    try:
+        assert starved.rcvbuf_asked == 4 * rmem_max
+        assert 0 < starved.rcvbuf_granted < starved.rcvbuf_asked
+        assert any("net.core.rmem_max" in r.getMessage() and str(starved.rcvbuf_granted)
+                   in r.getMessage() for r in caplog.records)
+    finally:
+        starved.shutdown()
+    caplog.clear()
+    with caplog.at_level(logging.WARNING):
+        fine = UdpTransport("127.0.0.1", 0, listen=True, rcvbuf_bytes=65536)
+    try:
+        assert fine.rcvbuf_granted >= 65536 and not caplog.records
+    finally:
+        fine.shutdown()
