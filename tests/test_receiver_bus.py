@@ -114,3 +114,44 @@ def test_udp_sources_are_capped_and_filtered(small_decoder: WindowDecoder) -> No
         host.shutdown()
         for s in senders:
             s.close()
+
+
+def test_drain_decodes_what_the_link_already_received(small_decoder: WindowDecoder,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """Datagrams already in the socket when a receiver stops (listen on Ctrl-C) are decoded
+    by ``drain()``: the totals count every event sent, none left in the kernel's queue."""
+    import numpy as np
+
+    import skinhil.transports.udp as udp
+
+    monkeypatch.setattr(udp, "RECV_BATCH", 16)  # one read takes 16 datagrams of the 200
+
+    import protocols
+    from skinhil.events import make_events
+    from skinhil.receiver import Receiver
+
+    host = UdpTransport("127.0.0.1", 0, listen=True)
+    board = UdpTransport("127.0.0.1", host.port)
+    try:
+        enc = protocols.SerialEncoder()
+        sent = 0
+        for ms in range(200):
+            ev = make_events(np.arange(5, dtype=np.int64) * 100 + ms * 1000, np.arange(5) * 7)
+            board.send(enc.events(ev, (ms + 1) * 1000))
+            sent += len(ev)
+        time.sleep(0.2)
+        rx = Receiver(host, small_decoder)
+        rx.poll(0.0)  # one read: a batch, not everything
+        first = rx.link_report().events_decoded
+        rx.drain()
+        assert first < sent and rx.link_report().events_decoded == sent
+        bus = BusReceiver(host, small_decoder)
+        for ms in range(200, 300):
+            ev = make_events(np.arange(5, dtype=np.int64) * 100 + ms * 1000, np.arange(5) * 7)
+            board.send(enc.events(ev, (ms + 1) * 1000))
+        time.sleep(0.2)
+        bus.drain()
+        assert bus.combined_report().events_decoded == 500
+    finally:
+        board.shutdown()
+        host.shutdown()

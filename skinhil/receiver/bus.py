@@ -149,6 +149,20 @@ class BusReceiver:
             return self.split_frames(self.transport.recv(timeout))
         return self.split_datagrams(self.transport.recv_from(timeout))  # type: ignore[attr-defined]
 
+    def drain(self) -> list[tuple[BoardKey, ScoredDecision]]:
+        """Decode everything the link already received (see :meth:`Receiver.drain`)."""
+        out: list[tuple[BoardKey, ScoredDecision]] = []
+        while not self.link_down:
+            try:
+                parts = self.receive(0.0)
+            except TransportError as exc:
+                self._link_error(exc)
+                break
+            if not parts:
+                break
+            out += self.feed(parts, time.monotonic())
+        return out
+
     def poll(self, timeout: float | None = 0.02) -> list[tuple[BoardKey, ScoredDecision]]:
         """Receive once and process; a link error is reported to every board's listeners
         and stops :meth:`run`."""
@@ -157,14 +171,17 @@ class BusReceiver:
         try:
             parts = self.receive(timeout)
         except TransportError as exc:
-            self.link_errors += 1
-            self.link_down = True
-            log.warning("link error: %s", exc)
-            for rx in self.boards.values():
-                for listener in rx.listeners:
-                    listener.on_link_error(str(exc))
+            self._link_error(exc)
             return []
         return self.feed(parts, time.monotonic())
+
+    def _link_error(self, exc: TransportError) -> None:
+        self.link_errors += 1
+        self.link_down = True
+        log.warning("link error: %s", exc)
+        for rx in self.boards.values():
+            for listener in rx.listeners:
+                listener.on_link_error(str(exc))
 
     def run(self, duration_s: float | None = None,
             stop: threading.Event | None = None) -> None:
