@@ -96,7 +96,7 @@ def test_udp_sources_are_capped_and_filtered(small_decoder: WindowDecoder) -> No
         for cap, allow, want in ((3, None, names[:3]), (16, [names[4], "10.0.0.1"],
                                                         [names[4]])):
             bus = BusReceiver(host, small_decoder, max_sources=cap, allow=allow)
-            for rnd in range(2):
+            for _ in range(2):
                 for s in senders:
                     s.sendto(b"\x01", ("127.0.0.1", host.port))
                     time.sleep(0.002)  # in order: the first three are heard first
