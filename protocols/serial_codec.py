@@ -247,6 +247,7 @@ class SerialDecoder:
         lc.syncs = int(c[k.C_SYNCS])
         lc.command_seq_gaps = int(c[k.C_CMD_GAPS])
         lc.commands_lost = int(c[k.C_CMD_LOST])
+        lc.late_frames = int(c[k.C_LATE])
 
 
 

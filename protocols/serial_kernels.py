@@ -60,8 +60,12 @@ BODY_LEN = np.array([-1, 11, 60, 13, 9, 6, -1, -1], dtype=np.int64)
 D_SIZE = 11
 # decoder counter slots (LinkCounters fields of the same names)
 (C_FRAMES_OK, C_CRC, C_MALFORMED, C_RESYNCS, C_DISCARDED, C_GAPS, C_LOST, C_DUPS,
- C_EVENTS, C_UNTIMED, C_SYNCS, C_CMD_GAPS, C_CMD_LOST) = range(13)
-C_SIZE = 13
+ C_EVENTS, C_UNTIMED, C_SYNCS, C_CMD_GAPS, C_CMD_LOST, C_LATE) = range(14)
+C_SIZE = 14
+
+LATE_WINDOW = 8
+"""A board packet 1..LATE_WINDOW sequence numbers behind the last one is late (reordered),
+not a gap of 248..255 (SPEC.md §6 rule 4)."""
 
 
 @numba.njit(cache=True, nogil=True)
@@ -448,6 +452,11 @@ def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
                 gap = (seq - st[D_SEQ] - 1) & 0xFF
                 if gap == 0xFF:
                     c[C_DUPS] += 1
+                    continue
+                if gap >= 0xFF - LATE_WINDOW:  # a reordered packet: dropped, base kept
+                    c[C_LATE] += 1
+                    if typ == T_EVENTS or typ == T_WIDE:
+                        c[C_UNTIMED] += check_body(dec, m)
                     continue
                 if gap:
                     c[C_GAPS] += 1

@@ -115,3 +115,21 @@ def test_empty_events_and_empty_bitmap_are_malformed() -> None:
         got = dec.feed(sync_packet() + framed(bytes([0, 1, 0, 0]) + items))
         ok = name == "one bit"
         assert len(got.events) == ok and dec.counters.malformed == (not ok), name
+
+
+def test_a_reordered_packet_costs_only_its_own_events() -> None:
+    """UDP reordering (SPEC.md §10): a packet arriving after the next few is late: dropped and
+    counted, with no 250-frame gap and no lost time base for the packets after it."""
+    enc = SerialEncoder()
+    packets = []
+    for ms in range(12):
+        ev = make_events(np.arange(3, dtype=np.int64) * 100 + ms * 1000, [1, 2, 3])
+        packets += [p + b"\x00" for p in enc.events(ev, (ms + 1) * 1000).split(b"\x00") if p]
+    order = list(range(len(packets)))
+    order.insert(8, order.pop(4))  # packet 4 overtaken by 5..8
+    dec = SerialDecoder()
+    got = dec.feed(b"".join(packets[i] for i in order))
+    c = dec.counters
+    assert c.late_frames == 1 and c.frames_lost == 1 and c.seq_gaps == 1
+    assert len(got.events) == 3 * (len(packets) - 2)  # all but the SYNC's and the late one's
+    assert c.events_untimed == 3
