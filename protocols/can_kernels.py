@@ -21,7 +21,9 @@ from protocols.event_input import (
     E_SYNC_VALID,
     E_VERSION,
 )
-from protocols.serial_kernels import (
+from protocols.serial_kernels import (  # noqa: F401  (counter slots CAN shares, read by can_codec)
+    C_CMD_GAPS,
+    C_CMD_LOST,
     C_DUPS,
     C_EVENTS,
     C_FRAMES_OK,
@@ -30,12 +32,14 @@ from protocols.serial_kernels import (
     C_MALFORMED,
     C_SYNCS,
     C_UNTIMED,
+    SEQ_NEW,
     WIDE_ITEM_BYTES,
     WIDE_MAX_DELTA,
     get_le,
     is_known_version,
     put_le,
     take_base,
+    take_seq,
 )
 from protocols.versions import MAX_CHANNELS
 
@@ -63,13 +67,10 @@ EPOCH_MOD = 8
 """SYNC epochs count modulo 8; a sequence gap of 8 frames or more invalidates the time base."""
 CLASSIC_SEQ_MOD = 16
 FD_SEQ_MOD = 256
-C_FOREIGN = 11
-"""Counter slot of frames with another board's or an unknown ID."""
-C_CMD_GAPS = 12
-"""Counter slot of jumps in a host's COMMAND sequence numbers."""
-C_CMD_LOST = 13
-"""Counter slot of COMMAND frames missing by the host's sequence numbers."""
-C_SIZE = 14
+C_FOREIGN = 14
+"""Counter slot of frames with another board's or an unknown ID (after the serial slots,
+:data:`protocols.serial_kernels.C_CMD_GAPS` and the rest, which CAN shares)."""
+C_SIZE = 15
 
 # decoder state slots (D_VERSION: of the last SYNC; D_VERSIONS: bit v set once one was seen)
 (D_HAVE_SEQ, D_SEQ, D_SYNC_VALID, D_EPOCH, D_BASE, D_STEP_US, D_HAVE_CMD_SEQ,
@@ -308,22 +309,11 @@ def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: in
             c[C_MALFORMED] += 1
             continue
         seq = blob[fo] & (seq_mod - 1)
-        have, last = (D_HAVE_CMD_SEQ, D_CMD_SEQ) if cls == CLS_COMMAND else (D_HAVE_SEQ, D_SEQ)
-        if st[have]:
-            gap = (seq - st[last] - 1) % seq_mod
-            if gap == seq_mod - 1:
-                c[C_DUPS] += 1
-                continue
-            if gap and cls == CLS_COMMAND:  # a host's counter: apart from the board's frames
-                c[C_CMD_GAPS] += 1
-                c[C_CMD_LOST] += gap
-            elif gap:
-                c[C_GAPS] += 1
-                c[C_LOST] += gap
-                if gap >= EPOCH_MOD:
-                    st[D_SYNC_VALID] = 0
-        st[have] = 1
-        st[last] = seq
+        command = cls == CLS_COMMAND  # a host's counter: apart from the board's frames
+        have, last = (D_HAVE_CMD_SEQ, D_CMD_SEQ) if command else (D_HAVE_SEQ, D_SEQ)
+        if take_seq(st, c, have, last, D_SYNC_VALID, seq, seq_mod, command, 0,
+                    EPOCH_MOD) != SEQ_NEW:
+            continue
         c[C_FRAMES_OK] += 1
         if cls == CLS_EVENTS or cls == CLS_WIDE:
             if fd:

@@ -129,6 +129,40 @@ def take_base(st: np.ndarray, i_base: int, i_cand: int, i_have_cand: int, raw: i
     return False
 
 
+SEQ_NEW, SEQ_DUPLICATE, SEQ_LATE = 0, 1, 2
+"""Verdicts of :func:`take_seq` on a unit's sequence number."""
+
+
+@numba.njit(cache=True, nogil=True)
+def take_seq(st: np.ndarray, c: np.ndarray, have: int, last: int, sync_valid: int, seq: int,
+             mod: int, command: bool, late_window: int, epoch_gap: int) -> int:
+    """Check a packet's or frame's ``seq`` against the previous number (``st[last]``, valid
+    once ``st[have]``) of one counter modulo ``mod`` (SPEC.md §6 rule 4; counter slots are
+    this module's ``C_*``, which the CAN kernels share): a repeat is a duplicate; 1..``late_window``
+    behind is late (both left uncounted in the sequence); otherwise a gap counts in the
+    command counters (``command``) or the board's, where a gap of ``epoch_gap`` or more
+    invalidates the time base (``st[sync_valid]``), and ``seq`` becomes the previous."""
+    if st[have]:
+        gap = (seq - st[last] - 1) % mod
+        if gap == mod - 1:
+            c[C_DUPS] += 1
+            return SEQ_DUPLICATE
+        if gap >= mod - 1 - late_window:
+            c[C_LATE] += 1
+            return SEQ_LATE
+        if gap and command:
+            c[C_CMD_GAPS] += 1
+            c[C_CMD_LOST] += gap
+        elif gap:
+            c[C_GAPS] += 1
+            c[C_LOST] += gap
+            if gap >= epoch_gap:
+                st[sync_valid] = 0
+    st[have] = 1
+    st[last] = seq
+    return SEQ_NEW
+
+
 @numba.njit(cache=True, nogil=True)
 def encode_sync(st: np.ndarray, base: int, pkt: np.ndarray, out: np.ndarray, pos: int) -> int:
     """Append a SYNC packet with time base ``base`` (steps); update ``st``; return the end."""
@@ -436,35 +470,14 @@ def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
                 continue
         seq = dec[1]
         typ = dec[0] >> 5
-        if typ == T_COMMAND:  # a host's counter, kept apart from the board's (SPEC.md §6)
-            if st[D_HAVE_CMD_SEQ]:
-                gap = (seq - st[D_CMD_SEQ] - 1) & 0xFF
-                if gap == 0xFF:
-                    c[C_DUPS] += 1
-                    continue
-                if gap:
-                    c[C_CMD_GAPS] += 1
-                    c[C_CMD_LOST] += gap
-            st[D_HAVE_CMD_SEQ] = 1
-            st[D_CMD_SEQ] = seq
-        else:
-            if st[D_HAVE_SEQ]:
-                gap = (seq - st[D_SEQ] - 1) & 0xFF
-                if gap == 0xFF:
-                    c[C_DUPS] += 1
-                    continue
-                if gap >= 0xFF - LATE_WINDOW:  # a reordered packet: dropped, base kept
-                    c[C_LATE] += 1
-                    if typ == T_EVENTS or typ == T_WIDE:
-                        c[C_UNTIMED] += check_body(dec, m)
-                    continue
-                if gap:
-                    c[C_GAPS] += 1
-                    c[C_LOST] += gap
-                    if gap >= EPOCH_MOD:
-                        st[D_SYNC_VALID] = 0
-            st[D_HAVE_SEQ] = 1
-            st[D_SEQ] = seq
+        command = typ == T_COMMAND  # a host's counter, kept apart from the board's (§6)
+        have, last = (D_HAVE_CMD_SEQ, D_CMD_SEQ) if command else (D_HAVE_SEQ, D_SEQ)
+        verdict = take_seq(st, c, have, last, D_SYNC_VALID, seq, 256, command,
+                           0 if command else LATE_WINDOW, EPOCH_MOD)
+        if verdict == SEQ_LATE and (typ == T_EVENTS or typ == T_WIDE):
+            c[C_UNTIMED] += check_body(dec, m)
+        if verdict != SEQ_NEW:
+            continue
         c[C_FRAMES_OK] += 1
         if typ == T_EVENTS or typ == T_WIDE:
             if st[D_SYNC_VALID] == 0 or (dec[0] & 0x1F) != st[D_EPOCH]:

@@ -54,6 +54,17 @@ def distinct_events(t_us: object, addr: object) -> np.ndarray:
     return make_events(pairs[0], pairs[1])
 
 
+def framed(body: bytes) -> bytes:
+    """``body`` as one serial packet (COBS, CRC, delimiter) with a good CRC: hand-made
+    bodies, for the decoder's layout checks."""
+    from protocols.framing import frame_into
+
+    buf = np.zeros(len(body) + 2, dtype=np.uint8)
+    buf[:len(body)] = np.frombuffer(body, dtype=np.uint8)
+    out = np.zeros(2 * len(body) + 16, dtype=np.uint8)
+    return out[:frame_into(buf, len(body), out, 0)].tobytes()
+
+
 def _split_packets(data: bytes) -> str:
     lines, start = [], 0
     for i, b in enumerate(data):

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from protocol_examples import framed
 
 from protocols import (
     Ack,
@@ -19,16 +20,7 @@ from protocols import (
     SerialDecoder,
     SerialEncoder,
 )
-from protocols.framing import frame_into
 from skinhil.events import make_events
-
-
-def framed(body: bytes) -> bytes:
-    """``body`` as one serial packet (COBS, CRC, delimiter) with a good CRC."""
-    buf = np.zeros(len(body) + 2, dtype=np.uint8)
-    buf[:len(body)] = np.frombuffer(body, dtype=np.uint8)
-    out = np.zeros(2 * len(body) + 16, dtype=np.uint8)
-    return out[:frame_into(buf, len(body), out, 0)].tobytes()
 
 
 def sync_packet() -> bytes:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from protocol_examples import distinct_events
+from protocol_examples import distinct_events, framed
 
 from protocols import (
     Ack,
@@ -115,15 +115,6 @@ def test_bitmap_chosen_only_when_smaller() -> None:
     assert len(SerialDecoder().feed(SerialEncoder().events(full, 100)).events) == 338
 
 
-def _framed(body: bytes) -> bytes:
-    from protocols.framing import frame_into
-
-    buf = np.zeros(len(body) + 2, dtype=np.uint8)
-    buf[:len(body)] = np.frombuffer(body, dtype=np.uint8)
-    out = np.zeros(2 * len(body) + 16, dtype=np.uint8)
-    return out[:frame_into(buf, len(body), out, 0)].tobytes()
-
-
 def test_a_channel_twice_in_a_step_is_refused() -> None:
     """A channel spikes at most once per step (SPEC.md §3.1): the encoder refuses a repeat and
     the decoder counts a packet repeating a channel in a step (or out of ascending order, or
@@ -138,7 +129,7 @@ def test_a_channel_twice_in_a_step_is_refused() -> None:
         body = bytes([0, 1, 0, 0]) + b"".join(  # EVENTS, epoch 0, seq 1, offset 0
             ((a << 7) | d).to_bytes(2, "little") for a, d in items)
         dec = SerialDecoder()
-        got = dec.feed(sync + _framed(body))
+        got = dec.feed(sync + framed(body))
         ok = name == "ascending"
         assert len(got.events) == (3 if ok else 0), name
         assert dec.counters.malformed == (0 if ok else 1), name
