@@ -32,6 +32,7 @@ from protocols.serial_kernels import (  # noqa: F401  (counter slots CAN shares,
     C_MALFORMED,
     C_SYNCS,
     C_UNTIMED,
+    MAX_TIME_US,
     SEQ_NEW,
     WIDE_ITEM_BYTES,
     WIDE_MAX_DELTA,
@@ -249,7 +250,8 @@ def _layout_ok(cls: int, blob: np.ndarray, o: int, ln: int, fd: bool) -> bool:
     if cls == CLS_SYNC:
         if fd:
             return ln == 12 and is_known_version(blob[o + 1] >> 4) and (
-                blob[o + 1] & 0x8) == 0 and get_le(blob, o + 2, 2) > 0
+                blob[o + 1] & 0x8) == 0 and get_le(blob, o + 2, 2) > 0 and (
+                get_le(blob, o + 4, 6) < MAX_TIME_US // get_le(blob, o + 2, 2))
         return ln == 8 and get_le(blob, o + 1, 2) > 0
     if cls == CLS_STATUS:
         if fd:

@@ -33,6 +33,10 @@ WIDE_ITEM_BYTES = 3
 WIDE_MAX_DELTA = 15
 """Largest step delta of a wide event word (4 bits)."""
 
+MAX_TIME_US = 1 << 62
+"""A SYNC whose base × step reaches this (µs) is malformed: event times stay far inside a
+signed 64-bit integer (SPEC.md §6 rule 5)."""
+
 MAX_MARKER_PHASE = 1
 """Largest MARKER phase (0 ONSET, 1 END); a larger one makes the packet malformed."""
 
@@ -344,7 +348,8 @@ def check_body(dec: np.ndarray, m: int) -> int:
     if typ != T_EVENTS:
         if BODY_LEN[typ] != m:
             return -1
-        if typ == T_SYNC and (not is_known_version(dec[2]) or get_le(dec, 3, 2) == 0):
+        if typ == T_SYNC and (not is_known_version(dec[2]) or get_le(dec, 3, 2) == 0
+                              or get_le(dec, 5, 6) >= MAX_TIME_US // get_le(dec, 3, 2)):
             return -1
         if typ == T_MARKER and dec[12] > MAX_MARKER_PHASE:
             return -1

@@ -125,3 +125,18 @@ def test_a_reordered_packet_costs_only_its_own_events() -> None:
     assert c.late_frames == 1 and c.frames_lost == 1 and c.seq_gaps == 1
     assert len(got.events) == 3 * (len(packets) - 2)  # all but the SYNC's and the late one's
     assert c.events_untimed == 3
+
+
+@pytest.mark.parametrize("layout", ["serial", "canfd"])
+def test_a_sync_whose_times_overflow_is_malformed(layout: str) -> None:
+    """Base × step at or beyond 2^62 µs would give negative event times: refused."""
+    for base, step, ok in ((2**48 - 1, 65535, False), ((1 << 62) // 65535 - 1, 65535, True)):
+        if layout == "serial":
+            dec = SerialDecoder()
+            body = bytes([1 << 5, 0, 3]) + step.to_bytes(2, "little") + base.to_bytes(6, "little")
+            dec.feed(framed(body))
+        else:
+            dec = CanDecoder(1, fd=True)
+            data = bytes([0, 3 << 4]) + step.to_bytes(2, "little") + base.to_bytes(6, "little")
+            dec.feed([CanFrame(0x31, data + bytes(2), True)])
+        assert dec.counters.syncs == ok and dec.counters.malformed == (not ok), (base, step)
