@@ -332,6 +332,7 @@ class Board:
         ok = reason == why.NONE
         if not ok:
             self.counters.nacks += 1
+            self.counters.rx_errors += 1  # a refused command shows in the next STATUS
         return protocols.Ack(token=cmd.token, opcode=op, ok=ok, reason=reason)
 
     # -- one tick -----------------------------------------------------------------------
@@ -379,7 +380,9 @@ class Board:
     def _serve_link(self, t_end_us: int) -> None:
         link = self.link
         assert link is not None
-        for cmd in link.poll_commands():
+        commands = link.poll_commands()
+        self.counters.rx_errors += link.take_rx_errors()
+        for cmd in commands:
             ack = self.handle(cmd)
             link.queue_record(ack)
             if cmd.opcode == protocols.CommandCode.QUERY_STATUS:

@@ -37,7 +37,8 @@ class BoardCounters:
     sent: int = 0
     dropped_by: dict[str, int] = field(default_factory=lambda: dict.fromkeys(DROP_REASONS, 0))
     rx_errors: int = 0
-    """Host bytes or frames the board could not decode."""
+    """Host commands refused (SPEC.md §3.3): NACKed, failing the CRC or layout, repeating
+    the host's previous sequence number, or not commands at all."""
     commands: int = 0
     nacks: int = 0
     markers_sent: int = 0

@@ -64,7 +64,12 @@ class BoardLink:
         self.units_sent = 0
         """Bytes (serial) or frames (CAN) handed to the transport."""
         self.rx_errors = 0
-        """Host data the decoder rejected by raising (a correct decoder never does)."""
+        """Host units refused so far (SPEC.md §3.3, ``rx_errors``): packets or frames that fail
+        the CRC or the layout (``crc_errors`` + ``malformed``), repeated host sequence numbers
+        (``duplicates``: dropped unanswered), records that are not commands, and data the
+        decoder rejected by raising (a correct decoder never does). NACKs are the board's."""
+        self._rx_reported = 0
+        self._rx_taken = 0
 
     def warm_up(self, status: Any) -> None:
         """Run every encode and decode path once on throwaway codecs, off the clock
@@ -201,7 +206,19 @@ class BoardLink:
             log.warning("undecodable host data dropped: %s", exc)
             self.rx_errors += 1
             return []
-        return [r for r in res.records if isinstance(r, protocols.Command)]
+        c = self.decoder.counters
+        refused = c.crc_errors + c.malformed + c.duplicates
+        self.rx_errors += refused - self._rx_reported
+        self._rx_reported = refused
+        commands = [r for r in res.records if isinstance(r, protocols.Command)]
+        self.rx_errors += len(res.records) - len(commands)
+        return commands
+
+    def take_rx_errors(self) -> int:
+        """Host units refused since the last call (see :attr:`rx_errors`)."""
+        n = self.rx_errors - self._rx_taken
+        self._rx_taken = self.rx_errors
+        return n
 
     def shutdown(self) -> None:
         self.transport.shutdown()

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import skinhil.model.kernel_cache  # noqa: F401  (numba's cache keyed on the sources, before any kernel)
+import protocols.kernel_cache  # noqa: F401  (numba's cache keyed on the sources, before any kernel)
 from protocols.budget import can_frame_seconds, serial_seconds
 from protocols.can_codec import CanDecoder, CanEncoder, full_events_frame
 from protocols.constants import N_CHANNELS

@@ -8,8 +8,8 @@ real bus must be able to carry; CAN FD frames switch to ``data_bitrate`` for the
 
 from __future__ import annotations
 
+from protocols.errors import ProtocolError
 from protocols.records import CanFrame
-from skinhil.errors import ProtocolError
 
 SERIAL_BITS_PER_BYTE = 10
 """8N1: start bit, 8 data bits, stop bit."""

@@ -2,9 +2,9 @@
 
 11-bit IDs ``class << 4 | board_id``; every board→host frame starts with a frame sequence
 counter (4 bits classic, 8 bits FD); events are 12-bit words (9-bit address, 3-bit step
-delta), 4 slots in every 8-byte classic frame and 40 in every 64-byte FD frame (version 1),
+delta), 4 slots in every 8-byte classic frame and 40 in every 64-byte FD frame (version 3),
 or, for skins of more than 338 channels, 24-bit words (20-bit address, 4-bit delta) in
-WIDE_EVENTS frames, 2 slots per classic and 20 per FD frame (version 2); unused slots are
+WIDE_EVENTS frames, 2 slots per classic and 20 per FD frame (version 4); unused slots are
 empty (all ones); stamped against SYNC frames. Every frame type has one fixed length, so a
 DBC (:mod:`protocols.dbc`) describes each exactly. The compiled loops are in
 :mod:`protocols.can_kernels`.
@@ -27,7 +27,9 @@ from protocols.constants import (
     WIDE_VERSION,
 )
 from protocols.counters import StatusTracker, unwrap
+from protocols.errors import ProtocolError
 from protocols.event_input import E_SIZE, check_step_us, event_steps, idle_sync_step
+from protocols.events import make_events
 from protocols.record_fields import arg_bits, arg_value, check_uint, enum_or_int
 from protocols.records import (
     Ack,
@@ -51,8 +53,6 @@ from protocols.status_layout import (
     status_words,
 )
 from protocols.versions import check_versions, refuse_version, wire_version
-from skinhil.errors import ProtocolError
-from skinhil.events import make_events
 
 log = logging.getLogger(__name__)
 
@@ -117,7 +117,7 @@ class CanEncoder:
         self._st[k.E_EPOCH] = k.EPOCH_MOD - 1
         self._st[k.E_STEP_US] = self.step_us
         self.version = wire_version(n_channels)
-        """Protocol version of this stream: 1 narrow, 2 wide (SPEC.md §9)."""
+        """Protocol version of this stream: 3 narrow, 4 wide (SPEC.md §9)."""
         self.n_channels = int(n_channels)
         self._st[k.E_VERSION] = self.version
         self._cmd_seq = 0

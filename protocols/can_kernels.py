@@ -1,6 +1,6 @@
 """Compiled inner loops of the CAN codec: events frames out, whole frame batches in.
 
-Layouts are those of SPEC.md §5 (narrow, version 1) and §9 (wide, version 2: WIDE_EVENTS
+Layouts are those of SPEC.md §5 (narrow, version 3) and §9 (wide, version 4: WIDE_EVENTS
 frames of 24-bit words). State and counters are int64 arrays; the slot names are the
 constants below (counter slots are shared with :mod:`protocols.serial_kernels`).
 """
@@ -21,7 +21,9 @@ from protocols.event_input import (
     E_SYNC_VALID,
     E_VERSION,
 )
-from protocols.serial_kernels import (
+from protocols.serial_kernels import (  # noqa: F401  (counter slots CAN shares, read by can_codec)
+    C_CMD_GAPS,
+    C_CMD_LOST,
     C_DUPS,
     C_EVENTS,
     C_FRAMES_OK,
@@ -30,18 +32,21 @@ from protocols.serial_kernels import (
     C_MALFORMED,
     C_SYNCS,
     C_UNTIMED,
+    MAX_TIME_US,
+    SEQ_NEW,
     WIDE_ITEM_BYTES,
     WIDE_MAX_DELTA,
     get_le,
     is_known_version,
     put_le,
-    unwrap_near,
+    take_base,
+    take_seq,
 )
 from protocols.versions import MAX_CHANNELS
 
 CLS_COMMAND, CLS_ACK, CLS_SYNC, CLS_STATUS, CLS_MARKER, CLS_EVENTS, CLS_WIDE = range(1, 8)
 """Frame classes: the 11-bit ID is ``class << 4 | board_id``. CLS_WIDE (wide events) belongs
-to a board only once it announced version 2 (a version-2 SYNC)."""
+to a board only once it announced version 4 (a version-4 SYNC)."""
 
 CLASSIC_MAX_EVENTS = 4
 FD_MAX_EVENTS = 40
@@ -63,18 +68,15 @@ EPOCH_MOD = 8
 """SYNC epochs count modulo 8; a sequence gap of 8 frames or more invalidates the time base."""
 CLASSIC_SEQ_MOD = 16
 FD_SEQ_MOD = 256
-C_FOREIGN = 11
-"""Counter slot of frames with another board's or an unknown ID."""
-C_CMD_GAPS = 12
-"""Counter slot of jumps in a host's COMMAND sequence numbers."""
-C_CMD_LOST = 13
-"""Counter slot of COMMAND frames missing by the host's sequence numbers."""
-C_SIZE = 14
+C_FOREIGN = 14
+"""Counter slot of frames with another board's or an unknown ID (after the serial slots,
+:data:`protocols.serial_kernels.C_CMD_GAPS` and the rest, which CAN shares)."""
+C_SIZE = 15
 
 # decoder state slots (D_VERSION: of the last SYNC; D_VERSIONS: bit v set once one was seen)
 (D_HAVE_SEQ, D_SEQ, D_SYNC_VALID, D_EPOCH, D_BASE, D_STEP_US, D_HAVE_CMD_SEQ,
- D_CMD_SEQ, D_VERSION, D_VERSIONS) = range(10)
-D_SIZE = 10
+ D_CMD_SEQ, D_VERSION, D_VERSIONS, D_CAND, D_HAVE_CAND) = range(12)
+D_SIZE = 12
 
 
 @numba.njit(cache=True, nogil=True)
@@ -243,22 +245,25 @@ def _events_count(blob: np.ndarray, o: int, ln: int, fd: bool, wide: bool) -> np
 
 @numba.njit(cache=True, nogil=True)
 def _layout_ok(cls: int, blob: np.ndarray, o: int, ln: int, fd: bool) -> bool:
+    """Whether a record frame of class ``cls`` has exactly its layout's length (SPEC.md §5:
+    a longer frame is malformed too) and valid fields."""
     if cls == CLS_SYNC:
         if fd:
-            return ln >= 10 and is_known_version(blob[o + 1] >> 4) and (
-                blob[o + 1] & 0x8) == 0 and get_le(blob, o + 2, 2) > 0
-        return ln >= 8 and get_le(blob, o + 1, 2) > 0
+            return ln == 12 and is_known_version(blob[o + 1] >> 4) and (
+                blob[o + 1] & 0x8) == 0 and get_le(blob, o + 2, 2) > 0 and (
+                get_le(blob, o + 4, 6) < MAX_TIME_US // get_le(blob, o + 2, 2))
+        return ln == 8 and get_le(blob, o + 1, 2) > 0
     if cls == CLS_STATUS:
         if fd:
-            return ln >= 64
-        return ln >= 8 and (blob[o] >> 4) <= 7
+            return ln == 64
+        return ln == 8 and (blob[o] >> 4) <= 7
     if cls == CLS_MARKER:
         if fd:
-            return ln >= 12 and blob[o + 1] <= 1
-        return ln >= 8 and (blob[o] >> 4) <= 1
+            return ln == 12 and blob[o + 1] <= 1
+        return ln == 8 and (blob[o] >> 4) <= 1
     if cls == CLS_ACK:
-        return ln >= 6
-    return ln >= 8  # COMMAND
+        return ln == 6
+    return ln == 8  # COMMAND
 
 
 @numba.njit(cache=True, nogil=True)
@@ -306,22 +311,11 @@ def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: in
             c[C_MALFORMED] += 1
             continue
         seq = blob[fo] & (seq_mod - 1)
-        have, last = (D_HAVE_CMD_SEQ, D_CMD_SEQ) if cls == CLS_COMMAND else (D_HAVE_SEQ, D_SEQ)
-        if st[have]:
-            gap = (seq - st[last] - 1) % seq_mod
-            if gap == seq_mod - 1:
-                c[C_DUPS] += 1
-                continue
-            if gap and cls == CLS_COMMAND:  # a host's counter: apart from the board's frames
-                c[C_CMD_GAPS] += 1
-                c[C_CMD_LOST] += gap
-            elif gap:
-                c[C_GAPS] += 1
-                c[C_LOST] += gap
-                if gap >= EPOCH_MOD:
-                    st[D_SYNC_VALID] = 0
-        st[have] = 1
-        st[last] = seq
+        command = cls == CLS_COMMAND  # a host's counter: apart from the board's frames
+        have, last = (D_HAVE_CMD_SEQ, D_CMD_SEQ) if command else (D_HAVE_SEQ, D_SEQ)
+        if take_seq(st, c, have, last, D_SYNC_VALID, seq, seq_mod, command, 0,
+                    EPOCH_MOD) != SEQ_NEW:
+            continue
         c[C_FRAMES_OK] += 1
         if cls == CLS_EVENTS or cls == CLS_WIDE:
             if fd:
@@ -357,7 +351,10 @@ def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: in
                 st[D_VERSION] = WIDE_VERSION if blob[fo] & 0x80 else PROTOCOL_VERSION
                 step, raw, bits = get_le(blob, fo + 1, 2), get_le(blob, fo + 3, 5), 40
             st[D_VERSIONS] |= 1 << st[D_VERSION]
-            st[D_BASE] = unwrap_near(st[D_BASE], raw, bits) if st[D_STEP_US] else raw
+            if st[D_STEP_US]:
+                st[D_SYNC_VALID] = take_base(st, D_BASE, D_CAND, D_HAVE_CAND, raw, bits)
+            else:
+                st[D_BASE] = raw
             st[D_STEP_US] = step
             c[C_SYNCS] += 1
         else:

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-PROTOCOL_VERSION = 1
+PROTOCOL_VERSION = 3
 """Version of the narrow format (9-bit addresses), carried by SYNC packets/frames and status
-flags of a stream whose channels all fit it."""
+flags of a stream whose channels all fit it. Versions 1 and 2 (retired) framed serial packets
+with a CRC blind to appended zeros (SPEC.md §2); no decoder reads them."""
 
-WIDE_VERSION = 2
+WIDE_VERSION = 4
 """Version of the wide format (20-bit addresses, SPEC.md §9), for skins of more channels."""
 
 KNOWN_VERSIONS = (PROTOCOL_VERSION, WIDE_VERSION)

@@ -16,9 +16,9 @@ from dataclasses import dataclass
 from protocols import can_kernels as k
 from protocols.can_codec import STATUS_LEN_FD, can_id
 from protocols.constants import PROTOCOL_VERSION
+from protocols.errors import ProtocolError
 from protocols.records import CommandCode, MarkerPhase, NackReason
 from protocols.status_layout import CLASSIC_STATUS_MUX, STATUS_WORDS
-from skinhil.errors import ProtocolError
 
 BOARD, HOST = "BOARD", "HOST"
 _FD_FORMAT = 14

@@ -6,7 +6,7 @@ import numba
 import numpy as np
 
 from protocols.constants import N_CHANNELS
-from skinhil.errors import ProtocolError
+from protocols.errors import ProtocolError
 
 # encoder state slots, the serial and the CAN encoders' alike
 E_SEQ, E_EPOCH, E_SYNC_VALID, E_SYNC_BASE, E_EVENTS, E_STEP_US, E_LAST_SYNC, E_VERSION = range(8)
@@ -86,4 +86,7 @@ def event_steps(events: np.ndarray, step_us: int, t_end_us: int, t_min_us: int,
     if code == _UNSORTED:
         order = np.lexsort((addr, steps))
         steps, addr = steps[order], addr[order]
+    if n > 1 and np.any((steps[1:] == steps[:-1]) & (addr[1:] == addr[:-1])):
+        raise ProtocolError("two events share a channel and a step: a channel spikes at most "
+                            "once per step; merge the duplicates before encoding")
     return steps, addr

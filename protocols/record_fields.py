@@ -7,8 +7,8 @@ import math
 import struct
 from typing import TypeVar
 
+from protocols.errors import ProtocolError
 from protocols.records import CommandCode
-from skinhil.errors import ProtocolError
 
 E = TypeVar("E", bound=enum.IntEnum)
 

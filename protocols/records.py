@@ -11,7 +11,7 @@ import enum
 
 import numpy as np
 
-from skinhil.events import EVENT_DTYPE
+from protocols.events import EVENT_DTYPE
 
 
 class CommandCode(enum.IntEnum):
@@ -174,6 +174,9 @@ class LinkCounters:
     """CAN: times a host's COMMAND sequence number jumped (not the board's frames)."""
     commands_lost: int = 0
     """CAN: COMMAND frames missing according to the host's sequence numbers."""
+    late_frames: int = 0
+    """Serial: packets arriving 1..8 sequence numbers behind the last (reordered UDP
+    datagrams): dropped (their events in ``events_untimed``), the time base kept."""
 
 
 @dataclasses.dataclass(frozen=True)

@@ -1,8 +1,8 @@
 """Serial packet stream (SPEC.md §2-§4): encoder and incremental decoder.
 
 Packets are COBS-framed, zero-delimited, CRC-16 protected; events are 16-bit words (9-bit
-address, 7-bit step delta) or a 338-bit bitmap for a crowded step (version 1), or 24-bit words
-(20-bit address, 4-bit delta) for skins of more channels (version 2), stamped against an
+address, 7-bit step delta) or a 338-bit bitmap for a crowded step (version 3), or 24-bit words
+(20-bit address, 4-bit delta) for skins of more channels (version 4), stamped against an
 explicit time base (SYNC). The compiled loops are in :mod:`protocols.serial_kernels`.
 """
 
@@ -23,7 +23,9 @@ from protocols.constants import (
     WIDE_VERSION,
 )
 from protocols.counters import StatusTracker
+from protocols.errors import ProtocolError
 from protocols.event_input import E_SIZE, check_step_us, event_steps, idle_sync_step
+from protocols.events import make_events
 from protocols.framing import frame_into
 from protocols.record_fields import arg_bits, arg_value, check_uint, enum_or_int
 from protocols.records import (
@@ -40,8 +42,6 @@ from protocols.records import (
 )
 from protocols.status_layout import STATUS_WORDS, WORD_WIDTHS, status_from_words, status_words
 from protocols.versions import check_versions, refuse_version, wire_version
-from skinhil.errors import ProtocolError
-from skinhil.events import make_events
 
 log = logging.getLogger(__name__)
 
@@ -77,7 +77,7 @@ class SerialEncoder:
                                 f"{0xFFFF * step_us}] µs")
         self.sync_us = sync_us
         self.version = wire_version(n_channels)
-        """Protocol version of this stream: 1 narrow, 2 wide (SPEC.md §9)."""
+        """Protocol version of this stream: 3 narrow, 4 wide (SPEC.md §9)."""
         self.n_channels = int(n_channels)
         self._st = np.zeros(E_SIZE, dtype=np.int64)
         self._st[k.E_EPOCH] = k.EPOCH_MOD - 1
@@ -199,7 +199,9 @@ class SerialDecoder:
                 self._c[k.C_DISCARDED] += cut
                 self._sync_counters()
             return DecodeResult.empty()
-        buf = np.frombuffer(bytes(pending[:end + 1]), dtype=np.uint8)
+        buf = np.empty(end + 1, dtype=np.uint8)
+        with memoryview(pending) as view:  # one copy, no lasting export of the bytearray
+            buf[:] = np.frombuffer(view[:end + 1], dtype=np.uint8)
         del pending[:end + 1]
         t, a, ne, rec, rec_ix, nr = k.decode_stream(buf, self._st, self._c)
         refuse_version(int(self._st[k.D_VERSIONS]), self.versions)
@@ -221,10 +223,7 @@ class SerialDecoder:
                                           dict(zip(STATUS_WORDS, v, strict=True)))
             return self._status.update(raw, link, decoded, WORD_WIDTHS, self.counters)
         if typ == k.T_MARKER:
-            _, _, t, sid, phase = _MARKER.unpack(body)
-            if phase not in MarkerPhase._value2member_map_:
-                self._c[k.C_MALFORMED] += 1
-                return None
+            _, _, t, sid, phase = _MARKER.unpack(body)  # phase checked by the layout check
             return Marker(int.from_bytes(t, "little"), sid, MarkerPhase(phase))
         if typ == k.T_COMMAND:
             _, _, token, op, bits = _COMMAND.unpack(body)
@@ -246,6 +245,9 @@ class SerialDecoder:
         lc.events_decoded = int(c[k.C_EVENTS])
         lc.events_untimed = int(c[k.C_UNTIMED])
         lc.syncs = int(c[k.C_SYNCS])
+        lc.command_seq_gaps = int(c[k.C_CMD_GAPS])
+        lc.commands_lost = int(c[k.C_CMD_LOST])
+        lc.late_frames = int(c[k.C_LATE])
 
 
 

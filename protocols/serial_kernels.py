@@ -1,8 +1,8 @@
 """Compiled inner loops of the serial codec: events packets out, whole byte streams in.
 
 State and counters live in small int64 arrays so the loops run without Python objects; the
-index constants below name their slots. Layouts are those of SPEC.md §3-§4 (narrow, version 1)
-and §9 (wide, version 2: WIDE_EVENTS packets of 24-bit words).
+index constants below name their slots. Layouts are those of SPEC.md §3-§4 (narrow, version 3)
+and §9 (wide, version 4: WIDE_EVENTS packets of 24-bit words).
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from protocols.constants import BITMAP_BYTES, N_CHANNELS, WIDE_VERSION
+from protocols.constants import BITMAP_BYTES, N_CHANNELS, PROTOCOL_VERSION, WIDE_VERSION
 from protocols.event_input import (
     E_EPOCH,
     E_EVENTS,
@@ -21,17 +21,24 @@ from protocols.event_input import (
     E_SYNC_VALID,
     E_VERSION,
 )
-from protocols.framing import cobs_decode, crc16, frame_into
+from protocols.framing import CRC_RESIDUE, cobs_decode, crc16, frame_into, suffix_checks
 from protocols.versions import MAX_CHANNELS
 
 T_EVENTS, T_SYNC, T_STATUS, T_MARKER, T_COMMAND, T_ACK, T_WIDE = 0, 1, 2, 3, 4, 5, 6
-"""Packet types (high three bits of byte 0); T_WIDE carries wide (version 2) events."""
+"""Packet types (high three bits of byte 0); T_WIDE carries wide (version 4) events."""
 
 WIDE_ITEM_BYTES = 3
 """A wide event word: 24 bits, little-endian: bits 3..0 delta, bits 23..4 address."""
 
 WIDE_MAX_DELTA = 15
 """Largest step delta of a wide event word (4 bits)."""
+
+MAX_TIME_US = 1 << 62
+"""A SYNC whose base × step reaches this (µs) is malformed: event times stay far inside a
+signed 64-bit integer (SPEC.md §6 rule 5)."""
+
+MAX_MARKER_PHASE = 1
+"""Largest MARKER phase (0 ONSET, 1 END); a larger one makes the packet malformed."""
 
 BITMAP_ADDR = 511
 """Address field value of a bitmap word."""
@@ -52,12 +59,17 @@ BODY_LEN = np.array([-1, 11, 60, 13, 9, 6, -1, -1], dtype=np.int64)
 """Exact body length of each fixed-size packet type (-1: variable or invalid)."""
 
 # decoder state slots (D_VERSIONS: bit v set once a SYNC of version v was received)
-D_HAVE_SEQ, D_SEQ, D_SYNC_VALID, D_EPOCH, D_BASE, D_STEP_US, D_VERSIONS = range(7)
-D_SIZE = 7
+(D_HAVE_SEQ, D_SEQ, D_SYNC_VALID, D_EPOCH, D_BASE, D_STEP_US, D_VERSIONS, D_HAVE_CMD_SEQ,
+ D_CMD_SEQ, D_CAND, D_HAVE_CAND) = range(11)
+D_SIZE = 11
 # decoder counter slots (LinkCounters fields of the same names)
 (C_FRAMES_OK, C_CRC, C_MALFORMED, C_RESYNCS, C_DISCARDED, C_GAPS, C_LOST, C_DUPS,
- C_EVENTS, C_UNTIMED, C_SYNCS) = range(11)
-C_SIZE = 11
+ C_EVENTS, C_UNTIMED, C_SYNCS, C_CMD_GAPS, C_CMD_LOST, C_LATE) = range(14)
+C_SIZE = 14
+
+LATE_WINDOW = 8
+"""A board packet 1..LATE_WINDOW sequence numbers behind the last one is late (reordered),
+not a gap of 248..255 (SPEC.md §6 rule 4)."""
 
 
 @numba.njit(cache=True, nogil=True)
@@ -84,6 +96,75 @@ def unwrap_near(previous: int, raw: int, bits: int) -> int:
     if delta >= mod >> 1:
         delta -= mod
     return previous + delta
+
+
+BASE_JUMP_BITS = 4
+"""A SYNC base further than 2**(width - BASE_JUMP_BITS) steps from the previous one is a jump
+(a board restart or a damaged SYNC, SPEC.md §6 rule 5)."""
+
+
+@numba.njit(cache=True, nogil=True)
+def take_base(st: np.ndarray, i_base: int, i_cand: int, i_have_cand: int, raw: int,
+              bits: int) -> bool:
+    """Set the time base (``st[i_base]``, steps) from a SYNC's ``raw`` base (sent modulo
+    ``2**bits``); return whether the time base is valid after it.
+
+    The first SYNC is taken as sent. Later ones are unwrapped near the previous base; one
+    that lands more than ``2**(bits - BASE_JUMP_BITS)`` steps away is a jump: it is held
+    as a candidate (``st[i_cand]``) and the time base is invalid until a SYNC either
+    continues the old base (the jump was damage) or lies near the candidate (a board
+    restart: the base re-anchors there). One damaged SYNC thus never shifts later times.
+    """
+    jump = 1 << (bits - BASE_JUMP_BITS)
+    prev = st[i_base]
+    u = unwrap_near(prev, raw, bits)
+    if abs(u - prev) <= jump:
+        st[i_base] = u
+        st[i_have_cand] = 0
+        return True
+    if st[i_have_cand]:
+        v = unwrap_near(st[i_cand], raw, bits)
+        if abs(v - st[i_cand]) <= jump:
+            st[i_base] = v
+            st[i_have_cand] = 0
+            return True
+    st[i_cand] = raw
+    st[i_have_cand] = 1
+    return False
+
+
+SEQ_NEW, SEQ_DUPLICATE, SEQ_LATE = 0, 1, 2
+"""Verdicts of :func:`take_seq` on a unit's sequence number."""
+
+
+@numba.njit(cache=True, nogil=True)
+def take_seq(st: np.ndarray, c: np.ndarray, have: int, last: int, sync_valid: int, seq: int,
+             mod: int, command: bool, late_window: int, epoch_gap: int) -> int:
+    """Check a packet's or frame's ``seq`` against the previous number (``st[last]``, valid
+    once ``st[have]``) of one counter modulo ``mod`` (SPEC.md §6 rule 4; counter slots are
+    this module's ``C_*``, which the CAN kernels share): a repeat is a duplicate; 1..``late_window``
+    behind is late (both left uncounted in the sequence); otherwise a gap counts in the
+    command counters (``command``) or the board's, where a gap of ``epoch_gap`` or more
+    invalidates the time base (``st[sync_valid]``), and ``seq`` becomes the previous."""
+    if st[have]:
+        gap = (seq - st[last] - 1) % mod
+        if gap == mod - 1:
+            c[C_DUPS] += 1
+            return SEQ_DUPLICATE
+        if gap >= mod - 1 - late_window:
+            c[C_LATE] += 1
+            return SEQ_LATE
+        if gap and command:
+            c[C_CMD_GAPS] += 1
+            c[C_CMD_LOST] += gap
+        elif gap:
+            c[C_GAPS] += 1
+            c[C_LOST] += gap
+            if gap >= epoch_gap:
+                st[sync_valid] = 0
+    st[have] = 1
+    st[last] = seq
+    return SEQ_NEW
 
 
 @numba.njit(cache=True, nogil=True)
@@ -140,7 +221,7 @@ def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, sync_ever
     filled: one closes only when the body is full, when the next delta does not fit, or
     after the last event given; at most ``max_packets`` events packets are written. A SYNC
     is sent before a packet whose base is ``sync_every`` steps or more after the last SYNC
-    (or out of the 16-bit offset range). A version-2 encoder (``st[E_VERSION]``) writes
+    (or out of the 16-bit offset range). A version-4 encoder (``st[E_VERSION]``) writes
     WIDE_EVENTS packets instead. Returns ``(end in out, events consumed)``.
     """
     if st[E_VERSION] == WIDE_VERSION:
@@ -214,7 +295,7 @@ def encode_events(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, sync_ever
 @numba.njit(cache=True, nogil=True)
 def _encode_wide(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, sync_every: int,
                  max_packets: int, out: np.ndarray) -> tuple[int, int]:
-    """:func:`encode_events` for version 2: WIDE_EVENTS packets of 24-bit words."""
+    """:func:`encode_events` for version 4: WIDE_EVENTS packets of 24-bit words."""
     n = steps.shape[0]
     pkt = np.empty(MAX_BODY + 8, dtype=np.uint8)
     pos = 0
@@ -243,8 +324,8 @@ def _encode_wide(steps: np.ndarray, addr: np.ndarray, st: np.ndarray, sync_every
 
 @numba.njit(cache=True, nogil=True)
 def is_known_version(v: int) -> bool:
-    """Whether ``v`` is a protocol version the decoders read (1 narrow, 2 wide)."""
-    return v == 1 or v == WIDE_VERSION
+    """Whether ``v`` is a protocol version the decoders read (3 narrow, 4 wide)."""
+    return v == PROTOCOL_VERSION or v == WIDE_VERSION
 
 
 @numba.njit(cache=True, nogil=True)
@@ -256,35 +337,54 @@ def check_body(dec: np.ndarray, m: int) -> int:
     if typ == T_WIDE:
         if m < 4 + WIDE_ITEM_BYTES or (m - 4) % WIDE_ITEM_BYTES:
             return -1
+        last = -1
         for k in range(4, m, WIDE_ITEM_BYTES):
-            if (get_le(dec, k, WIDE_ITEM_BYTES) >> 4) >= MAX_CHANNELS:
+            word = get_le(dec, k, WIDE_ITEM_BYTES)
+            a = word >> 4
+            if a >= MAX_CHANNELS or (word & WIDE_MAX_DELTA == 0 and a <= last):
                 return -1
+            last = a
         return (m - 4) // WIDE_ITEM_BYTES
     if typ != T_EVENTS:
         if BODY_LEN[typ] != m:
             return -1
-        if typ == T_SYNC and (not is_known_version(dec[2]) or get_le(dec, 3, 2) == 0):
+        if typ == T_SYNC and (not is_known_version(dec[2]) or get_le(dec, 3, 2) == 0
+                              or get_le(dec, 5, 6) >= MAX_TIME_US // get_le(dec, 3, 2)):
+            return -1
+        if typ == T_MARKER and dec[12] > MAX_MARKER_PHASE:
             return -1
         return 0
-    if m < 4:
+    if m <= 4:  # an EVENTS packet holds at least one event (SPEC.md §3.1)
         return -1
     k = 4
     count = 0
+    last = -1  # channel of the previous event in the current step (-1: none yet)
     while k < m:
         if k + 2 > m:
             return -1
-        a = (np.int64(dec[k]) | (np.int64(dec[k + 1]) << 8)) >> 7
+        w = np.int64(dec[k]) | (np.int64(dec[k + 1]) << 8)
+        a = int(w >> 7)
+        if w & 0x7F:
+            last = -1
         if a < N_CHANNELS:
+            if a <= last:  # channels of one step ascend strictly (SPEC.md §3.1)
+                return -1
+            last = a
             count += 1
             k += 2
         elif a == BITMAP_ADDR:
-            if k + 2 + BITMAP_BYTES > m or dec[k + 1 + BITMAP_BYTES] & 0xFC:
+            if (k + 2 + BITMAP_BYTES > m or dec[k + 1 + BITMAP_BYTES] & 0xFC
+                    or last >= 0):
                 return -1
+            last = N_CHANNELS  # a bitmap holds its whole step
+            before = count
             for q in range(k + 2, k + 2 + BITMAP_BYTES):
                 v = dec[q]
                 while v:
                     count += 1
                     v &= v - 1
+            if count == before:  # an empty bitmap (SPEC.md §3.1)
+                return -1
             k += 2 + BITMAP_BYTES
         else:
             return -1
@@ -295,11 +395,21 @@ def check_body(dec: np.ndarray, m: int) -> int:
 def try_frame(buf: np.ndarray, a: int, b: int, dec: np.ndarray) -> int:
     """Decode candidate ``buf[a:b]``: body length, -1 (bad COBS/CRC) or -2 (bad layout)."""
     n = cobs_decode(buf, a, b, dec)
-    if n < 4 or crc16(dec, 0, n) != 0:
+    if n < 4 or crc16(dec, 0, n) != CRC_RESIDUE:
         return -1
-    if check_body(dec, n - 2) < 0:
+    if n - 2 > MAX_BODY or check_body(dec, n - 2) < 0:
         return -2
     return n - 2
+
+
+@numba.njit(cache=True, nogil=True)
+def _grown(arr: np.ndarray, need: int) -> np.ndarray:
+    """``arr`` if it holds ``need`` rows, else a copy with at least twice its rows."""
+    if arr.shape[0] >= need:
+        return arr
+    out = np.empty((max(need, 2 * arr.shape[0]),) + arr.shape[1:], dtype=arr.dtype)
+    out[:arr.shape[0]] = arr
+    return out
 
 
 @numba.njit(cache=True, nogil=True)
@@ -309,15 +419,20 @@ def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
 
     Returns ``(t_steps, addr, n_events, rec_bytes, rec_index, n_records)`` where event times
     are in µs; ``rec_index[r] = (offset, length, events decoded before it)`` of record ``r``.
+    Time and memory are linear in ``len(buf)``: a damaged candidate is resynchronised by one
+    pass over its suffixes (:func:`suffix_checks`), and the outputs grow with what decodes
+    (garbage costs no more than a few scratch arrays of one candidate's size).
     """
     n = buf.shape[0]
-    cap = 8 * n + 16
-    out_t = np.empty(cap, dtype=np.int64)
-    out_a = np.empty(cap, dtype=np.uint32)
-    rec = np.empty(n + 8, dtype=np.uint8)
-    rec_ix = np.empty((n // 4 + 2, 3), dtype=np.int64)
-    dec = np.empty(n + 8, dtype=np.uint8)
-    valid = np.empty(MAX_WIRE + 8, dtype=np.bool_)
+    out_t = np.empty(64, dtype=np.int64)
+    out_a = np.empty(64, dtype=np.uint32)
+    rec = np.empty(256, dtype=np.uint8)
+    rec_ix = np.empty((8, 3), dtype=np.int64)
+    dec = np.empty(MAX_WIRE + 8, dtype=np.uint8)
+    prefix = np.empty(MAX_WIRE + 8, dtype=np.int64)
+    length = np.empty(MAX_WIRE + 8, dtype=np.int64)
+    reg = np.empty(MAX_WIRE + 8, dtype=np.int64)
+    passes = np.empty(MAX_WIRE + 8, dtype=np.bool_)
     ne = 0
     nr = 0
     rpos = 0
@@ -346,14 +461,9 @@ def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
                     c[C_CRC] += 1
         if m < 0:
             # resynchronise inside the candidate: the longest suffix that is a good frame
-            chain_ok = valid
-            w0 = first
-            for k in range(b - 1, w0 - 1, -1):
-                code = buf[k]
-                nxt = k + code
-                chain_ok[k - w0] = code != 0 and (nxt == b or (nxt < b and chain_ok[nxt - w0]))
+            suffix_checks(buf, first, b, prefix, length, reg, passes)
             for k in range(a + 1, b):
-                if not chain_ok[k - w0]:
+                if not passes[k - first]:
                     continue
                 m = try_frame(buf, k, b, dec)
                 if m >= 0:
@@ -364,24 +474,24 @@ def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
                 c[C_DISCARDED] += b - first
                 continue
         seq = dec[1]
-        if st[D_HAVE_SEQ]:
-            gap = (seq - st[D_SEQ] - 1) & 0xFF
-            if gap == 0xFF:
-                c[C_DUPS] += 1
-                continue
-            if gap:
-                c[C_GAPS] += 1
-                c[C_LOST] += gap
-                if gap >= EPOCH_MOD:
-                    st[D_SYNC_VALID] = 0
-        st[D_HAVE_SEQ] = 1
-        st[D_SEQ] = seq
-        c[C_FRAMES_OK] += 1
         typ = dec[0] >> 5
+        command = typ == T_COMMAND  # a host's counter, kept apart from the board's (§6)
+        have, last = (D_HAVE_CMD_SEQ, D_CMD_SEQ) if command else (D_HAVE_SEQ, D_SEQ)
+        verdict = take_seq(st, c, have, last, D_SYNC_VALID, seq, 256, command,
+                           0 if command else LATE_WINDOW, EPOCH_MOD)
+        if verdict == SEQ_LATE and (typ == T_EVENTS or typ == T_WIDE):
+            c[C_UNTIMED] += check_body(dec, m)
+        if verdict != SEQ_NEW:
+            continue
+        c[C_FRAMES_OK] += 1
         if typ == T_EVENTS or typ == T_WIDE:
             if st[D_SYNC_VALID] == 0 or (dec[0] & 0x1F) != st[D_EPOCH]:
                 c[C_UNTIMED] += check_body(dec, m)
                 continue
+        if typ == T_EVENTS or typ == T_WIDE:
+            grow = ne + check_body(dec, m)
+            out_t = _grown(out_t, grow)
+            out_a = _grown(out_a, grow)
         if typ == T_WIDE:
             t = st[D_BASE] + dec[2] + (np.int64(dec[3]) << 8)
             step = st[D_STEP_US]
@@ -420,11 +530,16 @@ def decode_stream(buf: np.ndarray, st: np.ndarray, c: np.ndarray) -> tuple[
             st[D_SYNC_VALID] = 1
             st[D_EPOCH] = dec[0] & 0x1F
             raw = get_le(dec, 5, 6)
-            st[D_BASE] = unwrap_near(st[D_BASE], raw, 48) if st[D_STEP_US] else raw
+            if st[D_STEP_US]:
+                st[D_SYNC_VALID] = take_base(st, D_BASE, D_CAND, D_HAVE_CAND, raw, 48)
+            else:
+                st[D_BASE] = raw
             st[D_STEP_US] = get_le(dec, 3, 2)
             st[D_VERSIONS] |= 1 << dec[2]
             c[C_SYNCS] += 1
         else:
+            rec = _grown(rec, rpos + m)
+            rec_ix = _grown(rec_ix, nr + 1)
             rec[rpos:rpos + m] = dec[:m]
             rec_ix[nr, 0] = rpos
             rec_ix[nr, 1] = m

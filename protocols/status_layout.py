@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from protocols.errors import ProtocolError
 from protocols.records import Status
-from skinhil.errors import ProtocolError
 
 LINK_EVENTS = "link_events"
 

@@ -1,7 +1,7 @@
 """Which protocol version a stream uses, and a decoder's refusal of versions it does not read.
 
 Version 1 (narrow: 9-bit addresses, SPEC.md §3-§5) carries the paper's 6x6 skin and any
-board of at most 338 channels byte for byte as before; version 2 (wide: 20-bit addresses,
+board of at most 338 channels byte for byte as before; version 4 (wide: 20-bit addresses,
 SPEC.md §9) carries larger skins. The SYNC announces the version (serial byte 2, CAN FD
 byte 1 bits 7..4, classic CAN byte 0 bit 7).
 """
@@ -17,8 +17,8 @@ from protocols.constants import (
     WIDE_MAX_CHANNELS,
     WIDE_VERSION,
 )
-from skinhil.errors import ProtocolError
-from skinhil.events import EVENT_DTYPE
+from protocols.errors import ProtocolError
+from protocols.events import EVENT_DTYPE
 
 MAX_CHANNELS = min(WIDE_MAX_CHANNELS, int(np.iinfo(EVENT_DTYPE["addr"]).max) + 1)
 """Most channels a stream has here: the wide format's address range, capped by the event
@@ -26,8 +26,8 @@ array's address field (uint16: 65,536 channels, up to a 63x63 skin)."""
 
 
 def wire_version(n_channels: int) -> int:
-    """The version a board of ``n_channels`` channels sends: narrow (1) when its addresses
-    fit 0..337, else wide (2). Raises ProtocolError outside 1..MAX_CHANNELS."""
+    """The version a board of ``n_channels`` channels sends: narrow (3) when its addresses
+    fit 0..337, else wide (4). Raises ProtocolError outside 1..MAX_CHANNELS."""
     if not 1 <= int(n_channels) <= MAX_CHANNELS:
         raise ProtocolError(f"{n_channels} channels: a stream carries 1..{MAX_CHANNELS}; "
                             "use a smaller skin or split it over several boards")

@@ -5,7 +5,7 @@ importable from here; see the submodules for the equations.
 """
 
 # isort: off
-import skinhil.model.kernel_cache  # noqa: F401  (keys numba's cache on the sources: first of all)
+import protocols.kernel_cache  # noqa: F401  (keys numba's cache on the sources: first of all)
 # isort: on
 from skinhil.events import EVENT_DTYPE, make_events
 from skinhil.model.neurons import (

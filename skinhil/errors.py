@@ -1,27 +1,14 @@
-"""The one exceptions module of skinhil, firmware_sim and protocols.
-
-Every error raised on bad input is a :class:`SkinhilError`; its message says what was wrong
-and what to do, in one line, so the CLI can print it as it is.
-"""
+"""The exceptions of skinhil: the one exceptions module, :mod:`protocols.errors`, re-exported
+here so ``from skinhil.errors import ConfigError`` reads as the rest of skinhil does."""
 
 from __future__ import annotations
 
+from protocols.errors import (
+    ConfigError,
+    ModelFileError,
+    ProtocolError,
+    SkinhilError,
+    TransportError,
+)
 
-class SkinhilError(Exception):
-    """Base of every error this project raises on purpose."""
-
-
-class ConfigError(SkinhilError, ValueError):
-    """A parameter, stimulus, schedule or configuration file is invalid."""
-
-
-class ProtocolError(SkinhilError, ValueError):
-    """Data cannot be encoded in (or is not) the documented wire format."""
-
-
-class TransportError(SkinhilError, OSError):
-    """A serial port or CAN bus cannot be opened or has gone away."""
-
-
-class ModelFileError(SkinhilError, ValueError):
-    """A saved decoder model is missing, corrupted, not plain data, or does not match."""
+__all__ = ["ConfigError", "ModelFileError", "ProtocolError", "SkinhilError", "TransportError"]

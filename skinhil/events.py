@@ -1,24 +1,8 @@
-"""The address-event record shared by the model, the wire codecs and the receiver.
-
-An event is one spike: ``t`` the board time in microseconds (int64, a multiple of the
-simulation step), ``addr`` the channel (sensor/spring index 0..337, uint16; also readable as
-``x`` for tonic), ``p`` the polarity (always 1 for spikes; kept for tonic compatibility).
-"""
+"""The address-event record: defined once in :mod:`protocols.events` (the wire codecs stand
+alone), re-exported here for the model and the receiver."""
 
 from __future__ import annotations
 
-import numpy as np
+from protocols.events import EVENT_DTYPE, make_events
 
-EVENT_DTYPE = np.dtype([("t", "<i8"), (("x", "addr"), "<u2"), ("p", "i1")])
-"""numpy structured dtype of an event array: fields ``t`` (µs), ``addr`` (alias ``x``), ``p``."""
-
-
-def make_events(t_us: np.ndarray, addr: np.ndarray) -> np.ndarray:
-    """Build an event array from spike times (µs) and channel addresses, in the given order."""
-    t = np.asarray(t_us, dtype=np.int64)
-    a = np.asarray(addr)
-    ev = np.empty(t.shape[0], dtype=EVENT_DTYPE)
-    ev["t"] = t
-    ev["addr"] = a
-    ev["p"] = 1
-    return ev
+__all__ = ["EVENT_DTYPE", "make_events"]

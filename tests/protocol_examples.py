@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+import numpy as np
+
 from protocols import (
     Ack,
     CanEncoder,
@@ -39,9 +41,28 @@ BURST = make_events([200] * 25, list(range(0, 250, 10)))
 ONE = make_events([0], [7])
 """One event: channel 7 at 0 µs (a CAN frame with empty slots)."""
 WIDE_CHANNELS = 15_730
-"""A 32x32 skin's channel count: its stream uses the wide format (version 2)."""
+"""A 32x32 skin's channel count: its stream uses the wide format (version 4)."""
 WIDE_EVENTS = make_events([0, 0, 300, 900], [5, 15_000, 337, 12_810])
 """Four events of a wide stream: channels 5 and 15000 at 0 µs, 337 at 300 µs, 12810 at 900 µs."""
+
+
+def distinct_events(t_us: object, addr: object) -> np.ndarray:
+    """Events at times ``t_us`` (µs) on channels ``addr``, sorted by time and channel, each
+    (time, channel) pair once: a channel spikes at most once per step (SPEC.md §3.1), so
+    random test streams drop their repeats before an encoder sees them."""
+    pairs = np.unique(np.array([np.asarray(t_us), np.asarray(addr)], dtype=np.int64), axis=1)
+    return make_events(pairs[0], pairs[1])
+
+
+def framed(body: bytes) -> bytes:
+    """``body`` as one serial packet (COBS, CRC, delimiter) with a good CRC: hand-made
+    bodies, for the decoder's layout checks."""
+    from protocols.framing import frame_into
+
+    buf = np.zeros(len(body) + 2, dtype=np.uint8)
+    buf[:len(body)] = np.frombuffer(body, dtype=np.uint8)
+    out = np.zeros(2 * len(body) + 16, dtype=np.uint8)
+    return out[:frame_into(buf, len(body), out, 0)].tobytes()
 
 
 def _split_packets(data: bytes) -> str:

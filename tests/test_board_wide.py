@@ -1,6 +1,6 @@
-"""A board whose skin has more than 338 channels streams the wide format (version 2) on CAN:
+"""A board whose skin has more than 338 channels streams the wide format (version 4) on CAN:
 an 8x8 skin (706 channels) on a python-can virtual bus, classic and FD, decoded by a
-decoder that reads only version 2; every event arrives, with addresses above 337."""
+decoder that reads only version 4; every event arrives, with addresses above 337."""
 
 from __future__ import annotations
 
@@ -20,11 +20,11 @@ def test_wide_board_on_can(fd: bool) -> None:
     host = CanTransport(chan, "virtual", fd=fd)
     board = Board(BoardConfig(size=(8, 8), seed=2, rest_s=0.05),
                   lambda: CanTransport(chan, "virtual", fd=fd))
-    assert board.link is not None and board.link.encoder.version == 2
+    assert board.link is not None and board.link.encoder.version == 4
     done: list = []
     t = threading.Thread(target=lambda: done.append(board.run(1.0)))
     t.start()
-    dec = protocols.CanDecoder(board_id=0, fd=fd, versions=(2,))
+    dec = protocols.CanDecoder(board_id=0, fd=fd, versions=(4,))
     events, classes = [], set()
     while True:
         alive = t.is_alive()

@@ -14,7 +14,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from skinhil.model.kernel_cache import KERNEL_PACKAGES, source_hash
+from protocols.kernel_cache import KERNEL_PACKAGES, source_hash
 
 REPO = Path(__file__).resolve().parent.parent
 

@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from protocol_examples import distinct_events
 
 from protocols import CanDecoder, CanEncoder, CanFrame, SerialDecoder, SerialEncoder, Status
-from skinhil.events import EVENT_DTYPE, make_events
+from skinhil.events import EVENT_DTYPE
 
 SETTINGS = settings(max_examples=100, deadline=None, derandomize=True,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -34,8 +35,7 @@ def spikes(seed: int, rate_per_ms: float = 12.0, n_channels: int = 338) -> list[
         n = rng.poisson(rate_per_ms)
         t = np.sort(rng.integers(0, 10, n)) * 100 + c * 1000
         a = rng.integers(0, n_channels, n)
-        ev = make_events(t, a)
-        calls.append(ev[np.lexsort((ev["addr"], ev["t"]))])
+        calls.append(distinct_events(t, a))
     return calls
 
 
@@ -267,3 +267,92 @@ def test_can_random_frames_never_raise(fd: bool, frames: list[tuple[int, bytes]]
     assert len(res.events) == dec.counters.events_decoded
     assert dec.counters.frames_ok + dec.counters.malformed + dec.counters.foreign_frames + \
         dec.counters.duplicates == len(frames)
+
+
+def _genibus(data: bytes) -> int:
+    """CRC-16/GENIBUS written from its definition (SPEC.md §2), independent of the codec."""
+    crc = 0xFFFF
+    for byte in data:
+        crc ^= byte << 8
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1021 if crc & 0x8000 else crc << 1) & 0xFFFF
+    return crc ^ 0xFFFF
+
+
+def _every_packet_type() -> list[bytes]:
+    """One real packet of each serial type (SYNC, EVENTS with words and a bitmap, WIDE_EVENTS,
+    STATUS, MARKER, COMMAND, ACK), each with its delimiter."""
+    from protocol_examples import ACK, BURST, COMMAND, EVENTS, MARKER, STATUS, WIDE_EVENTS
+
+    stream = SerialEncoder().events(EVENTS, 1000) + SerialEncoder().events(BURST, 1000)
+    stream += SerialEncoder(n_channels=15_730).events(WIDE_EVENTS, 1000)
+    enc = SerialEncoder()
+    stream += enc.status(STATUS) + enc.marker(MARKER) + enc.command(COMMAND) + enc.ack(ACK)
+    long_ev = spikes(3, rate_per_ms=400.0)[0]  # a long events packet (about 400 events)
+    stream += SerialEncoder().events(long_ev, 1000)
+    return [p + b"\x00" for p in stream.split(b"\x00") if p]
+
+
+def test_crc_is_crc16_genibus() -> None:
+    assert _genibus(b"123456789") == 0xD64E
+    for packet in _every_packet_type():
+        body = bytearray()
+        raw = packet[:-1]
+        i = 0
+        while i < len(raw):  # COBS decode (SPEC.md §2)
+            code = raw[i]
+            body += raw[i + 1:i + code]
+            i += code
+            if code < 255 and i < len(raw):
+                body.append(0)
+        assert _genibus(bytes(body[:-2])) == int.from_bytes(body[-2:], "big")
+
+
+def test_appended_zeros_never_pass_the_crc() -> None:
+    """``0x01`` bytes inserted before a packet's delimiter decode to appended zero bytes: for
+    every packet type and every count that keeps the packet within 1032 bytes, the packet is
+    refused (a CRC error), no event is added, and the next packet decodes."""
+    packets = _every_packet_type()
+    for packet in packets:
+        ok = SerialDecoder()
+        ok.feed(packet)
+        assert ok.counters.frames_ok == 1 and ok.counters.crc_errors == 0
+        for k in range(1, 1033 - len(packet) + 1):
+            dec = SerialDecoder()
+            bad = packet[:-1] + b"\x01" * k + b"\x00"
+            got = dec.feed(bad)
+            assert len(got.events) == 0 and got.records == [], (packet.hex(), k)
+            assert dec.counters.frames_ok == 0 and dec.counters.crc_errors == 1, (packet, k)
+            dec.feed(packet)
+            assert dec.counters.frames_ok == 1, (packet.hex(), k)
+
+
+def test_linear_suffix_check_matches_decoding_each_suffix() -> None:
+    """The one-pass suffix check (framing.suffix_checks) marks exactly the starts whose suffix
+    COBS-decodes to at least 4 bytes with a good CRC, on damaged real packets and junk."""
+    from protocols.framing import CRC_RESIDUE, cobs_decode, crc16, suffix_checks
+
+    rng = np.random.default_rng(5)
+    stream = b"".join(_every_packet_type())
+    pieces = [p for p in stream.split(b"\x00") if p]
+    cases = [rng.integers(1, 256, int(rng.integers(1, 1032)), dtype=np.uint8).tobytes()
+             for _ in range(40)]
+    for _ in range(200):  # a damaged packet run into the next (a lost delimiter) and more
+        i = int(rng.integers(0, len(pieces) - 1))
+        junk = rng.integers(1, 256, int(rng.integers(0, 30)), dtype=np.uint8).tobytes()
+        cases.append((junk + pieces[i] + b"\x01" * int(rng.integers(0, 3)) + pieces[i + 1])
+                     [-1032:])
+    hits = 0
+    for case in cases:
+        buf = np.frombuffer(case, dtype=np.uint8)
+        n = len(case)
+        scratch = [np.empty(n + 1, dtype=np.int64) for _ in range(3)]
+        passes = np.empty(n + 1, dtype=np.bool_)
+        suffix_checks(buf, 0, n, *scratch, passes)
+        dec = np.empty(n + 8, dtype=np.uint8)
+        for k in range(n):
+            m = cobs_decode(buf, k, n, dec)
+            want = m >= 4 and crc16(dec, 0, m) == CRC_RESIDUE
+            assert bool(passes[k]) == want, (case.hex(), k)
+            hits += want
+    assert hits >= 200  # the packet after each lost delimiter is found

@@ -15,13 +15,13 @@ from typing import Any
 import cantools
 import numpy as np
 import pytest
+from protocol_examples import distinct_events
 
 import protocols
 from firmware_sim.board import Board, BoardConfig
 from protocols import DBC_FD_PATH, DBC_PATH, CanEncoder
 from protocols.dbc import dbc_text
 from protocols.status_layout import STATUS_WORDS
-from skinhil.events import make_events
 from skinhil.transports import CanTransport
 
 NAMES = {1: "SKIN_COMMAND", 2: "SKIN_ACK", 3: "SKIN_SYNC", 4: "SKIN_STATUS", 5: "SKIN_MARKER",
@@ -111,7 +111,7 @@ def test_cantools_decodes_encoder_frames(board_id: int, fd: bool) -> None:
         n = rng.choice([0, 1, 3, 7, 60])
         t0, t_end = t_end, t_end + 1000
         t = sorted(rng.randrange(t0, t_end, 100) for _ in range(n))
-        frames += enc.events(make_events(t, [rng.randrange(338) for _ in t]), t_end)
+        frames += enc.events(distinct_events(t, [rng.randrange(338) for _ in t]), t_end)
         if call % 50 == 0:
             sent.append(protocols.Status(t_end, 7 * call, 5 * call, 2 * call, 0, call, 0,
                                          call % 100 == 0, call, call, 0, 0, call // 2, 1))
@@ -141,7 +141,7 @@ def test_cantools_decodes_wide_frames(fd: bool) -> None:
     for call in range(100):
         t = sorted(rng.randrange(1000 * call, 1000 * call + 1000, 100)
                    for _ in range(rng.choice([1, 5, 30])))
-        frames += enc.events(make_events(t, [rng.randrange(15_730) for _ in t]),
+        frames += enc.events(distinct_events(t, [rng.randrange(15_730) for _ in t]),
                              1000 * call + 1000)
     reader = DbcReader(9, fd)
     for f in frames:

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from protocol_examples import distinct_events, framed
 
 from protocols import (
     Ack,
@@ -62,7 +63,7 @@ def event_streams(draw: st.DrawFn, wrap_bits: int) -> tuple[np.ndarray, list[int
         times += [t] * len(chans)
         addrs += chans
     ends = sorted(set(draw(st.lists(st.integers(start, t), max_size=6))))
-    ev = make_events(np.array(times, dtype=np.int64) * STEP, np.array(addrs))
+    ev = distinct_events(np.array(times, dtype=np.int64) * STEP, addrs)
     return ev, [e * STEP for e in ends if e > start] + [(t + 1) * STEP]
 
 
@@ -114,10 +115,24 @@ def test_bitmap_chosen_only_when_smaller() -> None:
     assert len(SerialDecoder().feed(SerialEncoder().events(full, 100)).events) == 338
 
 
-def test_duplicate_channel_in_a_step_round_trips() -> None:
+def test_a_channel_twice_in_a_step_is_refused() -> None:
+    """A channel spikes at most once per step (SPEC.md §3.1): the encoder refuses a repeat and
+    the decoder counts a packet repeating a channel in a step (or out of ascending order, or
+    a bitmap sharing its step) as malformed, events and all."""
     ev = make_events(np.zeros(30, np.int64), np.r_[np.arange(29), 5])
-    got = SerialDecoder().feed(SerialEncoder().events(ev, 100)).events
-    np.testing.assert_array_equal(got, canonical(ev))
+    with pytest.raises(ProtocolError, match="once per step"):
+        SerialEncoder().events(ev, 100)
+    sync = SerialEncoder().events(make_events([0], [1]), 100).split(b"\x00")[0] + b"\x00"
+    words = {"repeat": [(5, 0), (5, 0)], "descending": [(9, 0), (5, 0)],
+             "ascending": [(5, 0), (9, 0), (5, 1)]}
+    for name, items in words.items():
+        body = bytes([0, 1, 0, 0]) + b"".join(  # EVENTS, epoch 0, seq 1, offset 0
+            ((a << 7) | d).to_bytes(2, "little") for a, d in items)
+        dec = SerialDecoder()
+        got = dec.feed(sync + framed(body))
+        ok = name == "ascending"
+        assert len(got.events) == (3 if ok else 0), name
+        assert dec.counters.malformed == (0 if ok else 1), name
 
 
 statuses = st.builds(
@@ -148,10 +163,11 @@ def test_records_round_trip(layout: str, records: list, status: Status, where: i
     test_status_counters_unwrap_across_modulo: counters only make sense counting up)."""
     records.insert(min(where, len(records)), status)
     enc = SerialEncoder() if layout == "serial" else CanEncoder(5, fd=layout == "canfd")
+    host = SerialEncoder() if layout == "serial" else CanEncoder(5, fd=layout == "canfd")
     dec = SerialDecoder() if layout == "serial" else CanDecoder(5, fd=layout == "canfd")
     got = []
-    for rec in records:
-        method = {Status: enc.status, Marker: enc.marker, Command: enc.command,
+    for rec in records:  # commands come from a host: their own sequence numbers (SPEC.md §6)
+        method = {Status: enc.status, Marker: enc.marker, Command: host.command,
                   Ack: enc.ack}[type(rec)]
         got += dec.feed(method(rec)).records
     assert got == records

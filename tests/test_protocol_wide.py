@@ -1,4 +1,4 @@
-"""The wide format (protocol version 2, SPEC.md §9): chosen only for skins of more than 338
+"""The wide format (protocol version 4, SPEC.md §9): chosen only for skins of more than 338
 channels, round trips any address a stream can carry, packs its frames full, and a decoder
 that does not read the version of a stream refuses it with a ProtocolError."""
 
@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from protocol_examples import distinct_events
 from test_protocol_roundtrip import LAYOUTS, canonical, decode_all
 
 from protocols import CanDecoder, CanEncoder, CanFrame, SerialDecoder, SerialEncoder
@@ -29,7 +30,7 @@ def encoder(layout: str, n_channels: int, board: int = 0) -> SerialEncoder | Can
     return CanEncoder(board, fd=layout == "canfd", n_channels=n_channels)
 
 
-def decoder(layout: str, versions: tuple[int, ...] = (1, 2),
+def decoder(layout: str, versions: tuple[int, ...] = (3, 4),
             board: int = 0) -> SerialDecoder | CanDecoder:
     if layout == "serial":
         return SerialDecoder(versions=versions)
@@ -38,8 +39,8 @@ def decoder(layout: str, versions: tuple[int, ...] = (1, 2),
 
 @pytest.mark.parametrize("layout", LAYOUTS)
 def test_version_follows_the_channel_count(layout: str) -> None:
-    assert encoder(layout, 1).version == encoder(layout, 338).version == 1
-    assert encoder(layout, 339).version == encoder(layout, MAX_CHANNELS).version == 2
+    assert encoder(layout, 1).version == encoder(layout, 338).version == 3
+    assert encoder(layout, 339).version == encoder(layout, MAX_CHANNELS).version == 4
     with pytest.raises(ProtocolError, match="channels"):
         encoder(layout, MAX_CHANNELS + 1)
     with pytest.raises(ProtocolError, match="address"):
@@ -73,7 +74,7 @@ def wide_streams(draw: st.DrawFn, wrap_bits: int) -> tuple[int, np.ndarray, list
         times += [t] * len(chans)
         addrs += sorted(chans)
     ends = sorted(set(draw(st.lists(st.integers(start, t), max_size=6))))
-    ev = make_events(np.array(times, dtype=np.int64) * STEP, np.array(addrs))
+    ev = distinct_events(np.array(times, dtype=np.int64) * STEP, addrs)
     return n_ch, ev, [e * STEP for e in ends if e > start] + [(t + 1) * STEP]
 
 
@@ -98,13 +99,14 @@ def test_wide_events_round_trip(layout: str, data: st.DataObject) -> None:
 def test_a_decoder_refuses_a_version_it_does_not_read(layout: str) -> None:
     ev = make_events([0, 100], [5, 15_000])
     wide = encoder(layout, 15_730).events(ev, 1000)
-    with pytest.raises(ProtocolError, match="version 2"):
-        decoder(layout, versions=(1,)).feed(wide)
+    with pytest.raises(ProtocolError, match="version 4"):
+        decoder(layout, versions=(3,)).feed(wide)
     narrow = encoder(layout, 338).events(ev[:1], 1000)
-    with pytest.raises(ProtocolError, match="version 1"):
-        decoder(layout, versions=(2,)).feed(narrow)
+    with pytest.raises(ProtocolError, match="version 3"):
+        decoder(layout, versions=(4,)).feed(narrow)
+    # versions 1 and 2 are retired (their serial CRC was blind to appended zeros)
     with pytest.raises(ProtocolError, match="choose among"):
-        decoder(layout, versions=(3,))
+        decoder(layout, versions=(1,))
     assert len(decoder(layout).feed(wide).events) == 2
 
 
@@ -125,7 +127,7 @@ def test_full_frames_and_bytes_per_event() -> None:
 
 @pytest.mark.parametrize("fd", [False, True])
 def test_wide_frames_are_foreign_until_a_version_2_sync(fd: bool) -> None:
-    """Class 7 is another device's ID on a version-1 bus: counted foreign, never decoded."""
+    """Class 7 is another device's ID on a version-3 bus: counted foreign, never decoded."""
     frames = CanEncoder(1, fd=fd, n_channels=15_730).events(make_events([0], [9000]), 100)
     sync, wide = frames
     dec = CanDecoder(1, fd=fd)
@@ -156,7 +158,7 @@ def test_wide_serial_address_beyond_the_range_is_malformed() -> None:
     st.integers(0, 0x7FF), min_size=60, max_size=60))
 def test_wide_decoders_never_raise_on_garbage(layout: str, junk: list[bytes],
                                               ids: list[int]) -> None:
-    """After a version-2 SYNC, random bytes or frames (wide class included) never raise."""
+    """After a version-4 SYNC, random bytes or frames (wide class included) never raise."""
     enc = encoder(layout, 15_730)
     dec = decoder(layout)
     dec.feed(enc.events(make_events([0], [1]), 100))

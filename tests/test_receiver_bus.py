@@ -79,3 +79,79 @@ def test_three_boards_on_one_link_each_exact(small_decoder: WindowDecoder, kind:
     combined = bus.combined_report()
     assert combined.events_decoded == sum(summaries[b].sent for b in BOARD_IDS)
     assert combined.frames_ok == sum(r.frames_ok for r in reports.values())
+
+
+def test_udp_sources_are_capped_and_filtered(small_decoder: WindowDecoder) -> None:
+    """Past ``max_sources`` a new UDP source is refused and its datagrams counted, and with an
+    allow-list only the listed sources become boards: six senders over real loopback."""
+    import socket as socket_module
+
+    senders = [socket_module.socket(socket_module.AF_INET, socket_module.SOCK_DGRAM)
+               for _ in range(6)]
+    host = UdpTransport("127.0.0.1", 0, listen=True)
+    try:
+        for s in senders:
+            s.bind(("127.0.0.1", 0))
+        names = [f"127.0.0.1:{s.getsockname()[1]}" for s in senders]
+        for cap, allow, want in ((3, None, names[:3]), (16, [names[4], "10.0.0.1"],
+                                                        [names[4]])):
+            bus = BusReceiver(host, small_decoder, max_sources=cap, allow=allow)
+            for _ in range(2):
+                for s in senders:
+                    s.sendto(b"\x01", ("127.0.0.1", host.port))
+                    time.sleep(0.002)  # in order: the first three are heard first
+                got: dict = {}
+                end = time.monotonic() + 5
+                while sum(1 for _ in got) < len(want) and time.monotonic() < end:
+                    parts = bus.receive(0.05)
+                    bus.feed(parts)
+                    got.update(parts)
+                time.sleep(0.05)
+                bus.feed(bus.receive(0.05))
+            assert sorted(bus.boards) == sorted(want), (cap, allow)
+            assert bus.refused_datagrams == 2 * (6 - len(want))
+    finally:
+        host.shutdown()
+        for s in senders:
+            s.close()
+
+
+def test_drain_decodes_what_the_link_already_received(small_decoder: WindowDecoder,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """Datagrams already in the socket when a receiver stops (listen on Ctrl-C) are decoded
+    by ``drain()``: the totals count every event sent, none left in the kernel's queue."""
+    import numpy as np
+
+    import skinhil.transports.udp as udp
+
+    monkeypatch.setattr(udp, "RECV_BATCH", 16)  # one read takes 16 datagrams of the 200
+
+    import protocols
+    from skinhil.events import make_events
+    from skinhil.receiver import Receiver
+
+    host = UdpTransport("127.0.0.1", 0, listen=True)
+    board = UdpTransport("127.0.0.1", host.port)
+    try:
+        enc = protocols.SerialEncoder()
+        sent = 0
+        for ms in range(200):
+            ev = make_events(np.arange(5, dtype=np.int64) * 100 + ms * 1000, np.arange(5) * 7)
+            board.send(enc.events(ev, (ms + 1) * 1000))
+            sent += len(ev)
+        time.sleep(0.2)
+        rx = Receiver(host, small_decoder)
+        rx.poll(0.0)  # one read: a batch, not everything
+        first = rx.link_report().events_decoded
+        rx.drain()
+        assert first < sent and rx.link_report().events_decoded == sent
+        bus = BusReceiver(host, small_decoder)
+        for ms in range(200, 300):
+            ev = make_events(np.arange(5, dtype=np.int64) * 100 + ms * 1000, np.arange(5) * 7)
+            board.send(enc.events(ev, (ms + 1) * 1000))
+        time.sleep(0.2)
+        bus.drain()
+        assert bus.combined_report().events_decoded == 500
+    finally:
+        board.shutdown()
+        host.shutdown()

@@ -1,6 +1,6 @@
 """``skinhil serve --udp`` on loopback (127.0.0.1): whole packets in every datagram, every
 event and marker arrives, commands are answered, and the loss accounting is exact; the 6x6
-skin in the narrow format (version 1) and a 32x32 skin (15,730 channels) in the wide one; a
+skin in the narrow format (version 3) and a 32x32 skin (15,730 channels) in the wide one; a
 board on two threads (``--threads 2``) streams what one thread does and answers commands."""
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from skinhil.receiver.training import board_stream
 
 
 @pytest.mark.parametrize(("size", "version", "duration_s"),
-                         [("6x6", 1, 2.5), ("32x32", 2, 1.0)])
+                         [("6x6", 3, 2.5), ("32x32", 4, 1.0)])
 def test_serve_udp_stream_is_complete_and_exact(size: str, version: int,
                                                 duration_s: float) -> None:
     peer = UdpPeer(versions=(version,))  # the other version would raise ProtocolError
@@ -40,7 +40,7 @@ def test_serve_udp_stream_is_complete_and_exact(size: str, version: int,
     final = peer.of(protocols.Status)[-1]
     c = peer.decoder.counters
     assert len(ev) > 0 and np.all(np.diff(ev["t"]) >= 0)
-    if version == 2:
+    if version == 4:
         assert ev["addr"].max() >= protocols.N_CHANNELS  # addresses only the wide words carry
     assert summary["generated"] == final.events_generated == final.events_sent == len(ev)
     assert c.frames_lost == 0 and c.events_lost == 0 and c.crc_errors == 0
@@ -52,7 +52,7 @@ def test_serve_udp_stream_is_complete_and_exact(size: str, version: int,
 def _udp_board(*args: str) -> Iterator[tuple[UdpPeer, ServeProcess]]:
     """``skinhil serve --udp ARGS --json`` into a UdpPeer; when the block ends the board has
     finished and every event it sent is decoded."""
-    peer = UdpPeer(versions=(2,))
+    peer = UdpPeer(versions=(4,))
     serve = ServeProcess("--udp", f"127.0.0.1:{peer.port}", "--json", *args)
     try:
         yield peer, serve

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from protocol_examples import distinct_events
 
 import protocols
 from skinhil.errors import TransportError
-from skinhil.events import make_events
 from skinhil.transports import UdpTransport
 from skinhil.transports.udp import parse_address, split_packets
 
@@ -17,7 +17,7 @@ def _stream(n_events: int) -> bytes:
     enc = protocols.SerialEncoder()
     rng = np.random.default_rng(0)
     t = np.sort(rng.integers(0, 50_000, n_events)) * 100
-    return enc.events(make_events(t, rng.integers(0, 338, n_events)), int(t[-1]) + 100)
+    return enc.events(distinct_events(t, rng.integers(0, 338, n_events)), int(t[-1]) + 100)
 
 
 def test_datagrams_hold_whole_packets_and_decode_alone() -> None:
@@ -80,3 +80,30 @@ def test_bad_addresses_and_options_say_what_to_write() -> None:
     with UdpTransport("127.0.0.1", 0, listen=True) as a, pytest.raises(TransportError,
                                                                         match="bind"):
         UdpTransport("127.0.0.1", a.port, listen=True)
+
+
+def test_a_starved_receive_buffer_is_reported(caplog) -> None:
+    """A receiver asks the kernel for its socket buffer and says when it got less (asked vs
+    granted, and the setting to raise); one that got what it asked says nothing."""
+    import logging
+    from pathlib import Path
+
+    from skinhil.transports import UdpTransport
+
+    rmem_max = int(Path("/proc/sys/net/core/rmem_max").read_text())
+    with caplog.at_level(logging.WARNING):
+        starved = UdpTransport("127.0.0.1", 0, listen=True, rcvbuf_bytes=4 * rmem_max)
+    try:
+        assert starved.rcvbuf_asked == 4 * rmem_max
+        assert 0 < starved.rcvbuf_granted < starved.rcvbuf_asked
+        assert any("net.core.rmem_max" in r.getMessage() and str(starved.rcvbuf_granted)
+                   in r.getMessage() for r in caplog.records)
+    finally:
+        starved.shutdown()
+    caplog.clear()
+    with caplog.at_level(logging.WARNING):
+        fine = UdpTransport("127.0.0.1", 0, listen=True, rcvbuf_bytes=65536)
+    try:
+        assert fine.rcvbuf_granted >= 65536 and not caplog.records
+    finally:
+        fine.shutdown()

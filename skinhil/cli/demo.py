@@ -21,11 +21,11 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
+from protocols.kernel_cache import source_hash
 from skinhil.cli.listen import LivePrinter, class_names, print_summary, summary
 from skinhil.cli.options import DECODE_SNR_DB, snr_value
 from skinhil.cli.train import print_report
 from skinhil.errors import ConfigError
-from skinhil.model.kernel_cache import source_hash
 from skinhil.model.timeline import DEFAULT_REST_S
 from skinhil.output_files import atomic_path
 from skinhil.receiver import Receiver
@@ -43,7 +43,7 @@ data-limited below this: cross-validated window accuracy 83 % with 15 per condit
 with 30 (``skinhil train --reps``, seed 0)."""
 MODEL_FORMAT_TAG = "v3"
 """Bumped when the cached model's file format changes; the file name also carries the hash
-of the package sources (:func:`skinhil.model.kernel_cache.source_hash`), so a model is retrained
+of the package sources (:func:`protocols.kernel_cache.source_hash`), so a model is retrained
 once after any change of the code that simulated, cut and fitted its windows."""
 
 

@@ -179,7 +179,8 @@ def listen_until_stopped(args: argparse.Namespace, rx: Receiver | BusReceiver,
                          link_line: Callable[[], dict[str, Any]],
                          gone: Callable[[], bool]) -> None:
     """Poll ``rx`` until Ctrl-C/SIGTERM, ``--duration`` (s) or ``gone()``; with ``--json``
-    print ``link_line()`` every STATUS_PERIOD_S; then flush ``rx`` and shut its transport."""
+    print ``link_line()`` every STATUS_PERIOD_S; then decode what the link already received
+    (:meth:`Receiver.drain`), flush ``rx`` and shut its transport."""
     stop = threading.Event()
     old = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
     t0 = time.monotonic()
@@ -193,6 +194,7 @@ def listen_until_stopped(args: argparse.Namespace, rx: Receiver | BusReceiver,
             if args.json and now >= next_line:
                 next_line += STATUS_PERIOD_S
                 print(json.dumps({"type": "link", **link_line()}), flush=True)
+        rx.drain()  # what the link already received is decoded before the totals
         rx.flush()
     finally:
         for s, h in old.items():

@@ -32,6 +32,10 @@ BoardKey = int | str
 MAX_CAN_CLASS = 7
 """Highest frame class of a board's CAN IDs (class << 4 | board id, SPEC.md §5.1, §9.2)."""
 
+MAX_UDP_SOURCES = 16
+"""Most UDP sources (boards) a bus receiver decodes by default; datagrams of further sources
+are refused and counted (SPEC.md §10)."""
+
 
 def combine(reports: Iterable[LinkReport]) -> LinkReport:
     """Field-by-field sum of several boards' link reports (the combined view)."""
@@ -47,13 +51,18 @@ class BusReceiver:
     """Decode, filter and classify every board on one CAN bus or UDP port.
 
     ``board_ids`` (CAN: required) are the boards to decode; on UDP every source that sends is
-    a board. ``listeners(key, receiver)`` gives the listeners of a new board's receiver.
+    a board, up to ``max_sources`` of them (datagrams of further sources are refused and
+    counted in :attr:`refused_datagrams`, so stray or hostile senders cannot grow the
+    receiver without bound), and only sources in ``allow`` when it is given (each entry
+    ``"host"`` or ``"host:port"``). ``listeners(key, receiver)`` gives the listeners of a new
+    board's receiver.
     """
 
     def __init__(self, transport: Transport[Any], decoder: WindowDecoder,
                  board_ids: Iterable[int] = (), params: ReceiverParams | None = None,
                  listeners: Callable[[BoardKey, Receiver], Iterable[ReceiverListener]]
-                 | None = None) -> None:
+                 | None = None, max_sources: int = MAX_UDP_SOURCES,
+                 allow: Iterable[str] | None = None) -> None:
         if transport.kind not in ("can", "udp"):
             raise ConfigError(f"a {transport.kind} link carries one board: use Receiver, or "
                               "several boards on a CAN bus or a UDP port")
@@ -68,6 +77,13 @@ class BusReceiver:
         """Each board's receiver, by board id (CAN) or source address (UDP)."""
         self.foreign_frames = 0
         """CAN frames of no listed board (or with an ID no board uses)."""
+        if max_sources < 1:
+            raise ConfigError(f"max_sources={max_sources}: allow at least one UDP source")
+        self.max_sources = int(max_sources)
+        self.allow = frozenset(allow) if allow is not None else None
+        self.refused_datagrams = 0
+        """UDP datagrams refused: their source is not allowed, or is new past
+        ``max_sources``."""
         self.link_errors = 0
         self.link_down = False
         for b in ids:
@@ -97,11 +113,20 @@ class BusReceiver:
             out.setdefault(board, []).append(f)
         return out
 
-    @staticmethod
-    def split_datagrams(grams: list[tuple[str, bytes]]) -> dict[BoardKey, bytes]:
-        """UDP datagrams grouped by source (arrival order kept within each source)."""
+    def split_datagrams(self, grams: list[tuple[str, bytes]]) -> dict[BoardKey, bytes]:
+        """UDP datagrams grouped by source (arrival order kept within each source); those of
+        refused sources (not allowed, or new past ``max_sources``) counted and dropped."""
         out: dict[BoardKey, bytearray] = {}
+        room = self.max_sources - len(self.boards)
         for src, data in grams:
+            if src not in out:
+                allowed = self.allow is None or src in self.allow \
+                    or src.rsplit(":", 1)[0] in self.allow
+                known = src in self.boards
+                if not allowed or (not known and room <= 0):
+                    self.refused_datagrams += 1
+                    continue
+                room -= 0 if known else 1
             out.setdefault(src, bytearray()).extend(data)
         return {k: bytes(v) for k, v in out.items()}
 
@@ -124,6 +149,20 @@ class BusReceiver:
             return self.split_frames(self.transport.recv(timeout))
         return self.split_datagrams(self.transport.recv_from(timeout))  # type: ignore[attr-defined]
 
+    def drain(self) -> list[tuple[BoardKey, ScoredDecision]]:
+        """Decode everything the link already received (see :meth:`Receiver.drain`)."""
+        out: list[tuple[BoardKey, ScoredDecision]] = []
+        while not self.link_down:
+            try:
+                parts = self.receive(0.0)
+            except TransportError as exc:
+                self._link_error(exc)
+                break
+            if not parts:
+                break
+            out += self.feed(parts, time.monotonic())
+        return out
+
     def poll(self, timeout: float | None = 0.02) -> list[tuple[BoardKey, ScoredDecision]]:
         """Receive once and process; a link error is reported to every board's listeners
         and stops :meth:`run`."""
@@ -132,14 +171,17 @@ class BusReceiver:
         try:
             parts = self.receive(timeout)
         except TransportError as exc:
-            self.link_errors += 1
-            self.link_down = True
-            log.warning("link error: %s", exc)
-            for rx in self.boards.values():
-                for listener in rx.listeners:
-                    listener.on_link_error(str(exc))
+            self._link_error(exc)
             return []
         return self.feed(parts, time.monotonic())
+
+    def _link_error(self, exc: TransportError) -> None:
+        self.link_errors += 1
+        self.link_down = True
+        log.warning("link error: %s", exc)
+        for rx in self.boards.values():
+            for listener in rx.listeners:
+                listener.on_link_error(str(exc))
 
     def run(self, duration_s: float | None = None,
             stop: threading.Event | None = None) -> None:

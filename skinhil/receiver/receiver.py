@@ -240,6 +240,22 @@ class Receiver:
             return []
         return self.feed(payload, time.monotonic())
 
+    def drain(self) -> list[ScoredDecision]:
+        """Decode everything the link already received (reads without waiting until one
+        returns nothing): what a receiver does before it stops, so no frame it was handed is
+        left undecoded and its totals are whole."""
+        out: list[ScoredDecision] = []
+        while not self.link_down:
+            try:
+                payload = self.transport.recv(0.0)
+            except TransportError as exc:
+                self._link_error(str(exc))
+                break
+            if not payload:
+                break
+            out += self.feed(payload, time.monotonic())
+        return out
+
     def _link_error(self, message: str) -> None:
         self.link_errors += 1
         self.link_down = True

@@ -12,6 +12,7 @@ from typing import Any
 
 from skinhil.errors import TransportError
 from skinhil.transports.base import Deadline, Transport, check_bitrate
+from skinhil.transports.socket_buffer import request_receive_buffer
 
 log = logging.getLogger(__name__)
 
@@ -82,11 +83,12 @@ class CanTransport(Transport[list[Any]]):
         finally:
             can_log.setLevel(level)
         sock = getattr(self._bus, "socket", None)
-        if isinstance(sock, socket.socket):
-            try:
-                sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, CAN_RCVBUF_BYTES)
-            except OSError as exc:
-                log.debug("SO_RCVBUF on %s: %s", channel, exc)
+        self.rcvbuf_asked = CAN_RCVBUF_BYTES if isinstance(sock, socket.socket) else 0
+        """Receive buffer asked of the kernel (bytes; 0: the interface has no socket)."""
+        self.rcvbuf_granted = request_receive_buffer(
+            sock, CAN_RCVBUF_BYTES, f"CAN {channel}") if isinstance(sock, socket.socket) else 0
+        """Receive buffer the kernel granted (bytes): below :attr:`rcvbuf_asked` a warning
+        names the setting (``net.core.rmem_max``) to raise."""
         self.rx_overflows = 0
         self._rx: collections.deque[Any] = collections.deque()
         self._rx_ready = threading.Condition()

@@ -21,6 +21,7 @@ import socket
 
 from skinhil.errors import TransportError
 from skinhil.transports.base import Deadline, Transport
+from skinhil.transports.socket_buffer import request_receive_buffer
 
 log = logging.getLogger(__name__)
 
@@ -79,14 +80,16 @@ class UdpTransport(Transport[bytes]):
     """A UDP socket: ``listen=False`` sends to ``host:port`` (the board), ``listen=True``
     binds ``host:port`` (the host; port 0 picks a free one, see :attr:`port`).
 
-    ``bitrate`` (bits/s) is the wire budget; ``max_datagram`` (bytes) the largest datagram.
+    ``bitrate`` (bits/s) is the wire budget; ``max_datagram`` (bytes) the largest datagram;
+    ``rcvbuf_bytes`` the receive buffer asked of the kernel (see :attr:`rcvbuf_granted`).
     """
 
     kind = "udp"
 
     def __init__(self, host: str, port: int, listen: bool = False,
                  bitrate: int = DEFAULT_UDP_BITRATE,
-                 max_datagram: int = MAX_DATAGRAM_BYTES) -> None:
+                 max_datagram: int = MAX_DATAGRAM_BYTES,
+                 rcvbuf_bytes: int = UDP_RCVBUF_BYTES) -> None:
         if (not isinstance(bitrate, int) or isinstance(bitrate, bool)
                 or not 1000 <= bitrate <= MAX_UDP_BITRATE):
             raise TransportError(f"invalid UDP bitrate {bitrate!r}: give an integer from 1000 "
@@ -108,8 +111,13 @@ class UdpTransport(Transport[bytes]):
                                  "as 127.0.0.1 or a resolvable name") from None
         family, _, _, _, addr = infos[0]
         self._sock = socket.socket(family, socket.SOCK_DGRAM)
+        self.rcvbuf_asked = int(rcvbuf_bytes) if listen else 0
+        """Receive buffer asked of the kernel (bytes; a receiver's only: 0 when sending)."""
+        self.rcvbuf_granted = request_receive_buffer(
+            self._sock, self.rcvbuf_asked, f"UDP {host}:{port}") if listen else 0
+        """Receive buffer the kernel granted (bytes): below :attr:`rcvbuf_asked` a warning
+        names the setting (``net.core.rmem_max``) to raise."""
         try:
-            self._sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, UDP_RCVBUF_BYTES)
             if listen:
                 self._sock.bind(addr)
             else:

@@ -155,7 +155,7 @@ class UdpPeer(Peer):
     given ``versions``); commands go to the board heard last. ``datagram_ends`` is the last
     byte of every datagram."""
 
-    def __init__(self, versions: tuple[int, ...] = (1, 2)) -> None:
+    def __init__(self, versions: tuple[int, ...] = (3, 4)) -> None:
         super().__init__()
         self.link = UdpTransport("127.0.0.1", 0, listen=True)
         self.port = self.link.port

@@ -2,19 +2,20 @@
 
 numba keys a cached kernel on its own source file only (that file's modification time and
 size). A kernel that calls or inlines kernels of other files — ``skinhil.model.sensor``'s fused
-kernels run those of ``mechanics.linear``, ``neurons``, ``stimuli`` and ``rng`` — would keep
+kernels run those of ``mechanics_linear``, ``neurons``, ``stimuli`` and ``rng`` — would keep
 running the old callee after that other file changed. So, before any kernel is defined,
 :func:`configure` points numba's cache at ``<base>/<hash>``, ``<hash>`` a digest of every
 source file of the packages that hold kernels (:data:`KERNEL_PACKAGES`): an edit anywhere in
 them selects a fresh, empty cache directory, and every kernel compiles again from the
 current sources. ``<base>`` is ``$NUMBA_CACHE_DIR`` when set, else
-``skinhil/__pycache__/numba`` next to the sources (so a checkout, and a user-mode Linux guest
+``skinhil/__pycache__/numba`` next to the sources (``protocols/__pycache__/numba`` in a copy of
+``protocols`` alone) (so a checkout, and a user-mode Linux guest
 that mounts it, find its cache without any environment). Only the
 :data:`KEEP_VERSIONS` most recently used directories are kept.
 
-Importing this module configures the cache (:data:`CACHE_DIR`); ``skinhil/__init__.py``
-imports it first of all, and ``protocols`` and ``firmware_sim`` import it before they define
-a kernel.
+Importing this module configures the cache (:data:`CACHE_DIR`); ``protocols/__init__.py``
+imports it first of all (the wire codecs stand alone: they need nothing of ``skinhil``);
+``skinhil`` and ``firmware_sim`` import it before they define a kernel.
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ KERNEL_PACKAGES: tuple[str, ...] = ("skinhil", "protocols", "firmware_sim")
 KEEP_VERSIONS = 4
 """Cache directories of other source versions kept (most recently used first)."""
 
-_ROOT = Path(__file__).resolve().parents[2]
+_ROOT = Path(__file__).resolve().parents[1]
 
 
 def source_files(root: Path = _ROOT) -> list[Path]:
@@ -62,7 +63,10 @@ def source_hash(root: Path = _ROOT) -> str:
 def cache_base() -> Path:
     """The directory holding one cache directory per source version (see module docstring)."""
     user = os.environ.get("NUMBA_CACHE_DIR")
-    return Path(user) if user else _ROOT / "skinhil" / "__pycache__" / "numba"
+    if user:
+        return Path(user)
+    home = "skinhil" if (_ROOT / "skinhil").is_dir() else "protocols"
+    return _ROOT / home / "__pycache__" / "numba"
 
 
 def configure() -> Path:
