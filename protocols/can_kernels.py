@@ -74,9 +74,11 @@ C_FOREIGN = 14
 C_SIZE = 15
 
 # decoder state slots (D_VERSION: of the last SYNC; D_VERSIONS: bit v set once one was seen)
+# D_LAST_T / D_LAST_A: time (µs) and address of the last event decoded, once D_HAVE_LAST
 (D_HAVE_SEQ, D_SEQ, D_SYNC_VALID, D_EPOCH, D_BASE, D_STEP_US, D_HAVE_CMD_SEQ,
- D_CMD_SEQ, D_VERSION, D_VERSIONS, D_CAND, D_HAVE_CAND) = range(12)
-D_SIZE = 12
+ D_CMD_SEQ, D_VERSION, D_VERSIONS, D_CAND, D_HAVE_CAND, D_HAVE_LAST, D_LAST_T,
+ D_LAST_A) = range(15)
+D_SIZE = 15
 
 
 @numba.njit(cache=True, nogil=True)
@@ -267,6 +269,32 @@ def _layout_ok(cls: int, blob: np.ndarray, o: int, ln: int, fd: bool) -> bool:
 
 
 @numba.njit(cache=True, nogil=True)
+def _late_copy(st: np.ndarray, blob: np.ndarray, fo: int, fd: bool, wide: bool,
+               hdr: int) -> bool:
+    """Whether the EVENTS frame at ``blob[fo:]`` is timed in the current SYNC period and its
+    first event (time, address) does not follow the last event decoded in it: a copy that
+    came late (classic CAN's 4-bit sequence number cannot tell it from a new frame)."""
+    if not st[D_HAVE_LAST] or st[D_SYNC_VALID] == 0:
+        return False
+    if fd:
+        epoch = blob[fo + 1] & 0x7
+        off = get_le(blob, fo + 2, 2) >> 1
+    else:
+        epoch = (blob[fo] >> 4) & 0x7
+        off = get_le(blob, fo, 2) >> 7
+    if epoch != st[D_EPOCH]:
+        return False
+    if wide:
+        word = np.int64(get_le(blob, fo + hdr, WIDE_ITEM_BYTES))
+        delta, a = word & WIDE_MAX_DELTA, word >> 4
+    else:
+        e = _event_at(blob, fo, 0, hdr)
+        delta, a = e & 7, e >> 3
+    t = (st[D_BASE] + off + delta) * st[D_STEP_US]
+    return bool(t < st[D_LAST_T] or (t == st[D_LAST_T] and a <= st[D_LAST_A]))
+
+
+@numba.njit(cache=True, nogil=True)
 def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: int, fd: bool,
                   st: np.ndarray, c: np.ndarray) -> tuple[
                       np.ndarray, np.ndarray, int, np.ndarray, int]:
@@ -310,6 +338,9 @@ def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: in
         elif not _layout_ok(cls, blob, fo, ln, fd):
             c[C_MALFORMED] += 1
             continue
+        if count and _late_copy(st, blob, fo, fd, cls == CLS_WIDE, hdr):
+            c[C_DUPS] += 1  # its events do not follow the last decoded (SPEC §6, CAN)
+            continue
         seq = blob[fo] & (seq_mod - 1)
         command = cls == CLS_COMMAND  # a host's counter: apart from the board's frames
         have, last = (D_HAVE_CMD_SEQ, D_CMD_SEQ) if command else (D_HAVE_SEQ, D_SEQ)
@@ -340,6 +371,10 @@ def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: in
                     out_a[ne] = e >> 3
                 out_t[ne] = t * step
                 ne += 1
+            if count:
+                st[D_HAVE_LAST] = 1
+                st[D_LAST_T] = out_t[ne - 1]
+                st[D_LAST_A] = out_a[ne - 1]
         elif cls == CLS_SYNC:
             st[D_SYNC_VALID] = 1
             if fd:
@@ -351,6 +386,7 @@ def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: in
                 st[D_VERSION] = WIDE_VERSION if blob[fo] & 0x80 else PROTOCOL_VERSION
                 step, raw, bits = get_le(blob, fo + 1, 2), get_le(blob, fo + 3, 5), 40
             st[D_VERSIONS] |= 1 << st[D_VERSION]
+            st[D_HAVE_LAST] = 0  # the order check spans one SYNC period (SPEC §6, CAN)
             if st[D_STEP_US]:
                 st[D_SYNC_VALID] = take_base(st, D_BASE, D_CAND, D_HAVE_CAND, raw, bits)
             else:

@@ -140,3 +140,28 @@ def test_a_sync_whose_times_overflow_is_malformed(layout: str) -> None:
             data = bytes([0, 3 << 4]) + step.to_bytes(2, "little") + base.to_bytes(6, "little")
             dec.feed([CanFrame(0x31, data + bytes(2), True)])
         assert dec.counters.syncs == ok and dec.counters.malformed == (not ok), (base, step)
+
+
+@pytest.mark.parametrize("fd", [False, True])
+@pytest.mark.parametrize("late_by", [1, 9, 16, 17])
+def test_a_late_copy_of_a_can_events_frame_is_a_duplicate(fd: bool, late_by: int) -> None:
+    """Classic CAN's 4-bit sequence number repeats every 16 frames: a copy 9 or more frames
+    late passes the sequence check, but its events do not follow the last one decoded, so it
+    is dropped and counted as a duplicate (SPEC §6, CAN); the copy 16 late (same sequence
+    number as the frame before it) and 17 late (the next number) included."""
+    t = np.repeat(np.arange(0, 400), 3) * 100  # 3 events every step: no SYNC in between
+    addr = np.tile([5, 40, 300], 400)
+    ev = make_events(t, addr)
+    enc = CanEncoder(board_id=2, fd=fd)
+    frames = enc.events(ev, 40_000)
+    events_frames = [i for i, f in enumerate(frames) if f.arbitration_id >> 4 == 6]
+    assert len(events_frames) > late_by + 2
+    k = events_frames[1]
+    damaged = frames[:k + late_by + 1] + [frames[k]] + frames[k + late_by + 1:]
+    clean = CanDecoder(board_id=2, fd=fd)
+    want = clean.feed(frames).events
+    dec = CanDecoder(board_id=2, fd=fd)
+    got = dec.feed(damaged).events
+    np.testing.assert_array_equal(got, want)
+    assert len(want) == len(ev)
+    assert dec.counters.duplicates == 1
