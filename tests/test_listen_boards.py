@@ -36,15 +36,17 @@ def _free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def test_listen_decodes_two_udp_boards_at_once(tmp_path: Path) -> None:
+def _listen_to_two_boards(tmp_path: Path, *listen_args: str) -> tuple[dict, list[int]]:
+    """Run ``listen --udp`` (with ``listen_args``) and two ``serve --udp`` boards sending to
+    it; return listen's JSON summary and the boards' generated counts (board seed 1, 2)."""
     decoder, _ = train_decoder(math.inf, reps=1, seed=0, rest_s=0.05, cross_validation=False)
     model = tmp_path / "model.npz"
     save_decoder(decoder, model)
     port = _free_port()
     listen = subprocess.Popen(
         [sys.executable, "-m", "skinhil", "listen", "--udp", f"127.0.0.1:{port}", "--model",
-         str(model), "--json"], cwd=RUN_DIR, env=serve_env(), stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
+         str(model), "--json", *listen_args], cwd=RUN_DIR, env=serve_env(),
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
     boards = []
     try:
         end = time.monotonic() + 60
@@ -66,11 +68,28 @@ def test_listen_decodes_two_udp_boards_at_once(tmp_path: Path) -> None:
     assert listen.returncode == 0, err
     summary = [json.loads(line) for line in out.splitlines()
                if '"summary"' in line][-1]
-    generated = sorted(b.summary()["generated"] for b in boards)
+    return summary, [b.summary()["generated"] for b in boards]
+
+
+def test_listen_decodes_two_udp_boards_at_once(tmp_path: Path) -> None:
+    summary, generated = _listen_to_two_boards(tmp_path)
+    generated = sorted(generated)
     per_board = summary["boards"]
     assert len(per_board) == 2
+    assert summary["refused_datagrams"] == 0
     assert sorted(s["link"]["events_decoded"] for s in per_board.values()) == generated
     assert sorted(s["link"]["board_generated"] for s in per_board.values()) == generated
     link = summary["link"]
     assert link["events_decoded"] == sum(generated) > 0
     assert link["lost_on_link"] == link["frames_lost"] == link["crc_errors"] == 0
+
+
+def test_listen_refuses_sources_past_its_cap(tmp_path: Path) -> None:
+    """``--udp-max-sources 1``: the first board is decoded whole, the second one's datagrams
+    are refused and counted, never a board of their own."""
+    summary, generated = _listen_to_two_boards(tmp_path, "--udp-max-sources", "1")
+    per_board = summary["boards"]
+    assert len(per_board) == 1
+    decoded = next(iter(per_board.values()))["link"]
+    assert decoded["events_decoded"] == decoded["board_generated"] in generated
+    assert summary["refused_datagrams"] > 0

@@ -29,7 +29,7 @@ from skinhil.receiver import (
     ScoredDecision,
     SessionRecorder,
 )
-from skinhil.receiver.bus import BoardKey
+from skinhil.receiver.bus import MAX_UDP_SOURCES, BoardKey
 from skinhil.receiver.model_file import load_window_decoder
 
 STATUS_PERIOD_S = 1.0
@@ -57,6 +57,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--record", type=Path, metavar="FILE",
                    help="save events (tonic-compatible), markers and decisions to this .npz, "
                         "or to NWB if it ends in .nwb (pip install \"skinhil[nwb]\")")
+    p.add_argument("--udp-max-sources", type=int, default=MAX_UDP_SOURCES, metavar="N",
+                   help=f"with --udp: decode at most N sending boards; datagrams of further "
+                        f"sources are refused and counted (default: {MAX_UDP_SOURCES})")
+    p.add_argument("--udp-allow", type=lambda text: [h for h in text.split(",") if h],
+                   metavar="HOST[:PORT][,...]",
+                   help="with --udp: decode only these senders (an address, or address:port); "
+                        "datagrams of others are refused and counted")
     add_size_option(p)
 
 
@@ -172,7 +179,8 @@ def bus_summary(bus: BusReceiver, wall_s: float) -> dict[str, Any]:
     """Final figures of every board on the link and the combined link counters."""
     return {"type": "summary", "wall_s": round(wall_s, 3),
             "boards": {str(k): summary(rx, wall_s) for k, rx in bus.boards.items()},
-            "foreign_frames": bus.foreign_frames, "link": bus.combined_report().as_dict()}
+            "foreign_frames": bus.foreign_frames, "refused_datagrams": bus.refused_datagrams,
+            "link": bus.combined_report().as_dict()}
 
 
 def listen_until_stopped(args: argparse.Namespace, rx: Receiver | BusReceiver,
@@ -241,7 +249,10 @@ def run(args: argparse.Namespace) -> int:
     transport = open_transport(args)
     names = class_names()
     if several:
+        if args.udp_max_sources < 1:
+            raise ConfigError(f"--udp-max-sources must be 1 or more, got {args.udp_max_sources}")
         bus = BusReceiver(transport, decoder, args.board_ids if args.can else (),
+                          max_sources=args.udp_max_sources, allow=args.udp_allow,
                           listeners=lambda key, rx: [LivePrinter(rx, args.json, names, key)])
         return run_bus(args, bus, names)
     receiver = Receiver(transport, decoder, board_id=args.board_ids[0],
