@@ -269,6 +269,14 @@ def _layout_ok(cls: int, blob: np.ndarray, o: int, ln: int, fd: bool) -> bool:
 
 
 @numba.njit(cache=True, nogil=True)
+def _epoch_offset(blob: np.ndarray, fo: int, fd: bool) -> tuple[int, int]:
+    """The SYNC epoch and the offset (steps) of the EVENTS frame at ``blob[fo:]`` (§5.3)."""
+    if fd:
+        return blob[fo + 1] & 0x7, get_le(blob, fo + 2, 2) >> 1
+    return (blob[fo] >> 4) & 0x7, get_le(blob, fo, 2) >> 7
+
+
+@numba.njit(cache=True, nogil=True)
 def _late_copy(st: np.ndarray, blob: np.ndarray, fo: int, fd: bool, wide: bool,
                hdr: int) -> bool:
     """Whether the EVENTS frame at ``blob[fo:]`` is timed in the current SYNC period and its
@@ -276,12 +284,7 @@ def _late_copy(st: np.ndarray, blob: np.ndarray, fo: int, fd: bool, wide: bool,
     came late (classic CAN's 4-bit sequence number cannot tell it from a new frame)."""
     if not st[D_HAVE_LAST] or st[D_SYNC_VALID] == 0:
         return False
-    if fd:
-        epoch = blob[fo + 1] & 0x7
-        off = get_le(blob, fo + 2, 2) >> 1
-    else:
-        epoch = (blob[fo] >> 4) & 0x7
-        off = get_le(blob, fo, 2) >> 7
+    epoch, off = _epoch_offset(blob, fo, fd)
     if epoch != st[D_EPOCH]:
         return False
     if wide:
@@ -349,12 +352,7 @@ def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: in
             continue
         c[C_FRAMES_OK] += 1
         if cls == CLS_EVENTS or cls == CLS_WIDE:
-            if fd:
-                epoch = blob[fo + 1] & 0x7
-                off = get_le(blob, fo + 2, 2) >> 1
-            else:
-                epoch = (blob[fo] >> 4) & 0x7
-                off = get_le(blob, fo, 2) >> 7
+            epoch, off = _epoch_offset(blob, fo, fd)
             if st[D_SYNC_VALID] == 0 or epoch != st[D_EPOCH]:
                 c[C_UNTIMED] += count
                 continue
