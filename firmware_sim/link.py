@@ -236,7 +236,8 @@ def exercise_codecs(encoder: Any, decoder: Any, step_us: int, status: Any) -> li
     runner calls it on the host so the cache is warm before booting.
     """
     t = np.array([0, step_us, step_us, 70 * step_us, 5000 * step_us], dtype=np.int64)
-    ev = make_events(t, np.array([0, 1, 337, 200, 5]))
+    last = int(encoder.n_channels) - 1  # addresses of any skin >= 3x3 (at least 3 channels)
+    ev = make_events(t, np.array([0, 1, last, last // 2, min(5, last)]))
     # a one-event block is a distinct compiled signature (its field view is contiguous)
     out = [encoder.status(status), encoder.events(ev[:1], step_us),
            encoder.events(ev[1:], int(t[-1]) + step_us),

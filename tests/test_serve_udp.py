@@ -19,7 +19,8 @@ from skinhil.receiver.training import board_stream
 
 
 @pytest.mark.parametrize(("size", "version", "duration_s"),
-                         [("6x6", 3, 2.5), ("32x32", 4, 1.0)])
+                         [("6x6", 3, 2.5), ("32x32", 4, 1.0), ("3x3", 3, 1.5),
+                          ("5x6", 3, 1.5)])
 def test_serve_udp_stream_is_complete_and_exact(size: str, version: int,
                                                 duration_s: float) -> None:
     peer = UdpPeer(versions=(version,))  # the other version would raise ProtocolError
