@@ -97,7 +97,11 @@ class BoardConfig:
     """Seed of the noise and of the default random schedule."""
     board_id: int = 0
     """Board id on a CAN bus (in the arbitration ids)."""
-    mechanics: str = "linear"
+    mechanics: str = "auto"
+    """The skin's mechanics: "auto" (geometric up to 10x10, linear above), "linear" or
+    "geometric" (:class:`skinhil.model.skin.SkinParams`)."""
+    readout: str = "length"
+    """What each spring reports: "length" (its length change) or "axial"."""
     size: MeshSize = PAPER_SIZE
     """The skin's top layer (rows, cols) of masses; 6x6 is the paper's 338-channel skin."""
     threads: int = 1
@@ -187,10 +191,8 @@ class Board:
         self.config = config.check()
         self._open_link = open_link
         self.on_link = on_link or (lambda msg: log.warning("%s", msg))
-        if config.mechanics not in ("linear", "geometric"):
-            raise ConfigError(f"mechanics must be 'linear' or 'geometric', "
-                              f"got {config.mechanics!r}")
         model = SkinModel(SkinParams(mechanics=config.mechanics,  # type: ignore[arg-type]
+                                     readout=config.readout,  # type: ignore[arg-type]
                                      size=config.size))
         self.sensor = SkinSensor(model, config.dt_s, config.snr_db, config.seed,
                                  noise=config.noise, threads=max(1, config.threads - 1))

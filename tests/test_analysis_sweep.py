@@ -1,18 +1,20 @@
 """Sweeps: the modal path equals the full simulation; local, in-process and Dask runs agree."""
 
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from skinhil import SkinModel, SkinParams, paper_stimuli
 from skinhil.analysis import SweepSpec, information_measures, run_sweep
-from skinhil.analysis.modal_response import reduced_responses
+from skinhil.analysis.modal_response import reduced_responses, supports
 from skinhil.errors import ConfigError
 
 
 @pytest.mark.parametrize("k, c", [(50.0, 0.05), (7.0, 0.3)])
 def test_modal_responses_equal_skin_model(k: float, c: float) -> None:
-    params = SkinParams(stiffness_n_per_m=k, damping_n_s_per_m=c)
+    params = SkinParams(stiffness_n_per_m=k, damping_n_s_per_m=c, readout="axial",
+                        mechanics="linear")
     stimuli = paper_stimuli()
     fast = reduced_responses(params, stimuli, 0.5, 5e-4)
     full = SkinModel(params).simulate_many(stimuli, 0.5, 5e-4)
@@ -23,9 +25,15 @@ def test_modal_responses_equal_skin_model(k: float, c: float) -> None:
         assert value == pytest.approx(getattr(b, name), rel=1e-6), name
 
 
-def test_modal_path_refuses_tension() -> None:
+def test_modal_path_refuses_tension_and_the_length_readout() -> None:
     with pytest.raises(ConfigError, match="tension"):
-        reduced_responses(SkinParams(tension_n=0.1), paper_stimuli(), 0.5, 5e-4)
+        reduced_responses(SkinParams(tension_n=0.1, readout="axial", mechanics="linear"),
+                          paper_stimuli(), 0.5, 5e-4)
+    # the length change is not linear in the displacements: no reduced basis is exact
+    length = SkinParams(mechanics="linear")
+    assert not supports(length) and supports(replace(length, readout="axial"))
+    with pytest.raises(ConfigError, match="readout"):
+        reduced_responses(length, paper_stimuli(), 0.5, 5e-4)
 
 
 def test_local_processes_and_dask_give_identical_results() -> None:

@@ -40,7 +40,7 @@ def _solve_ivp_reference(model: SkinModel, force: np.ndarray, dt: float) -> np.n
 
 
 def test_leapfrog_16x16_matches_solve_ivp() -> None:
-    model = SkinModel(SkinParams(size=(16, 16)))
+    model = SkinModel(SkinParams(size=(16, 16), readout="axial"))  # the reference reads Cy q
     assert model.linear_regime == "leapfrog" and model.n_springs == 3538
     stim = at_size(paper_stimuli()[0], (16, 16))
     dt, n = 1e-4, 150

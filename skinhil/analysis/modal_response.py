@@ -3,7 +3,9 @@
 Why: a K x C sweep simulates the paper stimuli at hundreds of parameter points; the full
 338-sensor simulation costs ~50 ms per point, this costs a few.
 
-How (``linear`` mechanics without baseline tension, ``M = m I``): the damping is then
+How (``linear`` mechanics without baseline tension, ``M = m I``, and the ``axial`` readout,
+linear in the displacements: the default length readout is not, so it has no such shortcut
+and :func:`supports` sends it to the exact stepper): the damping is then
 proportional to the stiffness, ``C = (c/k) K``, so the modes of ``K``
 (:func:`skinhil.model.mechanics.linear.modal_form`, ``K = Φ diag(λ) Φᵀ``) decouple the equations
 into 75 oscillators, each discretised by the same exact zero-order hold as
@@ -60,16 +62,20 @@ def _unit_structure(spacing_m: float, layer_gap_m: float,
 
 
 def supports(params: SkinParams) -> bool:
-    """Whether :func:`reduced_responses` applies (linear mechanics, no baseline tension)."""
-    return params.mechanics == "linear" and params.tension_n == 0.0
+    """Whether :func:`reduced_responses` applies: linear mechanics, no baseline tension and
+    the axial readout. The length readout is not linear in the displacements, so the sensor
+    forces do not lie in the span of ``Cy Φ``: no reduced basis gives them exactly, and those
+    points go through the exact stepper (:meth:`skinhil.SkinModel.simulate_many`)."""
+    return (params.dynamics == "linear" and params.tension_n == 0.0
+            and params.readout == "axial")
 
 
 def reduced_responses(params: SkinParams, stimuli: Sequence[Stimulus], duration_s: float,
                       dt_s: float) -> ReducedResponses:
     """Exact responses of ``stimuli`` from rest, ``round(duration_s/dt_s)`` steps of ``dt_s``."""
     if not supports(params):
-        raise ConfigError("the modal sweep path needs mechanics='linear' and tension_n=0; "
-                          "use SkinModel.simulate_many for other models")
+        raise ConfigError("the modal sweep path needs mechanics='linear', tension_n=0 and "
+                          "readout='axial'; use SkinModel.simulate_many for other models")
     mesh, k_unit, dofs = _unit_structure(params.spacing_m, params.layer_gap_m, params.size)
     k = params.stiffness_n_per_m
     phi, mad, mbd = modal_form(k * k_unit, params.mass_kg, params.damping_n_s_per_m / k, dt_s)

@@ -8,11 +8,14 @@ neuron noise enters these measures), so a local run and a Dask run give identica
 
 Per-point simulation (documented choices):
 
-- ``linear`` mechanics without tension: the exact modal responses of
-  :mod:`skinhil.analysis.modal_response` at ``dt_s = 0.25 ms`` (2 kHz: the fastest mode of
-  the default grid's stiffest skin is ~1 kHz, and the exact zero-order hold has no step
-  error), ~15 ms per point on one core;
-- ``linear`` with tension, and ``geometric``: :meth:`skinhil.SkinModel.simulate_many`; the
+- ``linear`` mechanics without tension and with the axial readout: the exact modal
+  responses of :mod:`skinhil.analysis.modal_response` at ``dt_s = 0.25 ms`` (2 kHz: the
+  fastest mode of the default grid's stiffest skin is ~1 kHz, and the exact zero-order hold
+  has no step error), ~15 ms per point on one core;
+- ``linear`` with the length readout (the default: not linear in the displacements, so no
+  reduced basis is exact) or with tension: :meth:`skinhil.SkinModel.simulate_many`, the same
+  exact zero-order hold at the same step;
+- ``geometric``: :meth:`skinhil.SkinModel.simulate_many`; the
   geometric mechanics' explicit integrator needs ``dt`` below its stability limit, so a point
   uses the largest step ``≤ dt_s`` and ``≤ 0.9 x`` that limit that tiles the 0.25 s phases
   (heavily damped points need ~60 µs steps and cost ~1 s); a point that still diverges
@@ -122,7 +125,7 @@ class SweepResult:
 
 def point_step(params: SkinParams, dt_s: float, windows: PhaseWindows) -> float:
     """The step (s) a point is simulated at (see module docstring)."""
-    if params.mechanics == "linear":
+    if params.dynamics == "linear":
         return dt_s
     limit = STABILITY_MARGIN * SkinModel(params).max_dt_s()
     phase = windows.indentation_s[1] - windows.indentation_s[0]

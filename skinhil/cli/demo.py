@@ -26,6 +26,7 @@ from skinhil.cli.listen import LivePrinter, class_names, print_summary, summary
 from skinhil.cli.options import DECODE_SNR_DB, snr_value
 from skinhil.cli.train import print_report
 from skinhil.errors import ConfigError
+from skinhil.model.skin import SkinParams
 from skinhil.model.timeline import DEFAULT_REST_S
 from skinhil.output_files import atomic_path
 from skinhil.receiver import Receiver
@@ -132,7 +133,8 @@ def run(args: argparse.Namespace) -> int:
     receiver = Receiver(link, decoder)
     if not args.quiet:
         receiver.add_listener(LivePrinter(receiver, False, names))
-    print(f"board: {' '.join(cmd[1:])}\nreceiver: {link.name}, model {model_path}", flush=True)
+    print(f"board: {' '.join(cmd[1:])}; mechanics {SkinParams().describe_mechanics()}\n"
+          f"receiver: {link.name}, model {model_path}", flush=True)
     t_link = time.monotonic()
     try:
         status, out, err = run_against_board(receiver, cmd)

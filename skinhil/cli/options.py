@@ -7,8 +7,9 @@ import math
 
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import PAPER_SIZE, MeshSize, parse_size
+from skinhil.model.mechanics.readout import READOUTS
 from skinhil.model.neurons import NoiseParams
-from skinhil.model.skin import SkinModel, SkinParams
+from skinhil.model.skin import AUTO_GEOMETRIC_MAX_SPRINGS, SkinModel, SkinParams
 
 DECODE_SNR_DB = 10.0
 """Default noise level (dB) of ``skinhil train`` and ``skinhil demo``: the paper's operating
@@ -43,10 +44,19 @@ def add_size_option(parser: argparse.ArgumentParser) -> None:
 
 
 def add_model_options(parser: argparse.ArgumentParser, snr_default: float = math.inf) -> None:
-    """Add --size, --mechanics, --dt, --snr-db, --noise, --seed, --threads to ``parser``."""
+    """Add --size, --mechanics, --readout, --dt, --snr-db, --noise, --seed, --threads to
+    ``parser``."""
     add_size_option(parser)
-    parser.add_argument("--mechanics", choices=("linear", "geometric"), default="linear",
-                        help="skin mechanics (default: linear)")
+    parser.add_argument("--mechanics", choices=("auto", "linear", "geometric"), default="auto",
+                        help="skin mechanics: 'geometric' (true spring lengths; reproduces "
+                             "the paper), 'linear' (small-displacement stiffness matrix; "
+                             "cheaper) or 'auto', geometric up to "
+                             f"{AUTO_GEOMETRIC_MAX_SPRINGS} springs (10x10) and linear above, "
+                             "where geometric would not keep real time (default: auto)")
+    parser.add_argument("--readout", choices=READOUTS, default="length",
+                        help="what each spring reports: 'length', k x its length change "
+                             "(default), or 'axial', the small-displacement projection "
+                             "k e.(q_j - q_i)")
     parser.add_argument("--dt", dest="dt_s", type=float, default=1e-4, metavar="SECONDS",
                         help="simulation step in seconds (default: 1e-4)")
     parser.add_argument("--snr-db", type=snr_value, default=snr_default, metavar="DB",
@@ -72,4 +82,5 @@ def model_from_args(args: argparse.Namespace) -> SkinModel:
     """The skin model selected by :func:`add_model_options`' options."""
     if not (math.isfinite(args.dt_s) and args.dt_s > 0):
         raise ConfigError(f"--dt must be a positive number of seconds, got {args.dt_s!r}")
-    return SkinModel(SkinParams(mechanics=args.mechanics, size=args.size))
+    return SkinModel(SkinParams(mechanics=args.mechanics, readout=args.readout,
+                                size=args.size))

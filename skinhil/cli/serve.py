@@ -88,6 +88,7 @@ def _config(args: argparse.Namespace) -> BoardConfig:
                        status_period_s=args.status_period_s, snr_db=args.snr_db,
                        noise=noise_from_args(args),
                        seed=args.seed, board_id=args.board_id, mechanics=args.mechanics,
+                       readout=args.readout,
                        size=args.size, threads=args.threads, schedule_mode=mode, rest_s=args.rest_s,
                        start_running=not args.stopped, reconnect=args.reconnect,
                        spin_s=REALTIME_SPIN_S if args.realtime else 0.0).check()
@@ -162,7 +163,8 @@ def run(args: argparse.Namespace) -> int:
         model = board.sensor.model
         print(f"skinhil serve: board {args.board_id} on {where}; skin {format_size(model.size)}"
               f" ({model.n_springs} channels), model on {board.config.threads} thread"
-              f"{'s' if board.config.threads > 1 else ''}; Ctrl-C stops",
+              f"{'s' if board.config.threads > 1 else ''}; mechanics "
+              f"{model.params.describe_mechanics()}; Ctrl-C stops",
               file=sys.stderr, flush=True)
     try:
         summary = board.run(args.duration_s, stop,

@@ -85,7 +85,8 @@ def run(args: argparse.Namespace) -> int:
     markers = np.array([(e.onset_s, e.end_s, e.stimulus_id) for e in schedule.entries],
                        dtype=[("onset_s", "<f8"), ("end_s", "<f8"), ("stimulus_id", "<i4")])
     meta = {"dt_s": args.dt_s, "snr_db": args.snr_db, "noise": args.noise, "seed": args.seed,
-            "mechanics": args.mechanics, "size": list(model.size),
+            "mechanics": model.params.dynamics, "readout": model.params.readout,
+            "size": list(model.size),
             "duration_s": n_steps * args.dt_s,
             "stimuli": [e.stimulus.name for e in schedule.entries],
             "params": {k: v for k, v in vars(model.params).items()}}

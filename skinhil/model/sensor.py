@@ -25,7 +25,7 @@ from skinhil.errors import ConfigError
 from skinhil.events import EVENT_DTYPE
 from skinhil.model.geometry import format_size
 from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, LeapfrogOperands, leapfrog_kernel
-from skinhil.model.mechanics.linear import LinearMechanics, _advance_modal_kernel
+from skinhil.model.mechanics.linear import LinearMechanics, ModalOperands, _advance_modal_kernel
 from skinhil.model.neurons import (
     IzhikevichParams,
     KernelOperands,
@@ -40,42 +40,28 @@ from skinhil.model.stimuli import Schedule, ScheduleOperands, add_schedule_force
 
 @numba.njit(cache=True)
 def _modal_sensor_kernel(forces: np.ndarray, springs: np.ndarray, spikes: np.ndarray,
-                         dt_ms: float, phi: np.ndarray, phi_t: np.ndarray, mad: np.ndarray,
-                         mbd: np.ndarray, ke: np.ndarray, ii: np.ndarray, jj: np.ndarray,
-                         dofs: np.ndarray, eta: np.ndarray, v: np.ndarray, u: np.ndarray,
-                         a: float, b: float, c: float, d: float, gain: float, v_peak: float,
-                         measured: bool, noise_var: float, ref_step_ms: float,
-                         rng: np.ndarray, blowups: np.ndarray) -> None:  # pragma: no cover
-    # forces (n, 77, 3) N → springs (n, 338) N → spikes (n, 338) over steps of dt_ms (ms);
-    # phi..eta are LinearMechanics.modal_operands, v..blowups NeuronPopulation.kernel_operands()
-    _advance_modal_kernel(forces, springs, phi, phi_t, mad, mbd, ke, ii, jj, dofs, eta)
+                         dt_s: float, mechanics: ModalOperands,
+                         neurons: KernelOperands) -> None:  # pragma: no cover - compiled
+    # forces (n, n_masses, 3) N → springs (n, n_springs) N → spikes over steps of dt_s (s);
+    # mechanics is LinearMechanics.modal_operands, neurons NeuronPopulation.kernel_operands()
+    _advance_modal_kernel(forces, springs, *mechanics)
     n_steps, n = springs.shape
-    _izhikevich_kernel(springs.reshape(n_steps, 1, n), dt_ms, spikes.reshape(n_steps, 1, n),
-                       v, u, a, b, c, d, gain, v_peak, measured, noise_var, ref_step_ms, rng,
-                       blowups)
+    _izhikevich_kernel(springs.reshape(n_steps, 1, n), dt_s * 1e3,
+                       spikes.reshape(n_steps, 1, n), *neurons)
 
 
 @numba.njit(cache=True)
 def _scheduled_modal_sensor_kernel(
         first_step: int, dt_s: float, t_offset_s: float, n_masses: int, springs: np.ndarray,
-        spikes: np.ndarray, starts: np.ndarray, onsets: np.ndarray, ends: np.ndarray,
-        which: np.ndarray, stim_onsets: np.ndarray, stim_ends: np.ndarray, taus: np.ndarray,
-        pushed_ptr: np.ndarray, pushed: np.ndarray, peaks: np.ndarray, phi: np.ndarray,
-        phi_t: np.ndarray, mad: np.ndarray, mbd: np.ndarray, ke: np.ndarray, ii: np.ndarray,
-        jj: np.ndarray, dofs: np.ndarray, eta: np.ndarray, v: np.ndarray, u: np.ndarray,
-        a: float, b: float, c: float, d: float, gain: float, v_peak: float, measured: bool,
-        noise_var: float, ref_step_ms: float, rng: np.ndarray,
-        blowups: np.ndarray) -> None:  # pragma: no cover - compiled
+        spikes: np.ndarray, schedule: ScheduleOperands, mechanics: ModalOperands,
+        neurons: KernelOperands) -> None:  # pragma: no cover - compiled
     # the schedule's forces (N) for steps first_step.. of dt_s (s), schedule time 0 at
-    # t_offset_s (s), then _modal_sensor_kernel; starts..peaks are Schedule.kernel_operands
+    # t_offset_s (s), then _modal_sensor_kernel; schedule is Schedule.kernel_operands
     n_steps = springs.shape[0]
     t = (first_step + np.arange(n_steps)) * dt_s - t_offset_s
     forces = np.zeros((n_steps, n_masses, 3))
-    add_schedule_forces(forces, t, starts, onsets, ends, which, stim_onsets, stim_ends, taus,
-                        pushed_ptr, pushed, peaks)
-    _modal_sensor_kernel(forces, springs, spikes, dt_s * 1e3, phi, phi_t, mad, mbd, ke, ii,
-                         jj, dofs, eta, v, u, a, b, c, d, gain, v_peak, measured, noise_var,
-                         ref_step_ms, rng, blowups)
+    add_schedule_forces(forces, t, *schedule)
+    _modal_sensor_kernel(forces, springs, spikes, dt_s, mechanics, neurons)
 
 
 @numba.njit(cache=True)
@@ -172,8 +158,8 @@ class SkinSensor:
         assert self._modal is not None
         forces = np.ascontiguousarray(forces_n, dtype=np.float64)
         springs, spikes = self._outputs(forces.shape[0])
-        _modal_sensor_kernel(forces, springs, spikes, self.dt_s * 1e3,
-                             *(self._modal + self.neurons.kernel_operands()))
+        _modal_sensor_kernel(forces, springs, spikes, self.dt_s, self._modal,
+                             self.neurons.kernel_operands())
         return springs, spikes
 
     def advance_schedule(self, schedule: Schedule, n_steps: int,
@@ -193,9 +179,10 @@ class SkinSensor:
                 self._leapfrog.operands, self.neurons.kernel_operands())
         else:
             assert self._modal is not None
-            operands = schedule.kernel_operands + self._modal + self.neurons.kernel_operands()
             _scheduled_modal_sensor_kernel(self.step_index, self.dt_s, float(t_offset_s),
-                                           self.model.n_masses, springs, spikes, *operands)
+                                           self.model.n_masses, springs, spikes,
+                                           schedule.kernel_operands, self._modal,
+                                           self.neurons.kernel_operands())
         self.step_index += n_steps
         return springs, spikes
 

@@ -51,18 +51,30 @@ from typing import Literal, Protocol
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.model.geometry import PAPER_SIZE, MeshSize, build_mesh, check_size, format_size
+from skinhil.model.geometry import (
+    PAPER_SIZE,
+    MeshSize,
+    build_mesh,
+    check_size,
+    format_size,
+    spring_count,
+)
 from skinhil.model.mechanics.geometric import GeometricMechanics, max_stable_dt
 from skinhil.model.mechanics.leapfrog import LeapfrogMechanics
 from skinhil.model.mechanics.linear import LinearMechanics
+from skinhil.model.mechanics.readout import READOUTS, Readout
 from skinhil.model.stimuli import Schedule, Stimulus
 
-Mechanics = Literal["linear", "geometric"]
+Mechanics = Literal["auto", "linear", "geometric"]
+Dynamics = Literal["linear", "geometric"]
 LinearStepper = Literal["auto", "exact", "leapfrog"]
 
 INPUT_BLOCK_STEPS = 1000
 """Steps of input forces built at a time by :meth:`SkinModel.simulate_many` (bounded memory
 at any mesh size)."""
+AUTO_GEOMETRIC_MAX_SPRINGS = 1210
+"""``mechanics="auto"``: the geometric mechanics up to this many springs (a 10x10 top layer),
+the linear one above (module docstring)."""
 EXACT_MAX_FREE_DOFS = 200
 """Above this many free degrees of freedom the linear mechanics is stepped by the leapfrog
 (``linear_stepper="auto"``, module docstring); 6x6 has 75, 8x8 183, 9x9 258."""
@@ -83,6 +95,10 @@ class SkinParams:
     """Top layer (rows, cols) in masses; the layers below follow the pyramid rule."""
     linear_stepper: LinearStepper = "auto"
     """How the linear mechanics is stepped (module docstring)."""
+    readout: Readout = "length"
+    """What each spring reports, in both mechanics: ``"length"``, ``k·(|L0·e + q_j − q_i| −
+    L0)`` (N), or ``"axial"``, its small-displacement limit ``k·eᵀ(q_j − q_i)``
+    (:mod:`skinhil.model.mechanics.readout`)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "size", check_size(self.size))
@@ -98,9 +114,31 @@ class SkinParams:
             value = getattr(self, name)
             if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
                 raise ConfigError(f"SkinParams.{name} must be a finite number >= 0, got {value!r}")
-        if self.mechanics not in ("linear", "geometric"):
-            raise ConfigError(f"SkinParams.mechanics must be 'linear' or 'geometric', "
-                              f"got {self.mechanics!r}")
+        if self.readout not in READOUTS:
+            raise ConfigError(f"SkinParams.readout must be 'length' or 'axial', "
+                              f"got {self.readout!r}")
+        if self.mechanics not in ("auto", "linear", "geometric"):
+            raise ConfigError(f"SkinParams.mechanics must be 'auto', 'linear' or "
+                              f"'geometric', got {self.mechanics!r}")
+
+    @property
+    def dynamics(self) -> Dynamics:
+        """The mechanics that steps this skin: ``mechanics`` itself, or for ``"auto"`` the
+        geometric one up to :data:`AUTO_GEOMETRIC_MAX_SPRINGS` springs and the linear one
+        above (module docstring)."""
+        if self.mechanics != "auto":
+            return self.mechanics
+        return ("geometric" if spring_count(self.size) <= AUTO_GEOMETRIC_MAX_SPRINGS
+                else "linear")
+
+    def describe_mechanics(self) -> str:
+        """One line for banners: the mechanics, how ``auto`` chose it, and the readout."""
+        how: str = self.dynamics
+        if self.mechanics == "auto":
+            rule = (f"auto: geometric up to {AUTO_GEOMETRIC_MAX_SPRINGS} springs, linear above; "
+                    f"{spring_count(self.size)} here")
+            how = f"{how} ({rule})"
+        return f"{how}, {self.readout} readout"
 
 
 class SkinStepper(Protocol):
@@ -114,6 +152,10 @@ class SkinStepper(Protocol):
     def advance(self, forces_n: np.ndarray) -> np.ndarray:
         """(n, n_masses, 3) external forces (N) held per step → (n, n_springs) spring forces
         (N)."""
+        ...
+
+    def displacement_m(self) -> np.ndarray:
+        """Every mass's displacement from rest now (n_masses, 3) m; fixed masses 0."""
         ...
 
 
@@ -147,7 +189,7 @@ class SkinModel:
     def max_dt_s(self) -> float:
         """Largest step (s) the chosen mechanics accepts (inf for the linear mechanics: exact
         ZOH, or leapfrog substeps chosen for stability)."""
-        if self.params.mechanics == "linear":
+        if self.params.dynamics == "linear":
             return math.inf
         p = self.params
         return max_stable_dt(self.mesh, p.mass_kg, p.stiffness_n_per_m, p.damping_n_s_per_m,
@@ -165,10 +207,10 @@ class SkinModel:
                 "mechanics='linear'")
         p = self.params
         cls: type[LinearMechanics | LeapfrogMechanics | GeometricMechanics] = (
-            GeometricMechanics if p.mechanics == "geometric" else
+            GeometricMechanics if p.dynamics == "geometric" else
             LinearMechanics if self.linear_regime == "exact" else LeapfrogMechanics)
         return cls(self.mesh, p.mass_kg, p.stiffness_n_per_m, p.damping_n_s_per_m,
-                   p.tension_n, float(dt_s))
+                   p.tension_n, float(dt_s), p.readout)
 
     def check_stimulus(self, stimulus: Stimulus) -> None:
         """:class:`ConfigError` unless ``stimulus`` is defined on this size and pushes only

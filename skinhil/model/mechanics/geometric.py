@@ -17,7 +17,10 @@ damping the energy error is O(dt⁴) too. Explicit, so ``dt`` must resolve the f
 any configuration the mesh can take: :func:`max_stable_dt` gives that bound and the model
 refuses larger steps.
 
-The sensor signal is ``k (L − L0)`` (N): Hooke's force of the spring alone, without ``T``.
+The sensor signal is ``k (L − L0)`` (N): Hooke's force of the spring alone, without ``T``
+(the length readout); ``readout="axial"`` reports ``k e0ᵀ(q_j − q_i)`` instead, with ``e0`` the
+rest direction and ``q`` the displacements from rest, the small-displacement form the linear
+mechanics can also report (:mod:`skinhil.model.mechanics.readout`, which computes both).
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ import numba
 import numpy as np
 
 from skinhil.model.geometry import Mesh
+from skinhil.model.mechanics.readout import Readout, spring_signal
 
 RK4_STABILITY_RADIUS = 2.5
 """|λ|·dt bound used for RK4 (its real-axis limit is 2.785, imaginary-axis 2.828)."""
@@ -71,8 +75,9 @@ def _spring_forces(p: np.ndarray, v: np.ndarray, springs: np.ndarray, rest: np.n
 @numba.njit(cache=True, fastmath=True, nogil=True)
 def _rk4_kernel(p: np.ndarray, v: np.ndarray, springs: np.ndarray, rest: np.ndarray,
                 k: float, c: float, t: float, preload: np.ndarray, free: np.ndarray,
-                inv_m: float, dt: float, f_ext: np.ndarray,
-                out: np.ndarray) -> None:  # pragma: no cover - compiled
+                inv_m: float, dt: float, f_ext: np.ndarray, out: np.ndarray,
+                rest_p: np.ndarray, ke: np.ndarray,
+                length: bool) -> None:  # pragma: no cover - compiled
     n = p.shape[0]
     fbuf = np.empty((n, 3))
     kp = np.zeros((4, n, 3))
@@ -81,8 +86,13 @@ def _rk4_kernel(p: np.ndarray, v: np.ndarray, springs: np.ndarray, rest: np.ndar
     vs = v.copy()
     weights = (0.5, 0.5, 1.0)
     for step in range(f_ext.shape[0]):
-        for s in range(springs.shape[0]):
-            out[step, s] = k * (_spring_vector(p, springs, s)[3] - rest[s])
+        for s in range(springs.shape[0]):  # the readout of d = q_j − q_i, q = p − rest_p
+            i = springs[s, 0]
+            j = springs[s, 1]
+            out[step, s] = spring_signal(
+                ke[s, 0], ke[s, 1], ke[s, 2], p[j, 0] - p[i, 0] - (rest_p[j, 0] - rest_p[i, 0]),
+                p[j, 1] - p[i, 1] - (rest_p[j, 1] - rest_p[i, 1]),
+                p[j, 2] - p[i, 2] - (rest_p[j, 2] - rest_p[i, 2]), k, rest[s], length)
         for stage in range(4):
             if stage == 0:
                 ps[:] = p
@@ -131,12 +141,16 @@ class GeometricMechanics:
     """RK4 stepper of the geometric mechanics at a fixed ``dt_s`` (see module docstring)."""
 
     def __init__(self, mesh: Mesh, mass_kg: float, stiffness_n_per_m: float,
-                 damping_n_s_per_m: float, tension_n: float, dt_s: float) -> None:
+                 damping_n_s_per_m: float, tension_n: float, dt_s: float,
+                 readout: Readout = "length") -> None:
         self.mesh = mesh
+        self.readout = readout
+        """What each spring reports (:mod:`skinhil.model.mechanics.readout`)."""
         self.rest_positions = mesh.positions.copy()
         self.springs = np.ascontiguousarray(mesh.springs)
         d = mesh.positions[mesh.springs[:, 1]] - mesh.positions[mesh.springs[:, 0]]
         self.rest_lengths = np.linalg.norm(d, axis=1)
+        self.ke = stiffness_n_per_m * d / self.rest_lengths[:, None]
         self.k, self.c, self.t = stiffness_n_per_m, damping_n_s_per_m, tension_n
         self.inv_m = 1.0 / mass_kg
         self.mass_kg = mass_kg
@@ -153,6 +167,10 @@ class GeometricMechanics:
         self.p[:] = self.rest_positions
         self.v[:] = 0.0
 
+    def displacement_m(self) -> np.ndarray:
+        """Every mass's displacement from rest now (n_masses, 3) m; fixed masses 0."""
+        return self.p - self.rest_positions
+
     def advance(self, forces_n: np.ndarray) -> np.ndarray:
         """Step ``len(forces_n)`` steps; ``forces_n`` is (n, 77, 3) N; returns (n, 338) N.
 
@@ -162,7 +180,8 @@ class GeometricMechanics:
         f_ext = np.ascontiguousarray(forces_n, dtype=np.float64)
         out = np.empty((f_ext.shape[0], self.springs.shape[0]))
         _rk4_kernel(self.p, self.v, self.springs, self.rest_lengths, self.k, self.c, self.t,
-                    self.preload, self.free, self.inv_m, self.dt_s, f_ext, out)
+                    self.preload, self.free, self.inv_m, self.dt_s, f_ext, out,
+                    self.rest_positions, self.ke, self.readout == "length")
         return out
 
     def energy_j(self) -> float:

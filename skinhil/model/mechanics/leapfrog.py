@@ -39,8 +39,11 @@ substeps ``h`` that keep ``γ·h + (ω·h)²/4 ≤ 0.9`` and, for accuracy, ``ω
 rad/s and γ ≈ 4,200 /s at every size: one substep at dt = 0.1 ms; a baseline tension of 0.5 N
 (ω ≈ 7,600 rad/s) takes 4. The cost per step grows with the substeps.
 
-The sensor signal of spring ``s`` is ``k eᵀ(q_j − q_i)`` (N) at the start of each step, as in
-the exact stepper.
+The sensor signal of spring ``s`` at the start of each step is its length change
+``k (|L0 e + q_j − q_i| − L0)`` (N) or, with ``readout="axial"``, ``k eᵀ(q_j − q_i)``
+(:mod:`skinhil.model.mechanics.readout`), as in the exact stepper: computed in the run loop from
+the displacements it reads anyway, with the run's rest length a scalar (the springs of a run
+share it), so the loop stays vectorised.
 """
 
 from __future__ import annotations
@@ -53,6 +56,7 @@ from scipy.sparse.linalg import eigsh
 
 from skinhil.model.geometry import Mesh
 from skinhil.model.mechanics.linear import assemble, free_block, spring_frames
+from skinhil.model.mechanics.readout import Readout, spring_signal
 
 STABILITY_BOUND = 0.9
 """Substeps are chosen so that ``γ·h + (ω·h)²/4`` stays below this (the scheme's limit is 1)."""
@@ -70,11 +74,12 @@ direction (the rest positions of a regular mesh give the same direction to withi
 RUN_FIELDS = 5
 """Columns of a run table: first spring, spring stride, first mass i, first mass j, length."""
 
-LeapfrogOperands = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, float,
-                         np.ndarray, float, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                         np.ndarray, np.ndarray]
-"""``LeapfrogMechanics.operands``: the run table, each run's unit vector e and T/L, the
-springs between fixed masses, k, c, the moving masses as (first, count) ranges, 1/m, then
+LeapfrogOperands = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool,
+                         float, float, np.ndarray, float, np.ndarray, np.ndarray, np.ndarray,
+                         np.ndarray, np.ndarray, np.ndarray]
+"""``LeapfrogMechanics.operands``: the run table, each run's unit vector e, T/L and rest
+length, the springs between fixed masses, whether the readout is the length change, k, c,
+the moving masses as (first, count) ranges, 1/m, then
 the state q, v, w (velocity at the step start), f_prev, and scratch: acc (3, n_masses) and
 (4, longest run); arrays updated in place, the state stored by component (3, n_masses)."""
 
@@ -91,18 +96,18 @@ def moving_ranges(fixed: np.ndarray) -> np.ndarray:
     return np.stack([free[starts], counts], axis=1).astype(np.int64)
 
 
-def spring_runs(springs: np.ndarray, e: np.ndarray,
-                t_over_l: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def spring_runs(springs: np.ndarray, e: np.ndarray, t_over_l: np.ndarray,
+                rest: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Group the springs into runs for :func:`leapfrog_kernel`: spring ``s0 + t·ds`` of a
     run joins masses ``i0 + t`` and ``j0 + t`` (t = 0 .. length − 1) along one direction
-    ``e`` with one ``T/L``. On a grid the springs of one kind along a row (and the column
-    springs of a whole layer) form one run, so the kernel reads the masses of a run as
-    contiguous slices, which the compiler turns into vector instructions, and scatters the
-    forces the same way. Any spring list works: a spring with no such neighbour is a run of
-    one.
+    ``e`` with one ``T/L`` and one rest length (m). On a grid the springs of one kind along
+    a row (and the column springs of a whole layer) form one run, so the kernel reads the
+    masses of a run as contiguous slices, which the compiler turns into vector instructions,
+    and scatters the forces the same way. Any spring list works: a spring with no such
+    neighbour is a run of one.
 
-    Returns the (n_runs, 5) int64 table (s0, ds, i0, j0, length), each run's e (n_runs, 3)
-    and T/L (n_runs,) in N/m.
+    Returns the (n_runs, 5) int64 table (s0, ds, i0, j0, length), each run's e (n_runs, 3),
+    T/L (n_runs,) in N/m and rest length (n_runs,) in m.
     """
     where = {(int(i), int(j)): s for s, (i, j) in enumerate(springs)}
     taken = np.zeros(len(springs), dtype=bool)
@@ -116,7 +121,8 @@ def spring_runs(springs: np.ndarray, e: np.ndarray,
             nxt = where.get((int(i) + length, int(j) + length))
             if (nxt is None or taken[nxt] or nxt <= last or (stride and nxt - last != stride)
                     or np.abs(e[nxt] - e[s]).max() > SAME_DIRECTION
-                    or abs(t_over_l[nxt] - t_over_l[s]) > SAME_DIRECTION * abs(t_over_l[s])):
+                    or abs(t_over_l[nxt] - t_over_l[s]) > SAME_DIRECTION * abs(t_over_l[s])
+                    or abs(rest[nxt] - rest[s]) > SAME_DIRECTION * rest[s]):
                 break
             stride, last = nxt - last, nxt
             taken[nxt] = True
@@ -124,13 +130,15 @@ def spring_runs(springs: np.ndarray, e: np.ndarray,
         runs.append((s, stride or 1, int(i), int(j), length))
     table = np.array(runs, dtype=np.int64).reshape(-1, RUN_FIELDS)
     first = table[:, 0]
-    return table, np.ascontiguousarray(e[first]), np.ascontiguousarray(t_over_l[first])
+    return (table, np.ascontiguousarray(e[first]), np.ascontiguousarray(t_over_l[first]),
+            np.ascontiguousarray(rest[first]))
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
 def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: int,
                     runs: np.ndarray, run_e: np.ndarray, run_tl: np.ndarray,
-                    still: np.ndarray, k: float, c: float, moving: np.ndarray,
+                    run_l0: np.ndarray, still: np.ndarray, length: bool, k: float, c: float,
+                    moving: np.ndarray,
                     inv_m: float, q: np.ndarray, v: np.ndarray, w: np.ndarray,
                     f_prev: np.ndarray, acc: np.ndarray,
                     scratch: np.ndarray) -> None:  # pragma: no cover - compiled
@@ -141,7 +149,7 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
     qx, qy, qz = q[0], q[1], q[2]
     wx, wy, wz = w[0], w[1], w[2]
     gx, gy, gz = acc[0], acc[1], acc[2]
-    ke_s, fx_s, fy_s, fz_s = scratch[0], scratch[1], scratch[2], scratch[3]
+    sig_s, fx_s, fy_s, fz_s = scratch[0], scratch[1], scratch[2], scratch[3]
     n_masses = q.shape[1]
     # the input on the moving masses, contiguous per component (no other is read)
     by_component = np.empty((forces.shape[0], 3, n_masses))
@@ -160,20 +168,20 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
             for r in range(runs.shape[0]):
                 s0, ds, i0, j0, n = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3], runs[r, 4]
                 ex, ey, ez, tl = run_e[r, 0], run_e[r, 1], run_e[r, 2], run_tl[r]
+                kex, key, kez, l0 = k * ex, k * ey, k * ez, run_l0[r]
                 qxi, qyi, qzi = qx[i0:i0 + n], qy[i0:i0 + n], qz[i0:i0 + n]
                 qxj, qyj, qzj = qx[j0:j0 + n], qy[j0:j0 + n], qz[j0:j0 + n]
                 wxi, wyi, wzi = wx[i0:i0 + n], wy[i0:i0 + n], wz[i0:i0 + n]
                 wxj, wyj, wzj = wx[j0:j0 + n], wy[j0:j0 + n], wz[j0:j0 + n]
-                for t in range(n):  # extension, its rate along e, the spring's force
+                for t in range(n):  # extension, its rate along e, the spring's force, readout
                     dx = qxj[t] - qxi[t]
                     dy = qyj[t] - qyi[t]
                     dz = qzj[t] - qzi[t]
                     ext = ex * dx + ey * dy + ez * dz
                     rate = (ex * (wxj[t] - wxi[t]) + ey * (wyj[t] - wyi[t])
                             + ez * (wzj[t] - wzi[t]))
-                    ke = k * ext
-                    ke_s[t] = ke
-                    ax = ke + c * rate - tl * ext  # axial, along e; tension across
+                    sig_s[t] = spring_signal(kex, key, kez, dx, dy, dz, k, l0, length)
+                    ax = k * ext + c * rate - tl * ext  # axial, along e; tension across
                     fx_s[t] = ax * ex + tl * dx
                     fy_s[t] = ax * ey + tl * dy
                     fz_s[t] = ax * ez + tl * dz
@@ -181,10 +189,10 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
                     if ds == 1:  # a slice: the compiler vectorises the copy
                         contiguous = row[s0:s0 + n]
                         for t in range(n):
-                            contiguous[t] = ke_s[t]
+                            contiguous[t] = sig_s[t]
                     else:
                         for t in range(n):
-                            row[s0 + ds * t] = ke_s[t]
+                            row[s0 + ds * t] = sig_s[t]
                 # the spring's force (axial along e, tension across) on mass i, and minus it
                 # on mass j: two loops, since the masses i of a run may be its masses j
                 gxi, gyi, gzi = gx[i0:i0 + n], gy[i0:i0 + n], gz[i0:i0 + n]
@@ -244,8 +252,11 @@ class LeapfrogMechanics:
     """Leapfrog stepper of the linear mechanics at a fixed ``dt_s`` (see module docstring)."""
 
     def __init__(self, mesh: Mesh, mass_kg: float, stiffness_n_per_m: float,
-                 damping_n_s_per_m: float, tension_n: float, dt_s: float) -> None:
+                 damping_n_s_per_m: float, tension_n: float, dt_s: float,
+                 readout: Readout = "length") -> None:
         e, length = spring_frames(mesh)
+        self.readout = readout
+        """What each spring reports (:mod:`skinhil.model.mechanics.readout`)."""
         n = mesh.positions.shape[0]
         self.dt_s = dt_s
         self.omega_max, self.gamma_max = fastest_rates(mesh, mass_kg, stiffness_n_per_m,
@@ -253,13 +264,13 @@ class LeapfrogMechanics:
         self.substeps = substeps_for(self.omega_max, self.gamma_max, dt_s)
         self.n_masses = n
         self.n_springs = mesh.springs.shape[0]
-        runs, run_e, run_tl = spring_runs(mesh.springs, e, tension_n / length)
+        runs, run_e, run_tl, run_l0 = spring_runs(mesh.springs, e, tension_n / length, length)
         # a run between fixed masses only is never stretched: its springs' force stays 0
         live = np.array([not (mesh.fixed[i0:i0 + n].all() and mesh.fixed[j0:j0 + n].all())
                          for _, _, i0, j0, n in runs], dtype=bool)
         still = np.concatenate([s0 + ds * np.arange(n) for s0, ds, _, _, n in runs[~live]]
                                + [np.zeros(0, dtype=np.int64)]).astype(np.int64)
-        runs, run_e, run_tl = runs[live], run_e[live], run_tl[live]
+        runs, run_e, run_tl, run_l0 = runs[live], run_e[live], run_tl[live], run_l0[live]
         state = np.zeros((4, 3, n))
         self.q, self.v, self.w, self.f_prev = (s.T for s in state)
         """Displacement (m), velocity (m/s) at the half step and at the step start, and the
@@ -267,13 +278,18 @@ class LeapfrogMechanics:
         self._state = state
         scratch = np.zeros((4, int(runs[:, 4].max(initial=1))))
         self.operands: LeapfrogOperands = (
-            runs, run_e, run_tl, still, float(stiffness_n_per_m), float(damping_n_s_per_m),
+            runs, run_e, run_tl, run_l0, still, readout == "length", float(stiffness_n_per_m),
+            float(damping_n_s_per_m),
             moving_ranges(mesh.fixed), 1.0 / mass_kg, state[0], state[1], state[2], state[3],
             np.zeros((3, n)), scratch)
 
     def reset(self) -> None:
         """Back to rest: zero displacement, velocity and held input."""
         self._state[:] = 0.0
+
+    def displacement_m(self) -> np.ndarray:
+        """Every mass's displacement from rest now (n_masses, 3) m; fixed masses 0."""
+        return np.array(self.q)
 
     def advance(self, forces_n: np.ndarray) -> np.ndarray:
         """Step ``len(forces_n)`` steps; ``forces_n`` is (n, n_masses, 3) N; returns

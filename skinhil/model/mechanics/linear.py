@@ -12,8 +12,10 @@ Equations (paper eq. 5-8): ``M q'' + C q' + K q = f`` on the free degrees of fre
   ``expm([[A, B], [0, 0]]·dt) = [[Ad, Bd], [0, I]]``, so ``x[k+1] = Ad x[k] + Bd u[k]`` is exact
   for an input held constant over each step, at any ``dt``.
 
-The sensor signal of spring ``s`` between masses ``i`` and ``j`` is ``k e_sᵀ (q_j − q_i)`` (N),
-positive in tension.
+The sensor signal of spring ``s`` between masses ``i`` and ``j`` is its length change
+``k (|L0 e_s + q_j − q_i| − L0)`` (N, positive in tension) by default, or its small-displacement
+limit ``k e_sᵀ (q_j − q_i)`` (``readout="axial"``): :mod:`skinhil.model.mechanics.readout`,
+computed from the displacements inside the compiled step. The dynamics are the same for both.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from scipy import sparse
 from scipy.linalg import expm
 
 from skinhil.model.geometry import Mesh
+from skinhil.model.mechanics.readout import Readout, spring_signal
 
 
 def spring_frames(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
@@ -100,7 +103,7 @@ def zoh(a: np.ndarray, b: np.ndarray, dt_s: float) -> tuple[np.ndarray, np.ndarr
 
 def sensor_matrix(mesh: Mesh, stiffness_n_per_m: float) -> sparse.csr_array:
     """Sparse ``(n_springs, n_free_dofs)`` map (338 x 75 at 6x6) from free displacements (m)
-    to spring forces (N)."""
+    to the axial spring forces ``k eᵀ(q_j − q_i)`` (N): the ``"axial"`` readout, linear."""
     e, _ = spring_frames(mesh)
     n_masses = mesh.positions.shape[0]
     n_springs = mesh.springs.shape[0]
@@ -128,9 +131,10 @@ def spring_slots(mesh: Mesh, stiffness_n_per_m: float) -> tuple[np.ndarray, np.n
 
 
 ModalOperands = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                      np.ndarray, np.ndarray, np.ndarray]
+                      np.ndarray, np.ndarray, np.ndarray, float, np.ndarray, bool]
 """``LinearMechanics.modal_operands``: Φ, Φᵀ, per-mode Ad and Bd, k·e, the spring slots ii
-and jj, the free degrees of freedom, the modal state η."""
+and jj, the free degrees of freedom, the modal state η, then the readout's k (N/m), rest
+lengths (m) and whether it is the length change."""
 
 TINY = 1e-150
 """State components below this are flushed to zero: a decaying state would otherwise reach
@@ -139,13 +143,15 @@ subnormal numbers, which are ~100x slower on x86."""
 
 @numba.njit(inline="always", fastmath=True)
 def _spring_forces(ke: np.ndarray, ii: np.ndarray, jj: np.ndarray, q: np.ndarray,
-                   row: np.ndarray) -> None:  # pragma: no cover - compiled
-    # row[s] = k eᵀ(x_j − x_i) (N) from q, the free displacements (m) plus three zeros
+                   row: np.ndarray, k: float, rest: np.ndarray,
+                   length: bool) -> None:  # pragma: no cover - compiled
+    # row[s] = the readout of d = x_j − x_i (N) from q, the free displacements (m) plus
+    # three zeros
     for s in range(row.shape[0]):
         i = ii[s]
         j = jj[s]
-        row[s] = (ke[0, s] * (q[j] - q[i]) + ke[1, s] * (q[j + 1] - q[i + 1])
-                  + ke[2, s] * (q[j + 2] - q[i + 2]))
+        row[s] = spring_signal(ke[0, s], ke[1, s], ke[2, s], q[j] - q[i], q[j + 1] - q[i + 1],
+                               q[j + 2] - q[i + 2], k, rest[s], length)
 
 
 @numba.njit(inline="always", fastmath=True)
@@ -162,16 +168,17 @@ def _add_input(forces: np.ndarray, dofs: np.ndarray, table: np.ndarray,
 @numba.njit(cache=True, fastmath=True, nogil=True)
 def _advance_kernel(ad: np.ndarray, bd_t: np.ndarray, ke: np.ndarray, ii: np.ndarray,
                     jj: np.ndarray, x: np.ndarray, forces: np.ndarray, dofs: np.ndarray,
-                    out: np.ndarray) -> None:  # pragma: no cover - compiled
+                    out: np.ndarray, k: float, rest: np.ndarray,
+                    length: bool) -> None:  # pragma: no cover - compiled
     flat = forces.reshape(forces.shape[0], -1)
     n_state = x.shape[0]
     n = dofs.shape[0]
     q = np.zeros(n + 3)
-    for k in range(flat.shape[0]):
+    for step in range(flat.shape[0]):
         q[:n] = x[:n]
-        _spring_forces(ke, ii, jj, q, out[k])
+        _spring_forces(ke, ii, jj, q, out[step], k, rest, length)
         xn = ad @ x
-        _add_input(flat[k], dofs, bd_t, xn)
+        _add_input(flat[step], dofs, bd_t, xn)
         for i in range(n_state):
             x[i] = xn[i] if abs(xn[i]) > TINY else 0.0
 
@@ -180,22 +187,23 @@ def _advance_kernel(ad: np.ndarray, bd_t: np.ndarray, ke: np.ndarray, ii: np.nda
 def _advance_modal_kernel(forces: np.ndarray, out: np.ndarray, phi: np.ndarray,
                           phi_t: np.ndarray, mad: np.ndarray, mbd: np.ndarray, ke: np.ndarray,
                           ii: np.ndarray, jj: np.ndarray, dofs: np.ndarray,
-                          eta: np.ndarray) -> None:  # pragma: no cover - compiled
+                          eta: np.ndarray, k: float, rest: np.ndarray,
+                          length: bool) -> None:  # pragma: no cover - compiled
     # forces (n, 77, 3) N → out (n, 338) N; the rest are LinearMechanics.modal_operands
     flat = forces.reshape(forces.shape[0], -1)
     n_modes = eta.shape[1]
     g = np.empty(n_modes)
     q = np.zeros(n_modes + 3)
-    for k in range(flat.shape[0]):
+    for step in range(flat.shape[0]):
         # physical displacements q = Φ η (m), column by column
         q[:n_modes] = 0.0
         for m in range(n_modes):
             pos = eta[0, m]
             for i in range(n_modes):
                 q[i] += phi_t[m, i] * pos
-        _spring_forces(ke, ii, jj, q, out[k])
+        _spring_forces(ke, ii, jj, q, out[step], k, rest, length)
         g[:] = 0.0
-        _add_input(flat[k], dofs, phi, g)
+        _add_input(flat[step], dofs, phi, g)
         for m in range(n_modes):
             e0 = mad[0, m] * eta[0, m] + mad[1, m] * eta[1, m] + mbd[0, m] * g[m]
             e1 = mad[2, m] * eta[0, m] + mad[3, m] * eta[1, m] + mbd[1, m] * g[m]
@@ -236,9 +244,17 @@ class LinearMechanics:
     """
 
     def __init__(self, mesh: Mesh, mass_kg: float, stiffness_n_per_m: float,
-                 damping_n_s_per_m: float, tension_n: float, dt_s: float) -> None:
+                 damping_n_s_per_m: float, tension_n: float, dt_s: float,
+                 readout: Readout = "length") -> None:
         a, b = state_space(mesh, mass_kg, stiffness_n_per_m, damping_n_s_per_m, tension_n)
         self.a, self.b = a, b
+        self.readout = readout
+        """What each spring reports (:mod:`skinhil.model.mechanics.readout`)."""
+        self.k = float(stiffness_n_per_m)
+        self.rest = spring_frames(mesh)[1]
+        self.length_readout = readout == "length"
+        self.free = mesh.free
+        self.n_masses = mesh.positions.shape[0]
         self.cy = sensor_matrix(mesh, stiffness_n_per_m)
         self.ke, self.ii, self.jj = spring_slots(mesh, stiffness_n_per_m)
         self.dofs = free_dofs(mesh)
@@ -259,7 +275,8 @@ class LinearMechanics:
             self.phi_t = np.ascontiguousarray(self.phi.T)
             self.eta = np.zeros((2, n))
             self.modal_operands = (self.phi, self.phi_t, self.mad, self.mbd, self.ke, self.ii,
-                                   self.jj, self.dofs, self.eta)
+                                   self.jj, self.dofs, self.eta, self.k, self.rest,
+                                   self.length_readout)
 
     def reset(self) -> None:
         """Back to rest: zero displacement and velocity."""
@@ -273,6 +290,12 @@ class LinearMechanics:
             return np.concatenate([self.phi @ self.eta[0], self.phi @ self.eta[1]])
         return self.x.copy()
 
+    def displacement_m(self) -> np.ndarray:
+        """Every mass's displacement from rest now (n_masses, 3) m; fixed masses 0."""
+        q = np.zeros((self.n_masses, 3))
+        q[self.free] = self.state()[: self.dofs.size].reshape(-1, 3)
+        return q
+
     def advance(self, forces_n: np.ndarray) -> np.ndarray:
         """Step ``len(forces_n)`` steps; ``forces_n`` is (n, 77, 3) N; returns (n, 338) N.
 
@@ -285,5 +308,5 @@ class LinearMechanics:
             _advance_modal_kernel(forces, out, *self.modal_operands)
         else:
             _advance_kernel(self.ad, self.bd_t, self.ke, self.ii, self.jj, self.x, forces,
-                            self.dofs, out)
+                            self.dofs, out, self.k, self.rest, self.length_readout)
         return out
