@@ -14,7 +14,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
         "reproduce", help="regenerate the paper's figures and a report of its claims",
         description="Simulate, analyse and plot Figures 1E-F, 2A-C (and the tension axis), "
-                    "3A-F and 4A-G for the linear and the geometric mechanics, and write "
+                    "3A-F and 4A-G for the linear and the geometric mechanics, each with the "
+                    "length and the axial readout, and write "
                     "REPORT.md saying which claims of the paper the model reproduces (needs "
                     "matplotlib).")
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
@@ -55,6 +56,6 @@ def run(args: argparse.Namespace) -> int:
         from skinhil.reproduce.report import verdicts
 
         for v, _ in verdicts(r):
-            print(f"  {r.mechanics:9s} {v.key:4s} {'yes' if v.reproduced else 'NO ':3s}  "
+            print(f"  {r.label:16s} {v.key:4s} {'yes' if v.reproduced else 'NO ':3s}  "
                   f"{v.claim}")
     return 0

@@ -1,9 +1,11 @@
-"""Everything ``skinhil reproduce`` computes, for one mechanics, from documented defaults.
+"""Everything ``skinhil reproduce`` computes, for one mechanics and readout, from documented
+defaults.
 
 Nothing here is tuned to a figure: the model is :class:`skinhil.SkinParams` with its defaults
-(only ``mechanics`` changes), the stimuli are the built-in paper stimuli, and every analysis
-choice is the documented default of its module. The rules that pick what a figure shows are
-fixed here, before any run: the sensors of M15, the paper's "sensor #5", the operating SNR.
+(only ``mechanics`` and ``readout`` change), the stimuli are the built-in paper stimuli, and
+every analysis choice is the documented default of its module. The rules that pick what a
+figure shows are fixed here, before any run: the sensors of M15, the paper's "sensor #5", the
+operating SNR, and how far the damping grid is extended (:data:`EXTENSION_DECADES`).
 """
 
 from __future__ import annotations
@@ -25,11 +27,14 @@ from skinhil.analysis.decoding_snr import (
 from skinhil.analysis.information import InformationMeasures, measures_from_pcas, phase_pcas
 from skinhil.analysis.pca import PhasePCA
 from skinhil.analysis.phases import PhaseWindows
+from skinhil.analysis.regime import Deformation, largest_relative_displacement, readout_gap, scaled
 from skinhil.analysis.sweep import SweepResult, SweepSpec, log_values, run_sweep
 from skinhil.decoding import CVResult, FeatureSpec
-from skinhil.model.skin import Mechanics, SkinModel, SkinParams
+from skinhil.model.mechanics.readout import Readout
+from skinhil.model.skin import Dynamics, SkinModel, SkinParams
 from skinhil.model.stimuli import direction_conditions, paper_stimuli
 from skinhil.model.trials import simulate_trials
+from skinhil.reproduce.claims import edge_of_optimum
 
 logger = logging.getLogger(__name__)
 
@@ -47,6 +52,16 @@ FOCUS_CONDITION = 2
 """Figure 4B-C show direction condition 2 (0°, 0.5 N: the strongest along +x)."""
 FIGURE_TRIAL_S = 0.3
 """Length (s) of the trials shown in 4B-E: the 0.25 s indentation and 50 ms after it."""
+EXTENSION_DECADES = 0.5
+"""2B/2C: when the K-averaged nPC or SIR ratio peaks at an end of the damping grid, the grid is
+extended past that end by this many decades (at the grid's own log spacing) ..."""
+MAX_EXTENSIONS = 1
+"""... at most this many times per end (``ReproduceConfig.extensions``; half a decade: the
+geometric mechanics' cost per point grows with the damping, ~10 s a point at 1.6 N·s/m): an
+optimum still at the edge then is reported as none within the extended grid."""
+VALID_RATIO = 0.1
+"""The regime: the small-displacement model counts as valid while every spring's relative
+displacement |q_j − q_i| / L0 stays below this."""
 TENSION_N: tuple[float, ...] = (0.0, 0.005, 0.0158, 0.05, 0.158, 0.5)
 """Baseline tensions (N) of the tension sweep: none, then log-spaced 5 mN..0.5 N, whose
 transverse stiffness T/L on the 1 mm mesh (5..500 N/m) spans the stiffness sweep's range."""
@@ -75,12 +90,15 @@ class ReproduceConfig:
     workers: int | None = None
     scheduler: str | None = None
     progress: bool = True
+    extensions: int = MAX_EXTENSIONS
+    """How many times the damping grid may be extended per end for 2B/2C (--quick: 0)."""
 
     @classmethod
     def quick(cls, **kwargs: object) -> ReproduceConfig:
         """Small grids and few repeats: every figure in about a minute."""
         base = cls(sweep_linear=(5, 5), sweep_geometric=(3, 3), tension_linear=3,
-                   tension_geometric=1, decoding=DecodingSetup(reps=10, repeats=2))
+                   tension_geometric=1, decoding=DecodingSetup(reps=10, repeats=2),
+                   extensions=0)
         return replace(base, **kwargs)  # type: ignore[arg-type]
 
 
@@ -96,6 +114,7 @@ class MechanicsResults:
     """
 
     mechanics: str
+    readout: str
     responses: np.ndarray
     pca_ind: PhasePCA
     pca_post: PhasePCA
@@ -103,6 +122,9 @@ class MechanicsResults:
     focus_sensors: np.ndarray
     similarity: np.ndarray
     sweep: SweepResult
+    """The K x C sweep with its damping grid extended for 2B/2C (:func:`extended_sweep`)."""
+    sweep_base: SweepResult
+    """The same sweep on the first grid only (a decade either side of the defaults): 2A's."""
     tension_k: SweepResult
     tension_c: SweepResult
     snrs_db: tuple[float, ...]
@@ -114,6 +136,18 @@ class MechanicsResults:
     population_raster: np.ndarray
     sensor_trials: np.ndarray
     seconds: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def label(self) -> str:
+        """Mechanics and readout, as the report and the figures name the run."""
+        return f"{self.mechanics}/{self.readout}"
+
+    @property
+    def paper_sensor_spikes(self) -> np.ndarray:
+        """Mean spikes per trial of the paper's sensor in each of the 9 conditions at
+        :data:`FIGURE_SNR_DB` (the decoding's trials, over :data:`FIGURE_TRIAL_S`)."""
+        column = int(np.flatnonzero(self.focus_sensors == self.paper_sensor)[0])
+        return np.asarray(self.sensor_trials[..., column].sum(axis=2).mean(axis=1))
 
     @property
     def paper_sensor(self) -> int:
@@ -161,24 +195,97 @@ def figure_snr_index(snrs_db: tuple[float, ...]) -> int:
                           for s in snrs_db]))
 
 
-def _tension_sweeps(mechanics: Mechanics, n: int, config: ReproduceConfig
+def _tension_sweeps(mechanics: Dynamics, readout: Readout, n: int, config: ReproduceConfig
                     ) -> tuple[SweepResult, SweepResult]:
     """Tension x K at the default C, and tension x C at the default K."""
-    base = SkinParams()
+    base = SkinParams(readout=readout)
     full = SweepSpec.log_grid(n, n, mechanics=mechanics)
     specs = (SweepSpec(log_values(full.stiffness_n_per_m[0], full.stiffness_n_per_m[-1], n),
-                       (base.damping_n_s_per_m,), TENSION_N, mechanics),
+                       (base.damping_n_s_per_m,), TENSION_N, mechanics, base=base),
              SweepSpec((base.stiffness_n_per_m,),
                        log_values(full.damping_n_s_per_m[0], full.damping_n_s_per_m[-1], n),
-                       TENSION_N, mechanics))
+                       TENSION_N, mechanics, base=base))
     k_sweep, c_sweep = (run_sweep(s, workers=config.workers, scheduler=config.scheduler,
                                   progress=config.progress) for s in specs)
     return k_sweep, c_sweep
 
 
-def compute_mechanics(mechanics: Mechanics, config: ReproduceConfig) -> MechanicsResults:
-    """Run every analysis for one mechanics with default parameters."""
-    model = SkinModel(SkinParams(mechanics=mechanics))
+def _run(spec: SweepSpec, config: ReproduceConfig) -> SweepResult:
+    return run_sweep(spec, workers=config.workers, scheduler=config.scheduler,
+                     progress=config.progress)
+
+
+def extended_sweep(first: SweepResult, config: ReproduceConfig) -> SweepResult:
+    """``first`` with its damping grid extended, :data:`EXTENSION_DECADES` at a time (at most
+    ``config.extensions`` times per end), past every end at which the K-averaged nPC or SIR
+    ratio peaks (:func:`skinhil.reproduce.claims.edge_of_optimum`), at the grid's log spacing
+    or, if that is coarser, at :data:`EXTENSION_DECADES`."""
+    result = first
+    done = {"low": 0, "high": 0}
+    while True:
+        found = {edge_of_optimum(result.at(name)) for name in ("npc_ratio", "sir_ratio")}
+        edges = {e for e in found if e is not None and done[e] < config.extensions}
+        if not edges:
+            return result
+        for edge in sorted(edges):
+            c = result.spec.damping_n_s_per_m
+            step = min(c[1] / c[0] if len(c) > 1 else math.inf, 10 ** EXTENSION_DECADES)
+            n_new = max(1, round(EXTENSION_DECADES / math.log10(step)))
+            new = tuple(float(c[0] / step ** k) for k in range(n_new, 0, -1)) if edge == "low" \
+                else tuple(float(c[-1] * step ** k) for k in range(1, n_new + 1))
+            more = _run(replace(result.spec, damping_n_s_per_m=new), config)
+            parts = [more, result] if edge == "low" else [result, more]
+            spec = replace(result.spec, damping_n_s_per_m=parts[0].spec.damping_n_s_per_m
+                           + parts[1].spec.damping_n_s_per_m)
+            values = {k: np.concatenate([p.values[k] for p in parts], axis=2)
+                      for k in result.values}
+            result = SweepResult(spec, values, result.seconds + more.seconds)
+            done[edge] += 1
+            logger.info("damping grid extended at its %s end to %s", edge,
+                        spec.damping_n_s_per_m)
+
+
+@dataclass(frozen=True)
+class Regime:
+    """How large the deformation is at the default parameters, per mechanics: the largest
+    relative displacement per stimulus, and for the linear dynamics the force below which
+    the small-displacement model holds (:data:`VALID_RATIO`) and how far the readouts part
+    there and at the paper's force."""
+
+    per_stimulus: dict[str, dict[str, Deformation]]
+    """mechanics → stimulus name → its largest relative displacement."""
+    valid_force_n: float
+    """Force of the 0°, 0.5 N condition scaled down until the linear mesh's largest relative
+    displacement is :data:`VALID_RATIO` (N)."""
+    gap_at_valid: float
+    gap_at_paper: float
+    """max |length − axial| / max |length| of the linear dynamics at that force and at 0.5 N."""
+
+
+def compute_regime(dt_s: float) -> Regime:
+    """The regime at the default parameters: every paper stimulus (over the 0.5 s of the
+    analyses) and every Figure 4 condition (over :data:`FIGURE_TRIAL_S`), both mechanics."""
+    per: dict[str, dict[str, Deformation]] = {}
+    for mechanics in ("linear", "geometric"):
+        model = SkinModel(SkinParams(mechanics=mechanics))  # type: ignore[arg-type]
+        runs = [(s, 0.5) for s in paper_stimuli()]
+        runs += [(s, FIGURE_TRIAL_S) for s in direction_conditions()]
+        per[mechanics] = {s.name: largest_relative_displacement(model, s, d, dt_s)
+                          for s, d in runs}
+    linear = SkinModel(SkinParams(mechanics="linear"))
+    paper = direction_conditions()[FOCUS_CONDITION]
+    factor = VALID_RATIO / per["linear"][paper.name].ratio  # linear in the force
+    force = float(np.linalg.norm(next(iter(paper.forces.values()))))
+    return Regime(per, factor * force,
+                  readout_gap(linear, scaled(paper, factor), FIGURE_TRIAL_S, dt_s),
+                  readout_gap(linear, paper, FIGURE_TRIAL_S, dt_s))
+
+
+def compute_mechanics(mechanics: Dynamics, readout: Readout,
+                      config: ReproduceConfig) -> MechanicsResults:
+    """Run every analysis for one mechanics and readout with default parameters."""
+    base = SkinParams(mechanics=mechanics, readout=readout)
+    model = SkinModel(base)
     seconds: dict[str, float] = {}
     t0 = time.perf_counter()
     stimuli = paper_stimuli()
@@ -190,11 +297,12 @@ def compute_mechanics(mechanics: Mechanics, config: ReproduceConfig) -> Mechanic
     seconds["information"] = time.perf_counter() - t0
 
     grid = config.sweep_linear if mechanics == "linear" else config.sweep_geometric
-    sweep = run_sweep(SweepSpec.log_grid(*grid, mechanics=mechanics), workers=config.workers,
-                      scheduler=config.scheduler, progress=config.progress)
+    sweep_base = _run(replace(SweepSpec.log_grid(*grid, mechanics=mechanics), base=base),
+                      config)
+    sweep = extended_sweep(sweep_base, config)
     seconds["sweep"] = sweep.seconds
     n_t = config.tension_linear if mechanics == "linear" else config.tension_geometric
-    tension_k, tension_c = _tension_sweeps(mechanics, n_t, config)
+    tension_k, tension_c = _tension_sweeps(mechanics, readout, n_t, config)
     seconds["tension sweeps"] = tension_k.seconds + tension_c.seconds
 
     t0 = time.perf_counter()
@@ -217,8 +325,9 @@ def compute_mechanics(mechanics: Mechanics, config: ReproduceConfig) -> Mechanic
                                  dt_s=config.dt_s, snr_db=config.snrs_db[i_fig],
                                  seed=d.seed + len(config.snrs_db), model=model)[0, 0]
     seconds["rasters"] = time.perf_counter() - t0
-    logger.info("%s mechanics done: %s", mechanics, seconds)
+    logger.info("%s mechanics, %s readout done: %s", mechanics, readout, seconds)
     return MechanicsResults(
-        mechanics, responses, pca_ind, pca_post, measures_from_pcas(pca_ind, pca_post), focus,
-        similarity, sweep, tension_k, tension_c, tuple(config.snrs_db), d.spec, sets, decoding,
-        forces[:, :, focus], forces[FOCUS_CONDITION], population, sensor_trials, seconds)
+        mechanics, readout, responses, pca_ind, pca_post, measures_from_pcas(pca_ind, pca_post),
+        focus, similarity, sweep, sweep_base, tension_k, tension_c, tuple(config.snrs_db),
+        d.spec, sets, decoding, forces[:, :, focus], forces[FOCUS_CONDITION], population,
+        sensor_trials, seconds)

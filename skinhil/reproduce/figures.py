@@ -1,7 +1,7 @@
 """The PNG figures of ``skinhil reproduce`` (matplotlib, an optional extra, imported lazily).
 
-One file per figure group; every panel shows the linear and the geometric mechanics side by
-side where both apply. File names are listed in :data:`FIGURES`.
+One file per figure group; every panel shows each mechanics with each readout side by side
+where they apply. File names are listed in :data:`FIGURES`.
 """
 
 from __future__ import annotations
@@ -32,8 +32,9 @@ from skinhil.reproduce.compute import (
 FIGURES: dict[str, str] = {
     "fig1E_variance_explained.png": "1E: variance-explained curves per phase",
     "fig1F_information_measures.png": "1F: nPC99 and signal-information ratio per phase",
-    "fig2ABC_sweeps.png": "2A-C: area, nPC ratio, SIR ratio over stiffness x damping, with "
-                          "the tercile blocks and the best one outlined",
+    "fig2ABC_sweeps.png": "2A-C: area, nPC ratio, SIR ratio over stiffness x damping (the "
+                          "damping grid as extended for 2B/2C), with the terciles, 2A's "
+                          "extremes and 2B/2C's optimum marked",
     "fig2T_tension.png": "2, third axis: the measures over baseline tension x stiffness and "
                          "tension x damping",
     "fig3A-E_responses.png": "3A-E: forces at M15's sensors for the 5 inputs",
@@ -42,13 +43,19 @@ FIGURES: dict[str, str] = {
     "fig4B_forces.png": "4B: spring forces of all sensors, one condition",
     "fig4C_population_raster.png": "4C: spikes of all sensors, one trial at 10 dB",
     "fig4D_sensor_raster.png": "4D: sensor #5, 50 repetitions of each condition at 10 dB",
-    "fig4E_psp_linear.png": "4E: PSP traces of sensor #5 per condition (linear)",
-    "fig4E_psp_geometric.png": "4E: PSP traces of sensor #5 per condition (geometric)",
+    **{f"fig4E_psp_{m}_{r}.png": f"4E: PSP traces of sensor #5 per condition ({m}, {r} "
+                                  "readout)"
+       for m in ("linear", "geometric") for r in ("length", "axial")},
     "fig4F_confusion.png": "4F: confusion matrices at 10 dB for sensor #5, M15's 10 sensors "
                            "and all 338",
     "fig4G_accuracy_vs_snr.png": "4G: accuracy vs SNR for the three feature sets, with the "
                                  "range of M15's single sensors",
 }
+
+
+def psp_figure(mechanics: str, readout: str) -> str:
+    """File name of Figure 4E for one mechanics and readout."""
+    return f"fig4E_psp_{mechanics}_{readout}.png"
 
 
 def _pyplot() -> Any:
@@ -80,7 +87,7 @@ def fig1e(plt: Any, res: Sequence[MechanicsResults], out: Path) -> Path:
         ax.fill_between(k, ci, cp, alpha=0.2, color="grey",
                         label=f"area {r.measures.area:.3g}")
         ax.axhline(0.99, ls=":", c="k", lw=0.8)
-        ax.set(title=f"{r.mechanics} mechanics", xlabel="number of PCs",
+        ax.set(title=f"{r.label}", xlabel="number of PCs",
                ylabel="cumulative variance explained", ylim=(0, 1.02))
         ax.legend(loc="lower right", fontsize=8)
     return _save(fig, out, "fig1E_variance_explained.png")
@@ -93,7 +100,7 @@ def fig1f(plt: Any, res: Sequence[MechanicsResults], out: Path) -> Path:
         a.bar(x + off, [getattr(r.measures, f"npc99_{attr}") for r in res], 0.34, label=label)
         b.bar(x + off, [getattr(r.measures, f"sir_{attr}") for r in res], 0.34, label=label)
     for ax, title in ((a, "PCs for 99% variance"), (b, "signal-information ratio (PC1-3)")):
-        ax.set_xticks(x, [r.mechanics for r in res])
+        ax.set_xticks(x, [r.label for r in res])
         ax.set_title(title)
         ax.legend(fontsize=8)
     return _save(fig, out, "fig1F_information_measures.png")
@@ -125,13 +132,11 @@ def _heatmap(ax: Any, sweep: SweepResult, name: str, title: str, plt: Any) -> No
                          ((-0.5, values.shape[0] - n_high_k - 0.5), values.shape[1], n_high_k)):
             ax.add_patch(plt.Rectangle(xy, w, h, fill=False, ec="red", lw=0, hatch="///",
                                        label="2A: extremes"))
-    else:
-        best = claims.best_tercile(values)
-        if best is not None:
-            gk = groups[0][claims.TERCILES.index(best[0])]
-            gc = groups[1][claims.TERCILES.index(best[1])]
-            ax.add_patch(plt.Rectangle((gc[0] - 0.5, gk[0] - 0.5), gc.size, gk.size,
-                                       fill=False, ec="red", lw=2, label="best tercile block"))
+    else:  # 2B/2C: the peak of the K-averaged profile in C, then in K at that C
+        opt = claims.damping_optimum(values)
+        if opt is not None:
+            ax.plot(opt.c_index, opt.k_index, "wo", ms=9, mfc="none", mew=2,
+                    label="optimum in damping" + ("" if opt.interior else " (at an edge)"))
     if np.isfinite(values).any():
         i, j = np.unravel_index(int(np.nanargmax(values)), values.shape)
         ax.plot(j, i, "r*", ms=10, label="grid maximum")
@@ -145,7 +150,7 @@ def fig2(plt: Any, res: Sequence[MechanicsResults], out: Path) -> Path:
         for ax, (name, label) in zip(row, (("area", "A: area between curves"),
                                            ("npc_ratio", "B: nPC99 ratio ind/post"),
                                            ("sir_ratio", "C: SIR ratio ind/post")), strict=True):
-            _heatmap(ax, r.sweep, name, f"{label} ({r.mechanics})", plt)
+            _heatmap(ax, r.sweep, name, f"{label} ({r.label})", plt)
     handles: dict[str, Any] = {}
     for ax in axes[0]:
         for h, lab in zip(*ax.get_legend_handles_labels(), strict=True):
@@ -173,7 +178,7 @@ def fig2_tension(plt: Any, res: Sequence[MechanicsResults], out: Path) -> Path:
                 ax.set_yticks(range(v.shape[0]), [f"{t:.3g}" for t in sweep.spec.tension_n])
                 ax.set_xticks(*_log_ticks(values))
                 ax.set(xlabel=axis_name, ylabel="baseline tension (N)",
-                       title=f"{label} ({r.mechanics}, {fixed})")
+                       title=f"{label} ({r.label}, {fixed})")
                 plt.colorbar(img, ax=ax)
     return _save(fig, out, "fig2T_tension.png")
 
@@ -193,7 +198,7 @@ def fig3(plt: Any, res: Sequence[MechanicsResults], out: Path, dt_s: float) -> l
         t = np.arange(r.responses.shape[1]) * dt_s * 1e3
         for ax, i in zip(row, range(5), strict=True):
             ax.plot(t, r.responses[i][:, r.focus_sensors] * 1e3, lw=0.8)
-            ax.set(title=f"3{'ABCDE'[i]}: {labels[i]}: {what[i]}\n({r.mechanics})",
+            ax.set(title=f"3{'ABCDE'[i]}: {labels[i]}: {what[i]}\n({r.label})",
                    xlabel="time (ms)", ylabel="M15's 10 sensors (mN)" if i == 0 else "")
             ax.title.set_fontsize(9)
     paths = [_save(fig, out, "fig3A-E_responses.png")]
@@ -208,7 +213,7 @@ def fig3(plt: Any, res: Sequence[MechanicsResults], out: Path, dt_s: float) -> l
         ax.set_xticks(range(5), short)
         ax.set_yticks(range(5), short)
         ax.set(xlabel="input", ylabel="input",
-               title=f"3F: correlation index at M15 ({r.mechanics})")
+               title=f"3F: correlation index at M15 ({r.label})")
         plt.colorbar(img, ax=ax, label="max(ρ, 0): 0 uncorrelated, 1 identical")
     paths.append(_save(fig, out, "fig3F_similarity.png"))
     return paths
@@ -238,7 +243,7 @@ def fig4(plt: Any, res: Sequence[MechanicsResults], out: Path, dt_s: float) -> l
         img = ax.imshow(f.T * 1e3, aspect="auto", cmap="RdBu_r", origin="lower",
                         extent=(0, f.shape[0] * dt_s * 1e3, 0, f.shape[1]), vmin=-lim, vmax=lim)
         ax.set(xlabel="time (ms)", ylabel="sensor", title=f"4B: forces, condition "
-               f"{_condition_label(FOCUS_CONDITION)} ({r.mechanics})")
+               f"{_condition_label(FOCUS_CONDITION)} ({r.label})")
         plt.colorbar(img, ax=ax, label="mN (tension > 0)")
     paths.append(_save(fig, out, "fig4B_forces.png"))
 
@@ -250,7 +255,7 @@ def fig4(plt: Any, res: Sequence[MechanicsResults], out: Path, dt_s: float) -> l
         ax.set(xlabel="time (ms)", ylabel="sensor", ylim=(0, r.population_raster.shape[-1]),
                xlim=(0, r.population_raster.shape[0] * dt_s * 1e3),
                title=f"4C: one trial of condition {FOCUS_CONDITION} at {FIGURE_SNR_DB:g} dB "
-               f"({r.mechanics})")
+               f"({r.label})")
     paths.append(_save(fig, out, "fig4C_population_raster.png"))
 
     paths.append(_fig4d(plt, res, out, dt_s))
@@ -284,7 +289,7 @@ def _fig4d(plt: Any, res: Sequence[MechanicsResults], out: Path, dt_s: float) ->
         ax.set(xlabel="time (ms)", ylim=(-0.5, n_cond * reps - 0.5),
                xlim=(0, n_steps * dt_s * 1e3),
                title=f"4D: sensor {r.paper_sensor} (#{PAPER_SENSOR_RANK} of M{FOCUS_MASS}), "
-               f"{reps} repetitions per condition, {FIGURE_SNR_DB:g} dB ({r.mechanics})")
+               f"{reps} repetitions per condition, {FIGURE_SNR_DB:g} dB ({r.label})")
         ax.title.set_fontsize(9)
         ax.legend(loc="upper right", fontsize=7)
     return _save(fig, out, "fig4D_sensor_raster.png")
@@ -311,9 +316,9 @@ def _fig4e(plt: Any, r: MechanicsResults, out: Path, dt_s: float) -> Path:
             ax.set_ylabel("PSP (eq. 12)")
     fig.suptitle(f"4E: PSP traces of sensor {r.paper_sensor} (#{PAPER_SENSOR_RANK} of "
                  f"M{FOCUS_MASS}), {trials.shape[1]} repetitions at {FIGURE_SNR_DB:g} dB, "
-                 f"mean in colour; dotted: the decoder's 10 ms bins ({r.mechanics})",
+                 f"mean in colour; dotted: the decoder's 10 ms bins ({r.label})",
                  fontsize=10)
-    return _save(fig, out, f"fig4E_psp_{r.mechanics}.png")
+    return _save(fig, out, psp_figure(r.mechanics, r.readout))
 
 
 def _fig4f(plt: Any, res: Sequence[MechanicsResults], out: Path) -> Path:
@@ -329,7 +334,7 @@ def _fig4f(plt: Any, res: Sequence[MechanicsResults], out: Path) -> Path:
             label = r.paper_label if name == r.paper_set else name
             ax.set(xlabel="predicted condition", ylabel="true condition",
                    title=f"4F: {label}, {FIGURE_SNR_DB:g} dB\naccuracy {cv.accuracy:.2f} "
-                   f"({r.mechanics})")
+                   f"({r.label})")
             ax.title.set_fontsize(9)
         plt.colorbar(img, ax=row[-1], label="fraction of the true condition's trials")
     return _save(fig, out, "fig4F_confusion.png")
@@ -357,7 +362,7 @@ def _fig4g(plt: Any, res: Sequence[MechanicsResults], out: Path) -> Path:
         ax.axhspan(claims.WELL_ABOVE_CHANCE / 9, claims.WELL_BELOW_FULL, color="orange",
                    alpha=0.08, label="'well above chance, well below 100 %'")
         ax.set(xlabel="SNR (dB)", ylabel="accuracy (5-fold CV, mean ± std of folds)",
-               ylim=(0, 1.05), title=f"4G: decoding accuracy vs SNR ({r.mechanics})")
+               ylim=(0, 1.05), title=f"4G: decoding accuracy vs SNR ({r.label})")
     fig.legend(*axes[0][0].get_legend_handles_labels(), loc="outside lower center", ncol=3,
                fontsize=8)
     return _save(fig, out, "fig4G_accuracy_vs_snr.png")

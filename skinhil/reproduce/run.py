@@ -1,4 +1,5 @@
-"""``reproduce``: compute everything for both mechanics, write the figures and REPORT.md."""
+"""``reproduce``: compute everything for both mechanics with both readouts (the 2 x 2 design
+that names the cause of each claim's outcome), write the figures and REPORT.md."""
 
 from __future__ import annotations
 
@@ -8,7 +9,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from skinhil.errors import ConfigError
-from skinhil.reproduce.compute import MechanicsResults, ReproduceConfig, compute_mechanics
+from skinhil.model.mechanics.readout import READOUTS
+from skinhil.reproduce.compute import (
+    MechanicsResults,
+    Regime,
+    ReproduceConfig,
+    compute_mechanics,
+    compute_regime,
+)
 from skinhil.reproduce.figures import _pyplot, write_figures
 from skinhil.reproduce.report import write_report
 
@@ -24,6 +32,7 @@ class ReproduceOutcome:
     report: Path
     figures: list[Path]
     results: list[MechanicsResults]
+    regime: Regime
     seconds: float
 
 
@@ -39,9 +48,11 @@ def reproduce(out: str | Path, config: ReproduceConfig | None = None,
         raise ConfigError(f"cannot create output directory {str(path)!r}: "
                           f"{exc.strerror or exc}") from None
     start = time.perf_counter()
-    results = [compute_mechanics(m, cfg) for m in MECHANICS]  # type: ignore[arg-type]
+    results = [compute_mechanics(m, r, cfg)  # type: ignore[arg-type]
+               for m in MECHANICS for r in READOUTS]
+    regime = compute_regime(cfg.dt_s)
     figures = write_figures(results, path, cfg.dt_s)
     total = time.perf_counter() - start
-    report = write_report(results, cfg, path, total, quick)
+    report = write_report(results, regime, cfg, path, total, quick)
     logger.info("reproduction written to %s in %.1f s", path, total)
-    return ReproduceOutcome(report, figures, results, total)
+    return ReproduceOutcome(report, figures, results, regime, total)
