@@ -27,7 +27,8 @@ def test_simulate_writes_forces_and_spikes(tmp_path: Path) -> None:
         assert len(run["events"]) > 0 and np.all(run["events"]["t"] % 100 == 0)
         assert run["markers"]["stimulus_id"].tolist() == [11]
         meta = json.loads(str(run["meta"]))
-    assert meta["snr_db"] == 30 and meta["mechanics"] == "linear"
+    assert meta["snr_db"] == 30 and meta["mechanics"] == "geometric"  # auto at 6x6
+    assert meta["readout"] == "length"
     assert "wrote" in res.stdout
 
 

@@ -25,7 +25,7 @@ def _zoh_reference(rhs, x0: np.ndarray, stim: Stimulus, dt: float, n: int,
 
 
 def test_linear_matches_solve_ivp_on_paper_stimulus_1() -> None:
-    model = SkinModel(SkinParams(readout="axial"))  # the reference reads Cy q
+    model = SkinModel(SkinParams(mechanics="linear", readout="axial"))  # the reference: Cy q
     stim = paper_stimuli()[0]
     dt, n = 1e-3, 40
     ours = model.simulate(stim, n * dt, dt)
@@ -108,14 +108,15 @@ def test_force_balance_at_steady_state(mechanics: str) -> None:
 
 
 def test_linear_in_the_force() -> None:
-    model = SkinModel(SkinParams(readout="axial"))  # the length change is not linear in q
+    # the length change is not linear in q
+    model = SkinModel(SkinParams(mechanics="linear", readout="axial"))
     base = model.simulate(Stimulus("s", {15: (0.1, 0.2, -0.3)}), 0.05)
     double = model.simulate(Stimulus("s", {15: (0.2, 0.4, -0.6)}), 0.05)
     np.testing.assert_allclose(double, 2 * base, rtol=1e-12, atol=1e-15)
 
 
 def test_geometric_agrees_with_linear_for_small_forces() -> None:
-    lin = SkinModel()
+    lin = SkinModel(SkinParams(mechanics="linear"))
     geo = SkinModel(SkinParams(mechanics="geometric"))
     rel = []
     for scale in (1e-2, 1e-3, 1e-4):
@@ -130,7 +131,7 @@ def test_geometric_agrees_with_linear_for_small_forces() -> None:
 
 def test_energy_conserved_without_damping() -> None:
     dt = 1e-4
-    params = SkinParams(damping_n_s_per_m=0.0)
+    params = SkinParams(damping_n_s_per_m=0.0, mechanics="linear")
     kick = np.zeros((50, 77, 3))
     kick[:, 14] = (0.2, 0.1, -0.3)
     rest = np.zeros((2000, 77, 3))

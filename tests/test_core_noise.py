@@ -84,7 +84,7 @@ def test_no_runaway_over_10_s_of_the_strongest_stimulus(snr_db: float) -> None:
     assert sensor.neurons.blowups.sum() == 0
     rates_hz = counts / 10.0
     assert rates_hz.mean() <= 100.0 and rates_hz.max() <= 500.0
-    assert peak_force > 0.1 and counts.sum() > 0
+    assert peak_force > 0.05 and counts.sum() > 0  # the press loads the sensors (N)
 
 
 def _isi_cv(raster: np.ndarray) -> float:

@@ -28,10 +28,11 @@ def _reference(model: SkinModel, q: np.ndarray, readout: str) -> np.ndarray:
 
 
 CASES = [  # (params, kernel) : every stepper the model builds
-    (dict(), LinearMechanics),  # modal (no tension)
-    (dict(tension_n=0.05), LinearMechanics),  # full state space
-    (dict(size=(12, 12)), LeapfrogMechanics),
-    (dict(tension_n=0.5, linear_stepper="leapfrog"), LeapfrogMechanics),  # substeps
+    (dict(mechanics="linear"), LinearMechanics),  # modal (no tension)
+    (dict(mechanics="linear", tension_n=0.05), LinearMechanics),  # full state space
+    (dict(mechanics="linear", size=(12, 12)), LeapfrogMechanics),
+    (dict(mechanics="linear", tension_n=0.5, linear_stepper="leapfrog"),
+     LeapfrogMechanics),  # substeps
     (dict(mechanics="geometric"), GeometricMechanics),
 ]
 
@@ -61,7 +62,7 @@ def test_the_readouts_differ_at_the_papers_forces() -> None:
     """At 0.5 N the linear mesh moves by a large fraction of its spring lengths: the two
     readouts disagree there (which is why the choice matters)."""
     stim = direction_conditions()[2]
-    length, axial = (SkinModel(SkinParams(readout=r)).simulate(stim, 0.05)
+    length, axial = (SkinModel(SkinParams(mechanics="linear", readout=r)).simulate(stim, 0.05)
                      for r in ("length", "axial"))
     assert np.abs(length - axial).max() > 0.2 * np.abs(axial).max()
 
@@ -74,7 +75,7 @@ def test_readouts_agree_for_small_displacements() -> None:
     assert np.abs(length - axial).max() < 1e-4 * np.abs(axial).max()
 
 
-@pytest.mark.parametrize("extra", [dict(), dict(size=(12, 12))])
+@pytest.mark.parametrize("extra", [dict(mechanics="linear"), dict(size=(12, 12))])
 def test_fused_board_kernels_equal_stepper_then_neurons(extra: dict) -> None:
     """The board's compiled blocks (modal and leapfrog) report the default readout: the same
     spring forces and spikes as the stepper followed by the neurons."""

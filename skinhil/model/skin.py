@@ -1,4 +1,5 @@
-"""The skin model: the paper's mesh at any size, its parameters and its two mechanics.
+"""The skin model: the paper's mesh at any size, its parameters, its two mechanics and what
+each spring reports.
 
 Defaults and their reasoning (the paper gives the structure, not SI values):
 
@@ -14,18 +15,26 @@ Defaults and their reasoning (the paper gives the structure, not SI values):
   forces ring briefly after onset and decay within ~10 ms after the indentation.
 - ``tension_n = 0``: no baseline tension by default (the paper's K has none); set it to give
   in-plane springs transverse stiffness ``T/L``.
-- ``mechanics = "linear"``, chosen from the reproduction and the board's real-time budget.
-  Evidence (``skinhil reproduce``, docs/figures/REPORT.md): ``"geometric"`` reproduces 4 of
-  the paper's 7 checked claims (1E-F, 3F, 4F, 4G), ``"linear"`` 1 (4F); what linear misses
-  needs large-deformation coupling (a normal push stretches the in-plane springs only
-  through it), which the small-displacement stiffness matrix drops. Budget: the board steps
-  the skin in real time on one core beside its encoder; linear runs at 25x real time
-  (exact ZOH at any step; a leapfrog of O(springs) per step for large skins), geometric at
-  6x on a 6x6 skin (RK4, stable only below ~0.14 ms at these parameters), so the skin's share
-  of a core would rise from ~4 % to ~16 % and the board past its 25 % target, with 4x the
-  CPU time to train a decoder on a simulated stream. The product keeps linear; the
-  reproduction runs both, and ``--mechanics geometric`` (``simulate``, ``serve``) gives the
-  mechanics that reproduces the paper, at 6x real time.
+- ``mechanics = "auto"``: the geometric mechanics up to ``AUTO_GEOMETRIC_MAX_SPRINGS``
+  (1,210: a 10x10 top layer) springs, the linear one above; one rule, printed in the banner
+  of ``serve`` and ``demo`` (``SkinParams.describe_mechanics``). Chosen from the
+  reproduction and the board's real-time budget. Reproduction (``skinhil reproduce``,
+  docs/figures/REPORT.md, both readouts of both mechanics): the geometric dynamics with the
+  length readout reproduces the most claims of the paper; what the linear dynamics misses
+  comes from its dynamics (1E-F fails with either readout), and at the paper's forces its
+  mesh moves 4-5 rest lengths, far outside the small displacements its stiffness matrix
+  assumes (REPORT.md, "Regime"). Budget: the geometric mechanics costs ~27 ns per spring and
+  step (RK4, spring by spring: 9.1, 19.1, 33.1 and 50.3 µs per 0.1 ms step at 6x6, 8x8,
+  10x10 and 12x12, one core, this process's CPU time at load ~4), the linear one 4-7 ns;
+  with the neurons (~4 ns per channel) the geometric skin takes under 40 % of a core up to
+  10x10, so the board keeps real time there with room for its encoder and link, and above it
+  the linear mechanics (exact, then leapfrog) carries the board to ~27x27 on one core.
+  ``"linear"`` and ``"geometric"`` force one; the geometric one refuses steps above its
+  stability limit (~0.14 ms at the defaults).
+- ``readout = "length"``: every spring reports ``k·(|L0·e + q_j − q_i| − L0)``, its length
+  change, in both mechanics (the paper's Hooke's law on "the rate of change from its
+  equilibrium position"); ``"axial"``, ``k·eᵀ(q_j − q_i)``, is its small-displacement limit,
+  kept as an explicit option (:mod:`skinhil.model.mechanics.readout`).
 - ``size = (6, 6)``: the paper's top layer; any ``rows x cols`` >= 3x3 builds the same
   pyramid (:mod:`skinhil.model.geometry`).
 - ``linear_stepper = "auto"``: how the linear mechanics is stepped, one rule: the exact ZOH
@@ -90,7 +99,9 @@ class SkinParams:
     tension_n: float = 0.0
     spacing_m: float = 1e-3
     layer_gap_m: float = 1e-3
-    mechanics: Mechanics = "linear"
+    mechanics: Mechanics = "auto"
+    """"auto" (geometric up to :data:`AUTO_GEOMETRIC_MAX_SPRINGS` springs, linear above),
+    "linear" or "geometric" (module docstring); :attr:`dynamics` says which one runs."""
     size: MeshSize = PAPER_SIZE
     """Top layer (rows, cols) in masses; the layers below follow the pyramid rule."""
     linear_stepper: LinearStepper = "auto"
