@@ -1,6 +1,8 @@
 """How the board's work grows with the skin: a size benchmark (a script, not a test).
 
-For each top-layer size (default 6x6, 16x16, 26x26, 32x32, 48x48) it steps the board's loop
+For each top-layer size (default 6x6, 16x16, 26x26, 32x32, 48x48) and the default mechanics
+(``SkinParams().mechanics``, "auto": geometric up to 10x10, linear above; the ``stepper``
+column says which one ran) it steps the board's loop
 as :meth:`firmware_sim.board.Board.tick` does, without pacing and without a transport: per
 1 ms tick of ten 0.1 ms steps, the default random schedule's forces
 (:class:`skinhil.model.timeline.Timeline`), the model (mechanics and neurons, noise at ``--snr-db``,
@@ -162,13 +164,14 @@ def measure(size: tuple[int, int], threads: int, snr_db: float, seconds: float,
         t_end[0] += STEPS_PER_TICK * int(round(DT_S * 1e6))
 
     encode_us = _best_per_tick(encode, seconds / 8, repeats)
-    return SizeResult(size, threads, model.n_springs, model.linear_regime,
+    regime = "geometric" if model.params.dynamics == "geometric" else model.linear_regime
+    return SizeResult(size, threads, model.n_springs, regime,
                       mech_us / STEPS_PER_TICK, neur_us / STEPS_PER_TICK, events_us, encode_us,
                       loop_us, memory / 1e6, events_per_s)
 
 
 def _row(r: SizeResult) -> str:
-    return (f"{format_size(r.size):>6} {r.threads:>2} {r.springs:>7} {r.regime:>8} "
+    return (f"{format_size(r.size):>6} {r.threads:>2} {r.springs:>7} {r.regime:>9} "
             f"{r.mech_us:8.1f} {1e3 * r.mech_us / r.springs:6.2f} "
             f"{r.neur_us:8.1f} {1e3 * r.neur_us / r.springs:6.2f} "
             f"{r.events_us:7.1f} {r.encode_us:7.1f} {r.loop_us / STEPS_PER_TICK:8.1f} "
@@ -176,7 +179,7 @@ def _row(r: SizeResult) -> str:
             f"{r.events_per_s / 1e3:8.1f} {r.rtf:6.2f}")
 
 
-HEADER = (f"{'size':>6} {'th':>2} {'springs':>7} {'stepper':>8} "
+HEADER = (f"{'size':>6} {'th':>2} {'springs':>7} {'stepper':>9} "
           f"{'mech µs':>8} {'ns/sp':>6} {'neur µs':>8} {'ns/ch':>6} "
           f"{'ev µs':>7} {'enc µs':>7} {'loop µs':>8} {'ns/sp':>6} {'mem MB':>7} "
           f"{'kev/s':>8} {'RTF':>6}\n"
