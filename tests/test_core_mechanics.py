@@ -52,7 +52,8 @@ def _geometric_reference(stim: Stimulus, dt: float, t_end: float) -> np.ndarray:
         v = np.zeros_like(p)
         p[free] = y[: 3 * free.size].reshape(-1, 3)
         v[free] = y[3 * free.size:].reshape(-1, 3)
-        _spring_forces(p, v, g.springs, g.rest_lengths, g.k, g.c, g.t, buf)
+        _spring_forces(p, v, g.springs, g.rest_lengths, g.k, g.c, g.t,
+                       np.arange(len(g.springs)), buf)  # every spring: the free masses' net
         acc = (buf - g.preload + f)[free] * g.inv_m
         return np.concatenate([v[free].ravel(), acc.ravel()])
 
