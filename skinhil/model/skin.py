@@ -23,11 +23,11 @@ Defaults and their reasoning (the paper gives the structure, not SI values):
   length readout reproduces the most claims of the paper; what the linear dynamics misses
   comes from its dynamics (1E-F fails with either readout), and at the paper's forces its
   mesh moves 4-5 rest lengths, far outside the small displacements its stiffness matrix
-  assumes (REPORT.md, "Regime"). Budget: the geometric mechanics costs ~27 ns per spring and
-  step (RK4, spring by spring: 9.1, 19.1, 33.1 and 50.3 µs per 0.1 ms step at 6x6, 8x8,
-  10x10 and 12x12, one core, this process's CPU time at load ~4), the linear one 4-7 ns;
-  with the neurons (~4 ns per channel) the geometric skin takes under 40 % of a core up to
-  10x10, so the board keeps real time there with room for its encoder and link, and above it
+  assumes (REPORT.md, "Regime"). Budget: the geometric mechanics costs ~20-26 ns per spring
+  and step (RK4, spring by spring, the springs between fixed masses skipped: 6.8, 15.3, 27.8
+  and 48.2 µs per 0.1 ms step at 6x6, 8x8, 10x10 and 12x12, one core, this process's CPU
+  time at load ~10), the linear one 4-7 ns; with the neurons (~3 ns per channel) the
+  geometric skin takes about a third of a core at 10x10, so the board keeps real time there with room for its encoder and link, and above it
   the linear mechanics (exact, then leapfrog) carries the board to ~27x27 on one core.
   ``"linear"`` and ``"geometric"`` force one; the geometric one refuses steps above its
   stability limit (~0.14 ms at the defaults).
