@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import math
 import os
 import subprocess
 import time
@@ -23,8 +22,10 @@ from pathlib import Path
 
 from protocols.kernel_cache import source_hash
 from skinhil.cli.listen import LivePrinter, class_names, print_summary, summary
-from skinhil.cli.options import DECODE_SNR_DB, snr_value
+from skinhil.cli.options import DECODE_SNR_DB
 from skinhil.cli.train import print_report
+from skinhil.cli.transport_args import baud_value
+from skinhil.cli.values import real, seed_value, snr_value
 from skinhil.errors import ConfigError
 from skinhil.model.timeline import DEFAULT_REST_S
 from skinhil.output_files import atomic_path
@@ -35,6 +36,8 @@ from skinhil.receiver.training import train_decoder
 from skinhil.transports import PtyMasterTransport
 
 DEFAULT_DURATION_S = 20.0
+MAX_DURATION_S = 3600.0
+"""Longest demo (s of board time)."""
 DEMO_REST_S = DEFAULT_REST_S
 """Rest (s) after each stimulus: the board's default."""
 DEMO_REPS = 30
@@ -56,15 +59,17 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "and caches a model on first use.")
     p.add_argument("--snr-db", type=snr_value, default=DECODE_SNR_DB, metavar="DB",
                    help=f"neuron noise SNR in dB, 'inf' for none (default: {DECODE_SNR_DB:g})")
-    p.add_argument("--duration", dest="duration_s", type=float, default=DEFAULT_DURATION_S,
+    p.add_argument("--duration", dest="duration_s",
+                   type=real(0, MAX_DURATION_S, "seconds", lo_open=True),
+                   default=DEFAULT_DURATION_S,
                    metavar="SECONDS", help=f"board time to play (default: "
                                            f"{DEFAULT_DURATION_S:g})")
-    p.add_argument("--seed", type=int, default=1, help="board noise and schedule seed "
-                                                       "(default: 1)")
+    p.add_argument("--seed", type=seed_value, default=1,
+                   help="board noise and schedule seed, 0..2^63-1 (default: 1)")
     p.add_argument("--model", type=Path, metavar="NPZ",
                    help="decoder file (default: train on first use and cache)")
-    p.add_argument("--baud", type=int, default=921600, help="emulated serial baud rate "
-                                                           "(default: 921600)")
+    p.add_argument("--baud", type=baud_value, default=921600,
+                   help="emulated serial baud rate (default: 921600)")
     p.add_argument("--quiet", action="store_true", help="only the final figures")
 
 
@@ -119,8 +124,6 @@ def cached_model(snr_db: float, quiet: bool, baud: int, seed: int) -> Path:
 
 
 def run(args: argparse.Namespace) -> int:
-    if not (math.isfinite(args.duration_s) and 0 < args.duration_s <= 3600):
-        raise ConfigError(f"--duration must be 0..3600 seconds, got {args.duration_s!r}")
     t_start = time.monotonic()
     model_path = (args.model if args.model is not None
                   else cached_model(args.snr_db, args.quiet, args.baud, args.seed))

@@ -18,6 +18,7 @@ import numpy as np
 
 from skinhil.cli.options import add_size_option
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
+from skinhil.cli.values import MAX_DURATION_S, integer, real
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import build_mesh, spring_count
 from skinhil.model.skin import SkinParams
@@ -50,14 +51,16 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    metavar="N[,N...]",
                    help="board id(s) on the CAN bus, e.g. 0,5,9 to decode three boards at "
                         "once (default: 0); on UDP every board that sends is decoded")
-    p.add_argument("--duration", dest="duration_s", type=float, metavar="SECONDS",
+    p.add_argument("--duration", dest="duration_s",
+                   type=real(0, MAX_DURATION_S, "seconds", lo_open=True), metavar="SECONDS",
                    help="stop after this many seconds (default: until Ctrl-C)")
     p.add_argument("--json", action="store_true",
                    help="one JSON object per line: decisions, link counters, summary")
     p.add_argument("--record", type=Path, metavar="FILE",
                    help="save events (tonic-compatible), markers and decisions to this .npz, "
                         "or to NWB if it ends in .nwb (pip install \"skinhil[nwb]\")")
-    p.add_argument("--udp-max-sources", type=int, default=MAX_UDP_SOURCES, metavar="N",
+    p.add_argument("--udp-max-sources", type=integer(1, 4096, "count"),
+                   default=MAX_UDP_SOURCES, metavar="N",
                    help=f"with --udp: decode at most N sending boards; datagrams of further "
                         f"sources are refused and counted (default: {MAX_UDP_SOURCES})")
     p.add_argument("--udp-allow", type=lambda text: [h for h in text.split(",") if h],
@@ -233,10 +236,6 @@ def run_bus(args: argparse.Namespace, bus: BusReceiver, names: dict[int, str]) -
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.duration_s is not None and not (math.isfinite(args.duration_s)
-                                            and args.duration_s > 0):
-        raise ConfigError(f"--duration must be a positive number of seconds, "
-                          f"got {args.duration_s!r}")
     several = len(args.board_ids) > 1 or args.udp is not None
     if several and args.port is not None:
         raise ConfigError("a serial port carries one board: give one --board-id")
@@ -249,8 +248,6 @@ def run(args: argparse.Namespace) -> int:
     transport = open_transport(args)
     names = class_names()
     if several:
-        if args.udp_max_sources < 1:
-            raise ConfigError(f"--udp-max-sources must be 1 or more, got {args.udp_max_sources}")
         bus = BusReceiver(transport, decoder, args.board_ids if args.can else (),
                           max_sources=args.udp_max_sources, allow=args.udp_allow,
                           listeners=lambda key, rx: [LivePrinter(rx, args.json, names, key)])

@@ -5,33 +5,19 @@ from __future__ import annotations
 import argparse
 import math
 
-from skinhil.errors import ConfigError
-from skinhil.model.geometry import PAPER_SIZE, MeshSize, parse_size
+from skinhil.cli.values import integer, real, seed_value, size_value, snr_value
+from skinhil.model.geometry import PAPER_SIZE
 from skinhil.model.neurons import NoiseParams
 from skinhil.model.skin import SkinModel, SkinParams
 
+DT_RANGE_S = (1e-6, 1e-3)
+"""Simulation steps (s) the model takes: a whole number of microseconds, at most the 1 ms
+publish tick (the skin's fastest modes need steps well below a millisecond)."""
+MAX_THREADS = 256
+"""Most model threads."""
 DECODE_SNR_DB = 10.0
 """Default noise level (dB) of ``skinhil train`` and ``skinhil demo``: the paper's operating
 point (Figure 4)."""
-
-
-def snr_value(text: str) -> float:
-    """argparse type: an SNR in dB, or 'inf' for no noise."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number of dB (or 'inf')") from None
-    if math.isnan(value) or value == -math.inf:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number of dB (or 'inf')")
-    return value
-
-
-def size_value(text: str) -> MeshSize:
-    """argparse type: a mesh size ROWSxCOLS (>= 3x3)."""
-    try:
-        return parse_size(text)
-    except ConfigError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def add_size_option(parser: argparse.ArgumentParser) -> None:
@@ -47,16 +33,20 @@ def add_model_options(parser: argparse.ArgumentParser, snr_default: float = math
     add_size_option(parser)
     parser.add_argument("--mechanics", choices=("linear", "geometric"), default="linear",
                         help="skin mechanics (default: linear)")
-    parser.add_argument("--dt", dest="dt_s", type=float, default=1e-4, metavar="SECONDS",
-                        help="simulation step in seconds (default: 1e-4)")
+    parser.add_argument("--dt", dest="dt_s", type=real(*DT_RANGE_S, "seconds"), default=1e-4,
+                        metavar="SECONDS",
+                        help=f"simulation step in seconds, {DT_RANGE_S[0]:g}..{DT_RANGE_S[1]:g}"
+                             " (default: 1e-4)")
     parser.add_argument("--snr-db", type=snr_value, default=snr_default, metavar="DB",
                         help=f"neuron noise SNR in dB, 'inf' for none (default: {snr_default:g})")
     parser.add_argument("--noise", choices=("diffusion", "measured"), default="diffusion",
                         help="how the SNR becomes neuron noise: 'diffusion', sigma^2 = 1 mV^2 x "
                              "10^(-SNR/10) per ms whatever the step (default), or 'measured', "
                              "awgn(x, snr, 'measured') every step (runs away below ~24 dB)")
-    parser.add_argument("--seed", type=int, default=0, help="noise seed (default: 0)")
-    parser.add_argument("--threads", type=int, default=1, metavar="N",
+    parser.add_argument("--seed", type=seed_value, default=0,
+                        help="noise seed, 0..2^63-1 (default: 0)")
+    parser.add_argument("--threads", type=integer(1, MAX_THREADS, "thread count"), default=1,
+                        metavar="N",
                         help="threads for the model (diffusion noise), worth it from a few "
                              "thousand channels: offline the neurons share them (the same "
                              "spikes as one thread); serve steps the mechanics on one and the "
@@ -70,6 +60,4 @@ def noise_from_args(args: argparse.Namespace) -> NoiseParams:
 
 def model_from_args(args: argparse.Namespace) -> SkinModel:
     """The skin model selected by :func:`add_model_options`' options."""
-    if not (math.isfinite(args.dt_s) and args.dt_s > 0):
-        raise ConfigError(f"--dt must be a positive number of seconds, got {args.dt_s!r}")
     return SkinModel(SkinParams(mechanics=args.mechanics, size=args.size))

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import signal
 import sys
 import threading
@@ -15,6 +14,7 @@ from firmware_sim.board import REALTIME_SPIN_S, Board, BoardConfig, BoardSummary
 from firmware_sim.clock import request_realtime
 from skinhil.cli.options import add_model_options, noise_from_args
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
+from skinhil.cli.values import MAX_DURATION_S, MAX_REST_S, integer, real
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import format_size
 from skinhil.model.stimuli import load_schedule
@@ -25,6 +25,12 @@ LIVE_WINDOW_TICKS = 1000
 whole run): percentiles over the whole history inside the tick loop would stall it."""
 MAX_BOARD_ID = 15
 """Largest board id (the CAN layout reserves 4 bits for it)."""
+MAX_TICK_S = 1.0
+"""Longest publish tick (s)."""
+MAX_FIFO_EVENTS = 1 << 22
+"""Largest event FIFO (4,194,304 events, 48 MB)."""
+STATUS_PERIOD_RANGE_S = (1e-3, 60.0)
+"""Status/heartbeat periods (s) the board takes."""
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -40,18 +46,27 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                      help="play this schedule file (format: skinhil simulate --help)")
     src.add_argument("--host-driven", action="store_true",
                      help="no schedule: stimuli only on host commands")
-    p.add_argument("--rest", dest="rest_s", type=float, default=0.25, metavar="SECONDS",
-                   help="rest after each stimulus of the random schedule (default: 0.25)")
-    p.add_argument("--duration", dest="duration_s", type=float, metavar="SECONDS",
+    p.add_argument("--rest", dest="rest_s", type=real(0, MAX_REST_S, "seconds"), default=0.25,
+                   metavar="SECONDS", help="rest after each stimulus of the random schedule, "
+                                           f"0..{MAX_REST_S:g} (default: 0.25)")
+    p.add_argument("--duration", dest="duration_s", type=real(0, MAX_DURATION_S, "seconds",
+                                                               lo_open=True),
+                   metavar="SECONDS",
                    help="stop after this much board time (default: run until Ctrl-C)")
-    p.add_argument("--board-id", type=int, default=0, metavar="N",
+    p.add_argument("--board-id", type=integer(0, MAX_BOARD_ID, "board id"), default=0,
+                   metavar="N",
                    help=f"board id on the CAN bus, 0..{MAX_BOARD_ID} (default: 0)")
-    p.add_argument("--tick", dest="tick_s", type=float, default=1e-3, metavar="SECONDS",
+    p.add_argument("--tick", dest="tick_s", type=real(0, MAX_TICK_S, "seconds", lo_open=True),
+                   default=1e-3, metavar="SECONDS",
                    help="publish tick, a whole number of steps (default: 0.001)")
-    p.add_argument("--fifo", dest="fifo_events", type=int, default=16384, metavar="EVENTS",
-                   help="event FIFO capacity (default: 16384)")
-    p.add_argument("--status-period", dest="status_period_s", type=float, default=0.1,
-                   metavar="SECONDS", help="status/heartbeat period (default: 0.1)")
+    p.add_argument("--fifo", dest="fifo_events", type=integer(1, MAX_FIFO_EVENTS, "capacity"),
+                   default=16384, metavar="EVENTS",
+                   help=f"event FIFO capacity, 1..{MAX_FIFO_EVENTS} (default: 16384)")
+    p.add_argument("--status-period", dest="status_period_s",
+                   type=real(*STATUS_PERIOD_RANGE_S, "seconds"), default=0.1,
+                   metavar="SECONDS", help="status/heartbeat period, "
+                                           f"{STATUS_PERIOD_RANGE_S[0]:g}.."
+                                           f"{STATUS_PERIOD_RANGE_S[1]:g} (default: 0.1)")
     p.add_argument("--stopped", action="store_true",
                    help="start stopped: stream only after a START command")
     p.add_argument("--reconnect", action="store_true",
@@ -68,16 +83,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _config(args: argparse.Namespace) -> BoardConfig:
-    if args.duration_s is not None and not (math.isfinite(args.duration_s)
-                                            and args.duration_s > 0):
-        raise ConfigError(f"--duration must be a positive number of seconds, "
-                          f"got {args.duration_s!r}")
-    if not 0 <= args.board_id <= MAX_BOARD_ID:
-        raise ConfigError(f"--board-id must be 0..{MAX_BOARD_ID}, got {args.board_id}")
-    if not (math.isfinite(args.rest_s) and args.rest_s >= 0):
-        raise ConfigError(f"--rest must be >= 0 seconds, got {args.rest_s!r}")
-    if not (math.isfinite(args.tick_s) and args.tick_s > 0):
-        raise ConfigError(f"--tick must be a positive number of seconds, got {args.tick_s!r}")
     if args.schedule is not None:
         mode = Timeline.SCHEDULE_FILE
     elif args.host_driven:

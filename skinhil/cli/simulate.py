@@ -11,11 +11,14 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from skinhil.cli.options import add_model_options, model_from_args, noise_from_args
+from skinhil.cli.values import real
 from skinhil.errors import ConfigError
 from skinhil.model.sensor import SkinSensor
 from skinhil.model.stimuli import Schedule, ScheduledStimulus, builtin_catalog, load_schedule
 from skinhil.nwb import require_pynwb, write_simulation
 
+MAX_DURATION_S = 1e6
+"""Longest simulation (s of model time); memory is estimated before any is allocated."""
 BLOCK_S = 0.05
 """Simulated seconds per progress-bar update."""
 
@@ -34,7 +37,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                      help="built-in stimulus: A..E (Fig 3) or e.g. 0deg_0.5N (Fig 4) "
                           "(default: A)")
     src.add_argument("--schedule", type=Path, metavar="TOML", help="schedule file")
-    p.add_argument("--duration", dest="duration_s", type=float, metavar="SECONDS",
+    p.add_argument("--duration", dest="duration_s",
+                   type=real(0, MAX_DURATION_S, "seconds", lo_open=True), metavar="SECONDS",
                    help="simulated time (default: until 0.25 s after the last stimulus ends)")
     p.add_argument("--out", type=Path, default=Path("run.npz"),
                    help="output file: .npz (default run.npz) or .nwb")
