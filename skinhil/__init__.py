@@ -25,6 +25,7 @@ if TYPE_CHECKING:
         simulate_spikes,
     )
     from skinhil.model.psp import PSPFilterBank, PSPParams, psp_kernel
+    from skinhil.model.schedule_file import load_schedule
     from skinhil.model.skin import SkinModel, SkinParams, SkinStepper
     from skinhil.model.stimuli import (
         Schedule,
@@ -32,7 +33,6 @@ if TYPE_CHECKING:
         Stimulus,
         at_size,
         direction_conditions,
-        load_schedule,
         paper_stimuli,
         random_schedule,
     )
@@ -54,7 +54,7 @@ _EXPORTS: dict[str, str] = {
     "at_size": "skinhil.model.stimuli",
     "direction_conditions": "skinhil.model.stimuli",
     "events_to_raster": "skinhil.model.neurons",
-    "load_schedule": "skinhil.model.stimuli",
+    "load_schedule": "skinhil.model.schedule_file",
     "make_events": "skinhil.events",
     "paper_stimuli": "skinhil.model.stimuli",
     "psp_kernel": "skinhil.model.psp",

@@ -4,11 +4,15 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
+from pathlib import Path
 
 from skinhil.cli.values import integer, real, seed_value, size_value, snr_value
-from skinhil.model.geometry import PAPER_SIZE
+from skinhil.model.geometry import PAPER_SIZE, MeshSize
 from skinhil.model.neurons import NoiseParams
+from skinhil.model.schedule_file import load_schedule
 from skinhil.model.skin import SkinModel, SkinParams
+from skinhil.model.stimuli import Schedule
 
 DT_RANGE_S = (1e-6, 1e-3)
 """Simulation steps (s) the model takes: a whole number of microseconds, at most the 1 ms
@@ -61,3 +65,22 @@ def noise_from_args(args: argparse.Namespace) -> NoiseParams:
 def model_from_args(args: argparse.Namespace) -> SkinModel:
     """The skin model selected by :func:`add_model_options`' options."""
     return SkinModel(SkinParams(mechanics=args.mechanics, size=args.size))
+
+
+SCHEDULE_HELP = "schedule file (TOML; format and limits: docs/schedule.md)"
+"""The help text of every option that takes a schedule file."""
+SCHEDULE_NOTICE_BYTES = 1 << 20
+"""Schedule files from this size (1 MiB, ~0.3 s to read) on are announced before reading."""
+
+
+def read_schedule(path: Path, size: MeshSize) -> Schedule:
+    """The schedule file ``path`` for a skin of top-layer ``size``, checked against its
+    schema; a big file is announced on stderr first (its reading takes a while)."""
+    try:
+        n_bytes = path.stat().st_size
+    except OSError:
+        n_bytes = 0  # load_schedule says what is wrong with the path
+    if n_bytes >= SCHEDULE_NOTICE_BYTES:
+        print(f"skinhil: reading schedule {path} ({n_bytes / 2**20:.1f} MiB, about "
+              f"{n_bytes / 2**20 * 0.3:.0f} s)", file=sys.stderr, flush=True)
+    return load_schedule(path, size)

@@ -12,12 +12,11 @@ from typing import Any
 
 from firmware_sim.board import REALTIME_SPIN_S, Board, BoardConfig, BoardSummary
 from firmware_sim.clock import request_realtime
-from skinhil.cli.options import add_model_options, noise_from_args
+from skinhil.cli.options import SCHEDULE_HELP, add_model_options, noise_from_args, read_schedule
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.cli.values import MAX_DURATION_S, MAX_REST_S, integer, real
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import format_size
-from skinhil.model.stimuli import load_schedule
 from skinhil.model.timeline import Timeline
 
 LIVE_WINDOW_TICKS = 1000
@@ -43,7 +42,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     add_transport_args(p)
     src = p.add_mutually_exclusive_group()
     src.add_argument("--schedule", type=Path, metavar="TOML",
-                     help="play this schedule file (format: skinhil simulate --help)")
+                     help=f"play this {SCHEDULE_HELP}")
     src.add_argument("--host-driven", action="store_true",
                      help="no schedule: stimuli only on host commands")
     p.add_argument("--rest", dest="rest_s", type=real(0, MAX_REST_S, "seconds"), default=0.25,
@@ -126,7 +125,7 @@ def _summary_text(s: BoardSummary) -> str:
 
 def run(args: argparse.Namespace) -> int:
     config = _config(args)
-    schedule = (load_schedule(args.schedule, args.size) if args.schedule is not None
+    schedule = (read_schedule(args.schedule, args.size) if args.schedule is not None
                 else None)
     tty = sys.stderr.isatty() and not args.quiet and not args.json
     where = describe_transport(args)

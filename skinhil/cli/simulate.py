@@ -10,11 +10,17 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
-from skinhil.cli.options import add_model_options, model_from_args, noise_from_args
+from skinhil.cli.options import (
+    SCHEDULE_HELP,
+    add_model_options,
+    model_from_args,
+    noise_from_args,
+    read_schedule,
+)
 from skinhil.cli.values import real
 from skinhil.errors import ConfigError
 from skinhil.model.sensor import SkinSensor
-from skinhil.model.stimuli import Schedule, ScheduledStimulus, builtin_catalog, load_schedule
+from skinhil.model.stimuli import Schedule, ScheduledStimulus, builtin_catalog
 from skinhil.nwb import require_pynwb, write_simulation
 
 MAX_DURATION_S = 1e6
@@ -36,7 +42,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     src.add_argument("--stimulus", default="A", metavar="NAME",
                      help="built-in stimulus: A..E (Fig 3) or e.g. 0deg_0.5N (Fig 4) "
                           "(default: A)")
-    src.add_argument("--schedule", type=Path, metavar="TOML", help="schedule file")
+    src.add_argument("--schedule", type=Path, metavar="TOML", help=SCHEDULE_HELP)
     p.add_argument("--duration", dest="duration_s",
                    type=real(0, MAX_DURATION_S, "seconds", lo_open=True), metavar="SECONDS",
                    help="simulated time (default: until 0.25 s after the last stimulus ends)")
@@ -51,7 +57,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def _schedule(args: argparse.Namespace) -> Schedule:
     if args.schedule is not None:
-        return load_schedule(args.schedule, args.size)
+        return read_schedule(args.schedule, args.size)
     catalog = builtin_catalog(args.size)
     if args.stimulus not in catalog:
         raise ConfigError(f"unknown stimulus {args.stimulus!r}; choose one of "
