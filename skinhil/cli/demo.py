@@ -28,7 +28,6 @@ from skinhil.cli.transport_args import baud_value
 from skinhil.cli.values import real, seed_value, snr_value
 from skinhil.errors import ConfigError
 from skinhil.model.timeline import DEFAULT_REST_S
-from skinhil.output_files import atomic_path
 from skinhil.receiver import Receiver
 from skinhil.receiver.model_file import load_window_decoder
 from skinhil.receiver.session import run_against_board, serve_command
@@ -115,8 +114,7 @@ def cached_model(snr_db: float, quiet: bool, baud: int, seed: int) -> Path:
     if not quiet:
         print_report(report, class_names())
     path.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_path(path) as tmp:
-        decoder.save(tmp)
+    decoder.save(path)
     for old in path.parent.glob(f"{stem}*.npz"):  # models of earlier sources
         if old != path:
             old.unlink(missing_ok=True)
