@@ -18,19 +18,28 @@ COLD_COMPILE_S = (15, 30)
 ``serve`` at load 0.8; up to ~30 s on a loaded machine)."""
 
 
-def cache_is_cold() -> tuple[bool, str]:
-    """(the model's or the wire's kernels of this source version are not cached yet, the
-    cache directory)."""
+KERNEL_ROOMS: dict[str, tuple[str, ...]] = {
+    "simulate": ("model",),
+    "train": ("model",),
+}
+"""Whose kernels each command runs (numba names a cache folder after the package that holds
+the kernels): the model's, and the wire's (protocols) unless listed here."""
+
+
+def cache_is_cold(command: str = "serve") -> tuple[bool, str]:
+    """(the kernels ``command`` runs are not cached yet for this source version, the cache
+    directory)."""
     from protocols.kernel_cache import CACHE_DIR
 
-    cold = not all(any(CACHE_DIR.glob(f"{room}_*/*.nbi")) for room in ("model", "protocols"))
+    rooms = KERNEL_ROOMS.get(command, ("model", "protocols"))
+    cold = not all(any(CACHE_DIR.glob(f"{room}_*/*.nbi")) for room in rooms)
     return cold, str(CACHE_DIR)
 
 
 def announce_cold_cache(command: str) -> None:
     """On a cold kernel cache, say on stderr that ``command`` compiles first and about how
     long it takes (nothing when the cache is warm)."""
-    cold, where = cache_is_cold()
+    cold, where = cache_is_cold(command)
     if cold:
         lo, hi = COLD_COMPILE_S
         print(f"skinhil {command}: compiling the model's and the link's kernels for this "

@@ -27,6 +27,7 @@ from skinhil.cli.train import print_report
 from skinhil.cli.transport_args import baud_value
 from skinhil.cli.values import real, seed_value, snr_value
 from skinhil.errors import ConfigError
+from skinhil.model.geometry import PAPER_SIZE, spring_count
 from skinhil.model.timeline import DEFAULT_REST_S
 from skinhil.receiver import Receiver
 from skinhil.receiver.model_file import load_window_decoder
@@ -125,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
     t_start = time.monotonic()
     model_path = (args.model if args.model is not None
                   else cached_model(args.snr_db, args.quiet, args.baud, args.seed))
-    decoder = load_window_decoder(model_path)
+    decoder = load_window_decoder(model_path, n_channels=spring_count(PAPER_SIZE))
     link, slave_fd = PtyMasterTransport.open_pair(args.baud)
     cmd = serve_command(["--port", link.slave_path, "--baud", str(args.baud)],
                         args.duration_s, args.snr_db, args.seed, DEMO_REST_S)

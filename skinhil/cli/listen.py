@@ -23,6 +23,7 @@ from skinhil.errors import ConfigError
 from skinhil.model.geometry import build_mesh, spring_count
 from skinhil.model.skin import SkinParams
 from skinhil.nwb import require_pynwb, write_session
+from skinhil.output_files import check_output_path
 from skinhil.receiver import (
     BusReceiver,
     Receiver,
@@ -242,8 +243,10 @@ def run(args: argparse.Namespace) -> int:
     if several and args.record is not None:
         raise ConfigError("--record saves one board's session: use it with one board on "
                           "--port or --can")
-    if args.record is not None and args.record.suffix == ".nwb":
-        require_pynwb()
+    if args.record is not None:
+        args.record = check_output_path(args.record, (".npz", ".nwb"))
+        if args.record.suffix == ".nwb":
+            require_pynwb()
     decoder = load_window_decoder(args.model, n_channels=spring_count(args.size))
     transport = open_transport(args)
     names = class_names()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -42,7 +43,14 @@ def run(args: argparse.Namespace) -> int:
                       sweep_geometric=(args.grid, args.grid))
     if args.repeats is not None:
         cfg = replace(cfg, decoding=replace(cfg.decoding, repeats=args.repeats))
-    outcome = reproduce(args.out, cfg, quick=args.quick)
+    t0 = time.monotonic()
+    try:
+        outcome = reproduce(args.out, cfg, quick=args.quick)
+    except KeyboardInterrupt:
+        done = sorted(p.name for p in Path(args.out).glob("*") if not p.name.startswith("."))
+        print(f"reproduce: stopped after {time.monotonic() - t0:.1f} s; {len(done)} files "
+              f"complete in {args.out}{': ' + ', '.join(done) if done else ''}", flush=True)
+        raise
     print(f"wrote {outcome.report} and {len(outcome.figures)} figures in "
           f"{outcome.seconds:.1f} s")
     for r in outcome.results:

@@ -9,6 +9,7 @@ from pathlib import Path
 from skinhil.cli.options import DECODE_SNR_DB, add_size_option
 from skinhil.cli.values import MAX_REST_S, integer, real, seed_value, snr_value
 from skinhil.model.timeline import DEFAULT_REST_S
+from skinhil.output_files import check_output_path
 from skinhil.receiver.training import BIN_S, WINDOW_S, TrainingReport, train_decoder
 
 MAX_REPS = 10_000
@@ -65,11 +66,17 @@ def print_report(report: TrainingReport, names: dict[int, str]) -> None:
 def run(args: argparse.Namespace) -> int:
     from skinhil.cli.listen import class_names
 
+    out = check_output_path(args.out, (".npz",))  # before minutes of training
     t0 = time.monotonic()
-    decoder, report = train_decoder(args.snr_db, args.reps, args.seed, rest_s=args.rest_s,
-                                    progress=not args.no_progress, size=args.size)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    decoder.save(args.out)
+    try:
+        decoder, report = train_decoder(args.snr_db, args.reps, args.seed, rest_s=args.rest_s,
+                                        progress=not args.no_progress, size=args.size)
+    except KeyboardInterrupt:
+        kept = "the previous file kept" if out.exists() else "nothing written"
+        print(f"train: stopped after {time.monotonic() - t0:.1f} s of training; {kept} "
+              f"({out})", flush=True)
+        raise
+    decoder.save(out)
     print_report(report, class_names())
-    print(f"wrote {args.out} in {time.monotonic() - t0:.1f} s")
+    print(f"wrote {out} in {time.monotonic() - t0:.1f} s")
     return 0

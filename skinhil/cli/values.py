@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 from collections.abc import Callable
 
 from skinhil.errors import ConfigError
@@ -93,3 +94,29 @@ def size_value(text: str) -> MeshSize:
 
 seed_value = integer(0, MAX_SEED, "seed")
 """argparse type: a noise seed, 0..2^63-1."""
+
+
+MEMORY_SHARE = 0.8
+"""Largest share of the available memory one allocation may take."""
+
+
+def available_memory_bytes() -> int:
+    """Memory (bytes) the system can give without swapping: MemAvailable of /proc/meminfo,
+    else the physical memory."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+
+
+def check_memory(n_bytes: int, what: str, advice: str) -> None:
+    """:class:`ConfigError` (before allocating) when ``what`` needs ``n_bytes`` bytes, more
+    than :data:`MEMORY_SHARE` of the available memory; ``advice`` says what to do."""
+    free = available_memory_bytes()
+    if n_bytes > MEMORY_SHARE * free:
+        raise ConfigError(f"{what} need {n_bytes / 2**30:.3g} GiB; {free / 2**30:.3g} GiB "
+                          f"of memory is available — {advice}")
