@@ -138,6 +138,11 @@ def run(args: argparse.Namespace) -> int:
     t_link = time.monotonic()
     try:
         status, out, err = run_against_board(receiver, cmd)
+    except KeyboardInterrupt:  # stopped: the figures so far
+        print()
+        print_summary(summary(receiver, time.monotonic() - t_link), names)
+        print(f"demo: stopped after {time.monotonic() - t_start:.1f} s wall", flush=True)
+        raise
     finally:
         link.shutdown()
         os.close(slave_fd)

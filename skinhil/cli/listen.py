@@ -6,9 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import signal
 import sys
-import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -16,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from skinhil.cli import signals
 from skinhil.cli.options import add_size_option
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.cli.values import MAX_DURATION_S, integer, real
@@ -193,24 +192,23 @@ def listen_until_stopped(args: argparse.Namespace, rx: Receiver | BusReceiver,
     """Poll ``rx`` until Ctrl-C/SIGTERM, ``--duration`` (s) or ``gone()``; with ``--json``
     print ``link_line()`` every STATUS_PERIOD_S; then decode what the link already received
     (:meth:`Receiver.drain`), flush ``rx`` and shut its transport."""
-    stop = threading.Event()
-    old = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
     t0 = time.monotonic()
     next_line = t0 + STATUS_PERIOD_S
     try:
-        while not stop.is_set() and not gone():
-            now = time.monotonic()
-            if args.duration_s is not None and now - t0 >= args.duration_s:
-                break
-            rx.poll(0.02)
-            if args.json and now >= next_line:
-                next_line += STATUS_PERIOD_S
-                print(json.dumps({"type": "link", **link_line()}), flush=True)
-        rx.drain()  # what the link already received is decoded before the totals
-        rx.flush()
+        with signals.stop_event(on_second=lambda: "stopped at once: what the link had "
+                                                  "received but not yet decoded was dropped") \
+                as stop:
+            while not stop.is_set() and not gone():
+                now = time.monotonic()
+                if args.duration_s is not None and now - t0 >= args.duration_s:
+                    break
+                rx.poll(0.02)
+                if args.json and now >= next_line:
+                    next_line += STATUS_PERIOD_S
+                    print(json.dumps({"type": "link", **link_line()}), flush=True)
+            rx.drain()  # what the link already received is decoded before the totals
+            rx.flush()
     finally:
-        for s, h in old.items():
-            signal.signal(s, h)
         rx.transport.shutdown()
 
 

@@ -4,14 +4,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import signal
 import sys
-import threading
 from pathlib import Path
 from typing import Any
 
 from firmware_sim.board import REALTIME_SPIN_S, Board, BoardConfig, BoardSummary
 from firmware_sim.clock import request_realtime
+from skinhil.cli import signals
 from skinhil.cli.options import SCHEDULE_HELP, add_model_options, noise_from_args, read_schedule
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.cli.values import MAX_DURATION_S, MAX_REST_S, integer, real
@@ -97,6 +96,33 @@ def _config(args: argparse.Namespace) -> BoardConfig:
                        spin_s=REALTIME_SPIN_S if args.realtime else 0.0).check()
 
 
+DRAIN_NOTICE_S = 2.0
+"""A stop whose drain onto the link takes longer than this (s) says so."""
+
+
+def _drain_notice(board: Board) -> str | None:
+    """What a clean stop waits for, when it is long (a slow link): the FIFO's drain (at
+    most ``drain_timeout_s``) and the transmit queue at the link's rate."""
+    link = board.link
+    if link is None:
+        return None
+    wait_s = (board.config.drain_timeout_s if len(board.fifo) else 0.0) + link.backlog_s()
+    if wait_s <= DRAIN_NOTICE_S:
+        return None
+    return (f"stopping: sending what is queued ({len(board.fifo)} events, "
+            f"{link.queued_units()} {'frames' if link.is_can else 'bytes'}) takes up to "
+            f"{wait_s:.0f} s on this link; Ctrl-C again stops at once")
+
+
+def _undrained(board: Board) -> str:
+    """What a second Ctrl-C leaves unsent."""
+    link = board.link
+    queued = 0 if link is None else link.queued_units()
+    unit = "frames" if link is not None and link.is_can else "bytes"
+    return (f"stopped at once: {len(board.fifo)} events in the FIFO and {queued} {unit} "
+            "queued for the link were not sent")
+
+
 def _live(board: Board) -> dict[str, Any]:
     c = board.counters
     lat = board.clock.lateness_percentiles_ms(last=LIVE_WINDOW_TICKS)
@@ -156,12 +182,6 @@ def run(args: argparse.Namespace) -> int:
                 f"{'' if info['link_up'] else '  LINK DOWN'}\x1b[K")
             sys.stderr.flush()
 
-    stop = threading.Event()
-
-    def on_signal(signum: int, frame: object) -> None:
-        stop.set()
-
-    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     if not args.quiet and not args.json:
         model = board.sensor.model
         print(f"skinhil serve: board {args.board_id} on {where}; skin {format_size(model.size)}"
@@ -169,11 +189,11 @@ def run(args: argparse.Namespace) -> int:
               f"{'s' if board.config.threads > 1 else ''}; Ctrl-C stops",
               file=sys.stderr, flush=True)
     try:
-        summary = board.run(args.duration_s, stop,
-                            on_second if (args.json or tty) else None)
+        with signals.stop_event(lambda: _drain_notice(board),
+                                lambda: _undrained(board)) as stop:
+            summary = board.run(args.duration_s, stop,
+                                on_second if (args.json or tty) else None)
     finally:
-        for s, h in old.items():
-            signal.signal(s, h)
         if tty:
             sys.stderr.write("\n")
     if args.json:
