@@ -26,11 +26,11 @@ def check_output_path(path: Path, suffixes: tuple[str, ...] = ()) -> Path:
     is done, so a long run does not end in an unwritable output.
     """
     path = Path(path).expanduser().absolute()
+    if path.is_dir():
+        raise ConfigError(f"output '{path}' is a folder — give a file name")
     if suffixes and path.suffix.lower() not in suffixes:
         raise ConfigError(f"output '{path}' does not end in {' or '.join(suffixes)} — name "
                           f"the file with that suffix")
-    if path.is_dir():
-        raise ConfigError(f"output '{path}' is a folder — give a file name")
     if path.exists() and not path.is_file():
         raise ConfigError(f"output '{path}' is not a regular file — give a file path")
     if not path.parent.is_dir():

@@ -10,7 +10,7 @@ from pathlib import Path
 from skinhil.cli.values import integer, real, seed_value, size_value, snr_value
 from skinhil.model.geometry import PAPER_SIZE, MeshSize
 from skinhil.model.neurons import NoiseParams
-from skinhil.model.schedule_file import load_schedule
+from skinhil.model.schedule_file import MAX_FILE_BYTES, load_schedule
 from skinhil.model.skin import SkinModel, SkinParams
 from skinhil.model.stimuli import Schedule
 
@@ -80,7 +80,7 @@ def read_schedule(path: Path, size: MeshSize) -> Schedule:
         n_bytes = path.stat().st_size
     except OSError:
         n_bytes = 0  # load_schedule says what is wrong with the path
-    if n_bytes >= SCHEDULE_NOTICE_BYTES:
+    if SCHEDULE_NOTICE_BYTES <= n_bytes <= MAX_FILE_BYTES:  # larger ones are refused at once
         print(f"skinhil: reading schedule {path} ({n_bytes / 2**20:.1f} MiB, about "
               f"{n_bytes / 2**20 * 0.3:.0f} s)", file=sys.stderr, flush=True)
     return load_schedule(path, size)
