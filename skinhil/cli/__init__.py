@@ -7,69 +7,17 @@ and ``run(args) -> int``. Every refusal, argparse's own included, is one line on
 SIGTERM are handled from the first instruction of :func:`main` on
 (:mod:`skinhil.cli.signals`): exit status 130 or 143, child processes ended, no traceback.
 
-This module imports only the standard library at its top, so that the signal handlers are
-in place before numpy, numba and the model are imported.
+This module imports nothing at its top but :mod:`skinhil.cli.signals` (standard library
+only), so that the signal handlers are in place before anything else is imported: the parser
+(:mod:`skinhil.cli.parser`), numpy, numba and the model.
 """
 
 from __future__ import annotations
 
-import argparse
-import importlib
-import logging
 import sys
 from collections.abc import Sequence
-from typing import NoReturn
 
 from skinhil.cli import signals
-
-SUBCOMMANDS: tuple[str, ...] = (
-    "demo",
-    "serve",
-    "listen",
-    "train",
-    "simulate",
-    "reproduce",
-    "dbc",
-    "compile",
-)
-
-ERROR_STATUS = 2
-"""Exit status of every refusal (bad option, bad file, unusable port, ...)."""
-
-
-def error_line(what: str) -> str:
-    """The one line every refusal prints: ``skinhil: error: <what — what to do>``."""
-    return f"skinhil: error: {what}"
-
-
-class ArgumentParser(argparse.ArgumentParser):
-    """argparse with skinhil's error path: a bad option is one ``skinhil: error:`` line
-    saying where to read the usage, exit status 2, no usage block."""
-
-    def error(self, message: str) -> NoReturn:
-        print(error_line(f"{message} — see '{self.prog} --help'"), file=sys.stderr)
-        sys.exit(ERROR_STATUS)
-
-
-def build_parser(only: str | None = None) -> argparse.ArgumentParser:
-    """The top-level parser with every available subcommand registered, or only ``only``
-    when it names one (each subcommand module imports what it runs on: a board start need
-    not pay for scikit-learn's import)."""
-    parser = ArgumentParser(
-        prog="skinhil",
-        description="Real-time neuromorphic hardware-in-the-loop emulator of touch.")
-    parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=ArgumentParser)
-    sub.required = True
-    for name in (only,) if only in SUBCOMMANDS else SUBCOMMANDS:
-        try:
-            module = importlib.import_module(f"skinhil.cli.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name == f"skinhil.cli.{name}":
-                continue
-            raise
-        module.add_parser(sub)
-    return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -85,11 +33,16 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _run(argv: list[str]) -> int:
-    command = next((a for a in argv if not a.startswith("-")), None)  # -v is the only option
+    import importlib
+    import logging
+
+    from skinhil.cli.parser import ERROR_STATUS, build_parser, error_line
     from skinhil.errors import SkinhilError
 
+    command = next((a for a in argv if not a.startswith("-")), None)  # -v is the only option
     try:
-        args = build_parser(command).parse_args(argv)
+        args = build_parser(command).parse_args(argv)  # imports the subcommand's module
+        signals.resume()  # start-up done: a Ctrl-C during the imports stops here
         level = logging.WARNING - 10 * min(args.verbose, 2)
         logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
         if args.command in KERNEL_COMMANDS:

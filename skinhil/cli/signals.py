@@ -28,6 +28,7 @@ STOP_SIGNALS: tuple[signal.Signals, ...] = (signal.SIGINT, signal.SIGTERM)
 """The signals that stop a command."""
 
 _received: list[int] = []
+_deferred: list[bool] = [False]
 
 
 class Stopped(KeyboardInterrupt):
@@ -45,13 +46,26 @@ class Stopped(KeyboardInterrupt):
 
 def _raise(signum: int, frame: FrameType | None) -> None:
     _received.append(signum)
-    raise Stopped(signum)
+    if not _deferred[0]:
+        raise Stopped(signum)
 
 
 def install() -> None:
-    """Make SIGINT and SIGTERM raise :class:`Stopped` in the main thread."""
+    """Make SIGINT and SIGTERM raise :class:`Stopped` in the main thread, once
+    :func:`resume` is called: until then (the start-up's imports) they are only recorded,
+    since an exception inside an extension module's import (numpy's) turns into an
+    ImportError with pages of advice instead of a clean stop."""
+    _deferred[0] = True
     for s in STOP_SIGNALS:
         signal.signal(s, _raise)
+
+
+def resume() -> None:
+    """End the start-up: a stop signal received meanwhile raises :class:`Stopped` now, later
+    ones at once."""
+    _deferred[0] = False
+    if _received:
+        raise Stopped(_received[0])
 
 
 def received() -> int | None:
