@@ -33,7 +33,7 @@ STATUS_PERIOD_RANGE_S = (1e-3, 60.0)
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
-        "serve", help="run the emulated sensor board in real time over serial or CAN",
+        "serve", help="run the emulated sensor board in real time over serial, CAN or UDP",
         description="Run the emulated e-skin board in real time: the skin, its neurons (338 "
                     "at 6x6) and the AER link, paced to the baud rate or CAN bitrate. By default "
                     "it plays a seeded random sequence of the 9 direction conditions with rests, "

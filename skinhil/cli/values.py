@@ -118,5 +118,5 @@ def check_memory(n_bytes: int, what: str, advice: str) -> None:
     than :data:`MEMORY_SHARE` of the available memory; ``advice`` says what to do."""
     free = available_memory_bytes()
     if n_bytes > MEMORY_SHARE * free:
-        raise ConfigError(f"{what} need {n_bytes / 2**30:.3g} GiB; {free / 2**30:.3g} GiB "
-                          f"of memory is available — {advice}")
+        raise ConfigError(f"{what} need {n_bytes / 2**30:,.1f} GiB of memory; "
+                          f"{free / 2**30:,.1f} GiB is available — {advice}")
