@@ -40,15 +40,15 @@ def _run(argv: list[str]) -> int:
     from skinhil.errors import SkinhilError
 
     command = next((a for a in argv if not a.startswith("-")), None)  # -v is the only option
+    if command in KERNEL_COMMANDS and not {"-h", "--help"} & set(argv):
+        from skinhil.cli.compile import announce_cold_cache
+
+        announce_cold_cache(command)  # before the subcommand's imports: within ~1 s of launch
     try:
         args = build_parser(command).parse_args(argv)  # imports the subcommand's module
         signals.resume()  # start-up done: a Ctrl-C during the imports stops here
         level = logging.WARNING - 10 * min(args.verbose, 2)
         logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
-        if args.command in KERNEL_COMMANDS:
-            from skinhil.cli.compile import announce_cold_cache
-
-            announce_cold_cache(args.command)
         module = importlib.import_module(f"skinhil.cli.{args.command}")
         status = int(module.run(args) or 0)
     except SkinhilError as exc:
