@@ -241,10 +241,9 @@ def run(args: argparse.Namespace) -> int:
     if several and args.record is not None:
         raise ConfigError("--record saves one board's session: use it with one board on "
                           "--port or --can")
-    if args.record is not None:
-        args.record = check_output_path(args.record, (".npz", ".nwb"))
-        if args.record.suffix == ".nwb":
-            require_pynwb()
+    record = None if args.record is None else check_output_path(args.record, (".npz", ".nwb"))
+    if record is not None and record.suffix == ".nwb":
+        require_pynwb()
     decoder = load_window_decoder(args.model, n_channels=spring_count(args.size))
     transport = open_transport(args)
     names = class_names()
@@ -255,7 +254,7 @@ def run(args: argparse.Namespace) -> int:
         return run_bus(args, bus, names)
     receiver = Receiver(transport, decoder, board_id=args.board_ids[0],
                         reopen=lambda: open_transport(args))
-    recorder = SessionRecorder() if args.record is not None else None
+    recorder = SessionRecorder() if record is not None else None
     receiver.add_listener(LivePrinter(receiver, args.json, names))
     if recorder is not None:
         receiver.add_listener(recorder)
@@ -266,16 +265,16 @@ def run(args: argparse.Namespace) -> int:
     listen_until_stopped(args, receiver, lambda: receiver.link_report().as_dict(),
                          lambda: False)
     info = summary(receiver, time.monotonic() - t0)
-    if recorder is not None and args.record.suffix == ".nwb":
+    if recorder is not None and record is not None and record.suffix == ".nwb":
         p = SkinParams(size=args.size)
-        write_session(args.record, mesh=build_mesh(p.spacing_m, p.layer_gap_m, p.size),
+        write_session(record, mesh=build_mesh(p.spacing_m, p.layer_gap_m, p.size),
                       events=recorder.events, markers=recorder.markers,
                       decisions=recorder.decisions, names=names,
                       description=f"skinhil listen: {describe_transport(args)}, "
                                   f"model {args.model}")
-    elif recorder is not None:
-        recorder.save(args.record, {"model": str(args.model), "link": describe_transport(args),
-                                    "summary": info})
+    elif recorder is not None and record is not None:
+        recorder.save(record, {"model": str(args.model), "link": describe_transport(args),
+                               "summary": info})
     if args.json:
         print(json.dumps(info), flush=True)
     else:
