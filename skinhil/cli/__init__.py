@@ -40,10 +40,6 @@ def _run(argv: list[str]) -> int:
     from skinhil.errors import SkinhilError
 
     command = next((a for a in argv if not a.startswith("-")), None)  # -v is the only option
-    if command in KERNEL_COMMANDS and not {"-h", "--help"} & set(argv):
-        from skinhil.cli.compile import announce_cold_cache
-
-        announce_cold_cache(command)  # before the subcommand's imports: within ~1 s of launch
     try:
         args = build_parser(command).parse_args(argv)  # imports the subcommand's module
         signals.resume()  # start-up done: a Ctrl-C during the imports stops here
@@ -55,11 +51,6 @@ def _run(argv: list[str]) -> int:
         print(error_line(str(exc)), file=sys.stderr)
         return ERROR_STATUS
     return signals.exit_status(status)
-
-
-KERNEL_COMMANDS: frozenset[str] = frozenset({"serve", "listen", "demo", "train", "simulate"})
-"""Subcommands that run the model's or the receiver's compiled kernels: on a cold kernel
-cache they say first that they compile, and about how long it takes."""
 
 
 if __name__ == "__main__":

@@ -21,6 +21,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from protocols.kernel_cache import source_hash
+from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.listen import LivePrinter, class_names, print_summary, summary
 from skinhil.cli.options import DECODE_SNR_DB
 from skinhil.cli.train import print_report
@@ -124,6 +125,7 @@ def cached_model(snr_db: float, quiet: bool, baud: int, seed: int) -> Path:
 
 def run(args: argparse.Namespace) -> int:
     t_start = time.monotonic()
+    announce_cold_cache("demo")
     model_path = (args.model if args.model is not None
                   else cached_model(args.snr_db, args.quiet, args.baud, args.seed))
     decoder = load_window_decoder(model_path, n_channels=spring_count(PAPER_SIZE))

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from skinhil.cli import signals
+from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.options import add_size_option
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.cli.values import MAX_DURATION_S, integer, real
@@ -246,6 +247,7 @@ def run(args: argparse.Namespace) -> int:
         require_pynwb()
     decoder = load_window_decoder(args.model, n_channels=spring_count(args.size))
     transport = open_transport(args)
+    announce_cold_cache("listen")
     names = class_names()
     if several:
         bus = BusReceiver(transport, decoder, args.board_ids if args.can else (),

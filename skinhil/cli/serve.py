@@ -11,6 +11,7 @@ from typing import Any
 from firmware_sim.board import REALTIME_SPIN_S, Board, BoardConfig, BoardSummary
 from firmware_sim.clock import request_realtime
 from skinhil.cli import signals
+from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.options import SCHEDULE_HELP, add_model_options, noise_from_args, read_schedule
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.cli.values import MAX_DURATION_S, MAX_REST_S, integer, real
@@ -162,6 +163,7 @@ def run(args: argparse.Namespace) -> int:
         elif not args.quiet:
             print(("\n" if tty else "") + f"skinhil serve: {msg}", file=sys.stderr, flush=True)
 
+    announce_cold_cache("serve")
     board = Board(config, lambda: open_transport(args), schedule, on_link)
     if args.realtime:
         why = request_realtime()

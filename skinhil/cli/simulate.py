@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
+from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.options import (
     SCHEDULE_HELP,
     add_model_options,
@@ -81,6 +82,7 @@ def run(args: argparse.Namespace) -> int:
         check_memory(n_steps * model.n_springs * 4, f"the spring forces of {duration:g} s "
                      f"at --dt {args.dt_s:g} ({n_steps} steps x {model.n_springs} springs)",
                      "give --no-forces, a shorter --duration or a larger --dt")
+    announce_cold_cache("simulate")
     sensor = SkinSensor(model, args.dt_s, args.snr_db, args.seed,
                         noise=noise_from_args(args), threads=args.threads)
     block = max(1, int(round(BLOCK_S / args.dt_s)))

@@ -6,6 +6,7 @@ import argparse
 import time
 from pathlib import Path
 
+from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.options import DECODE_SNR_DB, add_size_option
 from skinhil.cli.values import MAX_REST_S, integer, real, seed_value, snr_value
 from skinhil.model.timeline import DEFAULT_REST_S
@@ -67,6 +68,7 @@ def run(args: argparse.Namespace) -> int:
     from skinhil.cli.listen import class_names
 
     out = check_output_path(args.out, (".npz",))  # before minutes of training
+    announce_cold_cache("train")
     t0 = time.monotonic()
     try:
         decoder, report = train_decoder(args.snr_db, args.reps, args.seed, rest_s=args.rest_s,

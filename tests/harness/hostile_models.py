@@ -18,12 +18,14 @@ SMALL_SPEC = FeatureSpec(dt_s=1e-3, window_s=0.004, bin_s=0.002, n_channels=5)
 """A decoder of 5 channels: of no skin's size."""
 
 
-def write_good(path: Path) -> Path:
-    """A valid decoder file of :data:`SMALL_SPEC` at ``path``."""
+def write_good(path: Path, n_channels: int = SMALL_SPEC.n_channels) -> Path:
+    """A valid decoder file of :data:`SMALL_SPEC` (with ``n_channels``) at ``path``."""
+    spec = FeatureSpec(dt_s=SMALL_SPEC.dt_s, window_s=SMALL_SPEC.window_s,
+                       bin_s=SMALL_SPEC.bin_s, n_channels=n_channels)
     rng = np.random.default_rng(0)
     y = np.repeat(np.arange(3), 10)
-    x = rng.normal(size=(30, SMALL_SPEC.n_features)) + y[:, None]
-    DirectionDecoder(SMALL_SPEC).fit(x, y).save(path)
+    x = rng.normal(size=(30, spec.n_features)) + y[:, None]
+    DirectionDecoder(spec).fit(x, y).save(path)
     return path
 
 
