@@ -163,12 +163,12 @@ def run(args: argparse.Namespace) -> int:
         elif not args.quiet:
             print(("\n" if tty else "") + f"skinhil serve: {msg}", file=sys.stderr, flush=True)
 
-    announce_cold_cache("serve")
-    board = Board(config, lambda: open_transport(args), schedule, on_link)
+    board = Board(config, lambda: open_transport(args), schedule, on_link)  # opens the link
     if args.realtime:
         why = request_realtime()
         if why is not None:
             raise ConfigError(f"--realtime: {why}")
+    announce_cold_cache("serve")  # board.run compiles: its warm-up runs every kernel once
 
     def on_second(b: Board) -> None:
         info = _live(b)
