@@ -21,15 +21,18 @@ from skinhil.cli import signals
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the process exit status (0, 2 for a refusal, 130/143
-    when stopped by SIGINT/SIGTERM)."""
-    signals.install()
+    """Run the command line (``argv``: the arguments, default ``sys.argv[1:]``); returns the
+    process exit status (0, 2 for a refusal, 130/143 when stopped by SIGINT/SIGTERM)."""
+    previous = signals.install()
     try:
         return _run(list(sys.argv[1:] if argv is None else argv))
     except signals.Stopped as exc:
         signals.end_children()
         print(f"skinhil: stopped by {exc}", file=sys.stderr, flush=True)
         return exc.exit_status
+    finally:
+        if argv is not None:  # called from Python: the caller's handlers back; as a
+            signals.restore(previous)  # program, they stay until the interpreter is gone
 
 
 def _run(argv: list[str]) -> int:

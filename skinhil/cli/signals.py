@@ -50,14 +50,26 @@ def _raise(signum: int, frame: FrameType | None) -> None:
         raise Stopped(signum)
 
 
-def install() -> None:
+Handlers = dict[signal.Signals, object]
+"""Signal handlers as :func:`signal.signal` returns them."""
+
+
+def install() -> Handlers:
     """Make SIGINT and SIGTERM raise :class:`Stopped` in the main thread, once
     :func:`resume` is called: until then (the start-up's imports) they are only recorded,
     since an exception inside an extension module's import (numpy's) turns into an
-    ImportError with pages of advice instead of a clean stop."""
+    ImportError with pages of advice instead of a clean stop. Returns the handlers it
+    replaced, for :func:`restore`."""
+    _received.clear()
     _deferred[0] = True
-    for s in STOP_SIGNALS:
-        signal.signal(s, _raise)
+    return {s: signal.signal(s, _raise) for s in STOP_SIGNALS}
+
+
+def restore(handlers: Handlers) -> None:
+    """Put back the handlers :func:`install` replaced (a caller in the same process, such
+    as a test calling :func:`skinhil.cli.main`, gets its own back)."""
+    for s, h in handlers.items():
+        signal.signal(s, h)  # type: ignore[arg-type]
 
 
 def resume() -> None:
