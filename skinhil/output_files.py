@@ -17,21 +17,26 @@ from pathlib import Path
 from skinhil.errors import ConfigError
 
 
-def check_output_path(path: Path) -> Path:
-    """``path`` as an absolute path whose folder exists and that is not a folder or device.
+def check_output_path(path: Path, suffixes: tuple[str, ...] = ()) -> Path:
+    """``path`` as an absolute path whose folder exists and that is not a folder or device;
+    with ``suffixes``, its name ends in one of them (a writer that adds its own suffix would
+    write another path than the one named).
 
     Raises :class:`ConfigError` (one line: what and what to do) otherwise, before any work
     is done, so a long run does not end in an unwritable output.
     """
     path = Path(path).expanduser().absolute()
     if path.is_dir():
-        raise ConfigError(f"output '{path}' is a folder: give a file name")
+        raise ConfigError(f"output '{path}' is a folder — give a file name")
+    if suffixes and path.suffix.lower() not in suffixes:
+        raise ConfigError(f"output '{path}' does not end in {' or '.join(suffixes)} — name "
+                          f"the file with that suffix")
     if path.exists() and not path.is_file():
-        raise ConfigError(f"output '{path}' is not a regular file: give a file path")
+        raise ConfigError(f"output '{path}' is not a regular file — give a file path")
     if not path.parent.is_dir():
-        raise ConfigError(f"output folder '{path.parent}' does not exist: create it first")
+        raise ConfigError(f"output folder '{path.parent}' does not exist — create it first")
     if not os.access(path.parent, os.W_OK):
-        raise ConfigError(f"output folder '{path.parent}' is not writable: choose another")
+        raise ConfigError(f"output folder '{path.parent}' is not writable — choose another")
     return path
 
 
@@ -41,7 +46,8 @@ def atomic_path(path: Path) -> Iterator[Path]:
 
     The temporary file keeps ``path``'s suffix (writers that choose a format by extension,
     such as numpy's or python-can's, see the right one). On an exception (including
-    KeyboardInterrupt and SystemExit) it is removed and ``path`` is left as it was.
+    KeyboardInterrupt and SystemExit) it is removed and ``path`` is left as it was; an
+    ``OSError`` of the writer (a full disk, a lost folder) becomes one :class:`ConfigError`.
     """
     path = check_output_path(path)
     fd, name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix}",
@@ -54,5 +60,15 @@ def atomic_path(path: Path) -> Iterator[Path]:
             with open(tmp, "rb+") as f:
                 os.fsync(f.fileno())
             os.replace(tmp, path)
+    except OSError as exc:
+        raise ConfigError(f"cannot write '{path}': {exc.strerror or exc} — free some space "
+                          "or choose another folder") from None
     finally:
         tmp.unlink(missing_ok=True)
+
+
+def write_text(path: Path, text: str) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` through :func:`atomic_path`; return the path."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
+    return Path(path)

@@ -64,7 +64,7 @@ def test_serve_bad_input_errors(tmp_path, pty_pair) -> None:
         "can": (serve_argv("--can", "vcan9"),
                 "does not exist" if HAS_VCAN else "no SocketCAN support"),
         "board": (serve_argv("--port", "loop://", "--board-id", "99"), "--board-id"),
-        "threads": (serve_argv("--port", "loop://", "--threads", "0"), "threads must be"),
+        "threads": (serve_argv("--port", "loop://", "--threads", "0"), "--threads"),
         "realtime": (_no_nice_prefix() + serve_argv("--port", "loop://", "--realtime",
                                                     "--duration", "0.1"), "real-time"),
     }

@@ -33,6 +33,7 @@ from __future__ import annotations
 import logging
 import math
 import os
+import signal
 import time
 from collections.abc import Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
@@ -160,6 +161,13 @@ def _one_blas_thread() -> None:
     threadpool_limits(1)
 
 
+def _local_worker() -> None:
+    """Local worker set-up: one BLAS thread; Ctrl-C (sent to the whole terminal's process
+    group) is for the parent, which ends its workers itself."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _one_blas_thread()
+
+
 def _local(tasks: list[tuple[SkinParams, float]], workers: int, bar: tqdm) -> list:
     if workers == 1:
         out = []
@@ -168,12 +176,17 @@ def _local(tasks: list[tuple[SkinParams, float]], workers: int, bar: tqdm) -> li
             bar.update()
         return out
     chunk = max(1, len(tasks) // (8 * workers))
-    with ProcessPoolExecutor(max_workers=workers, initializer=_one_blas_thread) as pool:
+    pool = ProcessPoolExecutor(max_workers=workers, initializer=_local_worker)
+    try:
         out = []
         for res in pool.map(_evaluate, tasks, chunksize=chunk):
             out.append(res)
             bar.update()
-        return out
+    except BaseException:  # stopped or failed: no waiting for the points still running
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown()
+    return out
 
 
 def _dask(tasks: list[tuple[SkinParams, float]], scheduler: str, bar: tqdm,

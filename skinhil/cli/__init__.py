@@ -1,70 +1,59 @@
 """The ``skinhil`` command line: one module per subcommand, one error path for all.
 
 Each subcommand module exposes ``add_parser(subparsers)`` (a parser named like the module)
-and ``run(args) -> int``. Errors
-raised on purpose (:class:`skinhil.errors.SkinhilError`) become one line on stderr and exit
-status 2; Ctrl-C becomes exit status 130.
+and ``run(args) -> int``. Every refusal, argparse's own included, is one line on stderr,
+``skinhil: error: <what> — <what to do>``, and exit status 2: errors raised on purpose
+(:class:`skinhil.errors.SkinhilError`) and bad options (:class:`ArgumentParser`). SIGINT and
+SIGTERM are handled from the first instruction of :func:`main` on
+(:mod:`skinhil.cli.signals`): exit status 130 or 143, child processes ended, no traceback.
+
+This module imports nothing at its top but :mod:`skinhil.cli.signals` (standard library
+only), so that the signal handlers are in place before anything else is imported: the parser
+(:mod:`skinhil.cli.parser`), numpy, numba and the model.
 """
 
 from __future__ import annotations
 
-import argparse
-import importlib
-import logging
 import sys
 from collections.abc import Sequence
 
-from skinhil.errors import SkinhilError
-
-SUBCOMMANDS: tuple[str, ...] = (
-    "demo",
-    "serve",
-    "listen",
-    "train",
-    "simulate",
-    "reproduce",
-    "dbc",
-)
-
-
-def build_parser(only: str | None = None) -> argparse.ArgumentParser:
-    """The top-level parser with every available subcommand registered, or only ``only``
-    when it names one (each subcommand module imports what it runs on: a board start need
-    not pay for scikit-learn's import)."""
-    parser = argparse.ArgumentParser(
-        prog="skinhil",
-        description="Real-time neuromorphic hardware-in-the-loop emulator of touch.",
-    )
-    parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    sub.required = True
-    for name in (only,) if only in SUBCOMMANDS else SUBCOMMANDS:
-        try:
-            module = importlib.import_module(f"skinhil.cli.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name == f"skinhil.cli.{name}":
-                continue
-            raise
-        module.add_parser(sub)
-    return parser
+from skinhil.cli import signals
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the process exit status."""
-    argv = list(sys.argv[1:] if argv is None else argv)
-    command = next((a for a in argv if not a.startswith("-")), None)  # -v is the only option
-    args = build_parser(command).parse_args(argv)
-    level = logging.WARNING - 10 * min(args.verbose, 2)
-    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+    """Run the command line (``argv``: the arguments, default ``sys.argv[1:]``); returns the
+    process exit status (0, 2 for a refusal, 130/143 when stopped by SIGINT/SIGTERM)."""
+    previous = signals.install()
     try:
+        return _run(list(sys.argv[1:] if argv is None else argv))
+    except signals.Stopped as exc:
+        signals.end_children()
+        print(f"skinhil: stopped by {exc}", file=sys.stderr, flush=True)
+        return exc.exit_status
+    finally:
+        if argv is not None:  # called from Python: the caller's handlers back; as a
+            signals.restore(previous)  # program, they stay until the interpreter is gone
+
+
+def _run(argv: list[str]) -> int:
+    import importlib
+    import logging
+
+    from skinhil.cli.parser import ERROR_STATUS, build_parser, error_line
+    from skinhil.errors import SkinhilError
+
+    command = next((a for a in argv if not a.startswith("-")), None)  # -v is the only option
+    try:
+        args = build_parser(command).parse_args(argv)  # imports the subcommand's module
+        signals.resume()  # start-up done: a Ctrl-C during the imports stops here
+        level = logging.WARNING - 10 * min(args.verbose, 2)
+        logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
         module = importlib.import_module(f"skinhil.cli.{args.command}")
-        return int(module.run(args) or 0)
+        status = int(module.run(args) or 0)
     except SkinhilError as exc:
-        print(f"skinhil: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("skinhil: interrupted", file=sys.stderr)
-        return 130
+        print(error_line(str(exc)), file=sys.stderr)
+        return ERROR_STATUS
+    return signals.exit_status(status)
 
 
 if __name__ == "__main__":

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import math
 import os
 import subprocess
 import time
@@ -22,13 +21,16 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from protocols.kernel_cache import source_hash
+from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.listen import LivePrinter, class_names, print_summary, summary
-from skinhil.cli.options import DECODE_SNR_DB, snr_value
+from skinhil.cli.options import DECODE_SNR_DB
 from skinhil.cli.train import print_report
+from skinhil.cli.transport_args import baud_value
+from skinhil.cli.values import real, seed_value, snr_value
 from skinhil.errors import ConfigError
+from skinhil.model.geometry import PAPER_SIZE, spring_count
 from skinhil.model.skin import SkinParams
 from skinhil.model.timeline import DEFAULT_REST_S
-from skinhil.output_files import atomic_path
 from skinhil.receiver import Receiver
 from skinhil.receiver.model_file import load_window_decoder
 from skinhil.receiver.session import run_against_board, serve_command
@@ -36,6 +38,8 @@ from skinhil.receiver.training import train_decoder
 from skinhil.transports import PtyMasterTransport
 
 DEFAULT_DURATION_S = 20.0
+MAX_DURATION_S = 3600.0
+"""Longest demo (s of board time)."""
 DEMO_REST_S = DEFAULT_REST_S
 """Rest (s) after each stimulus: the board's default."""
 DEMO_REPS = 30
@@ -57,15 +61,17 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "and caches a model on first use.")
     p.add_argument("--snr-db", type=snr_value, default=DECODE_SNR_DB, metavar="DB",
                    help=f"neuron noise SNR in dB, 'inf' for none (default: {DECODE_SNR_DB:g})")
-    p.add_argument("--duration", dest="duration_s", type=float, default=DEFAULT_DURATION_S,
+    p.add_argument("--duration", dest="duration_s",
+                   type=real(0, MAX_DURATION_S, "seconds", lo_open=True),
+                   default=DEFAULT_DURATION_S,
                    metavar="SECONDS", help=f"board time to play (default: "
                                            f"{DEFAULT_DURATION_S:g})")
-    p.add_argument("--seed", type=int, default=1, help="board noise and schedule seed "
-                                                       "(default: 1)")
+    p.add_argument("--seed", type=seed_value, default=1,
+                   help="board noise and schedule seed, 0..2^63-1 (default: 1)")
     p.add_argument("--model", type=Path, metavar="NPZ",
                    help="decoder file (default: train on first use and cache)")
-    p.add_argument("--baud", type=int, default=921600, help="emulated serial baud rate "
-                                                           "(default: 921600)")
+    p.add_argument("--baud", type=baud_value, default=921600,
+                   help="emulated serial baud rate (default: 921600)")
     p.add_argument("--quiet", action="store_true", help="only the final figures")
 
 
@@ -111,8 +117,7 @@ def cached_model(snr_db: float, quiet: bool, baud: int, seed: int) -> Path:
     if not quiet:
         print_report(report, class_names())
     path.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_path(path) as tmp:
-        decoder.save(tmp)
+    decoder.save(path)
     for old in path.parent.glob(f"{stem}*.npz"):  # models of earlier sources
         if old != path:
             old.unlink(missing_ok=True)
@@ -120,12 +125,11 @@ def cached_model(snr_db: float, quiet: bool, baud: int, seed: int) -> Path:
 
 
 def run(args: argparse.Namespace) -> int:
-    if not (math.isfinite(args.duration_s) and 0 < args.duration_s <= 3600):
-        raise ConfigError(f"--duration must be 0..3600 seconds, got {args.duration_s!r}")
     t_start = time.monotonic()
+    announce_cold_cache("demo")
     model_path = (args.model if args.model is not None
                   else cached_model(args.snr_db, args.quiet, args.baud, args.seed))
-    decoder = load_window_decoder(model_path)
+    decoder = load_window_decoder(model_path, n_channels=spring_count(PAPER_SIZE))
     link, slave_fd = PtyMasterTransport.open_pair(args.baud)
     cmd = serve_command(["--port", link.slave_path, "--baud", str(args.baud)],
                         args.duration_s, args.snr_db, args.seed, DEMO_REST_S)
@@ -138,6 +142,11 @@ def run(args: argparse.Namespace) -> int:
     t_link = time.monotonic()
     try:
         status, out, err = run_against_board(receiver, cmd)
+    except KeyboardInterrupt:  # stopped: the figures so far
+        print()
+        print_summary(summary(receiver, time.monotonic() - t_link), names)
+        print(f"demo: stopped after {time.monotonic() - t_start:.1f} s wall", flush=True)
+        raise
     finally:
         link.shutdown()
         os.close(slave_fd)

@@ -6,9 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import signal
 import sys
-import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -16,12 +14,16 @@ from typing import Any
 
 import numpy as np
 
+from skinhil.cli import signals
+from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.options import add_size_option
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
+from skinhil.cli.values import MAX_DURATION_S, integer, real
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import build_mesh, spring_count
 from skinhil.model.skin import SkinParams
 from skinhil.nwb import require_pynwb, write_session
+from skinhil.output_files import check_output_path
 from skinhil.receiver import (
     BusReceiver,
     Receiver,
@@ -50,14 +52,16 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    metavar="N[,N...]",
                    help="board id(s) on the CAN bus, e.g. 0,5,9 to decode three boards at "
                         "once (default: 0); on UDP every board that sends is decoded")
-    p.add_argument("--duration", dest="duration_s", type=float, metavar="SECONDS",
+    p.add_argument("--duration", dest="duration_s",
+                   type=real(0, MAX_DURATION_S, "seconds", lo_open=True), metavar="SECONDS",
                    help="stop after this many seconds (default: until Ctrl-C)")
     p.add_argument("--json", action="store_true",
                    help="one JSON object per line: decisions, link counters, summary")
     p.add_argument("--record", type=Path, metavar="FILE",
                    help="save events (tonic-compatible), markers and decisions to this .npz, "
                         "or to NWB if it ends in .nwb (pip install \"skinhil[nwb]\")")
-    p.add_argument("--udp-max-sources", type=int, default=MAX_UDP_SOURCES, metavar="N",
+    p.add_argument("--udp-max-sources", type=integer(1, 4096, "count"),
+                   default=MAX_UDP_SOURCES, metavar="N",
                    help=f"with --udp: decode at most N sending boards; datagrams of further "
                         f"sources are refused and counted (default: {MAX_UDP_SOURCES})")
     p.add_argument("--udp-allow", type=lambda text: [h for h in text.split(",") if h],
@@ -189,24 +193,23 @@ def listen_until_stopped(args: argparse.Namespace, rx: Receiver | BusReceiver,
     """Poll ``rx`` until Ctrl-C/SIGTERM, ``--duration`` (s) or ``gone()``; with ``--json``
     print ``link_line()`` every STATUS_PERIOD_S; then decode what the link already received
     (:meth:`Receiver.drain`), flush ``rx`` and shut its transport."""
-    stop = threading.Event()
-    old = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
     t0 = time.monotonic()
     next_line = t0 + STATUS_PERIOD_S
     try:
-        while not stop.is_set() and not gone():
-            now = time.monotonic()
-            if args.duration_s is not None and now - t0 >= args.duration_s:
-                break
-            rx.poll(0.02)
-            if args.json and now >= next_line:
-                next_line += STATUS_PERIOD_S
-                print(json.dumps({"type": "link", **link_line()}), flush=True)
-        rx.drain()  # what the link already received is decoded before the totals
-        rx.flush()
+        with signals.stop_event(on_second=lambda: "stopped at once: what the link had "
+                                                  "received but not yet decoded was dropped") \
+                as stop:
+            while not stop.is_set() and not gone():
+                now = time.monotonic()
+                if args.duration_s is not None and now - t0 >= args.duration_s:
+                    break
+                rx.poll(0.02)
+                if args.json and now >= next_line:
+                    next_line += STATUS_PERIOD_S
+                    print(json.dumps({"type": "link", **link_line()}), flush=True)
+            rx.drain()  # what the link already received is decoded before the totals
+            rx.flush()
     finally:
-        for s, h in old.items():
-            signal.signal(s, h)
         rx.transport.shutdown()
 
 
@@ -233,31 +236,27 @@ def run_bus(args: argparse.Namespace, bus: BusReceiver, names: dict[int, str]) -
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.duration_s is not None and not (math.isfinite(args.duration_s)
-                                            and args.duration_s > 0):
-        raise ConfigError(f"--duration must be a positive number of seconds, "
-                          f"got {args.duration_s!r}")
     several = len(args.board_ids) > 1 or args.udp is not None
     if several and args.port is not None:
         raise ConfigError("a serial port carries one board: give one --board-id")
     if several and args.record is not None:
         raise ConfigError("--record saves one board's session: use it with one board on "
                           "--port or --can")
-    if args.record is not None and args.record.suffix == ".nwb":
+    record = None if args.record is None else check_output_path(args.record, (".npz", ".nwb"))
+    if record is not None and record.suffix == ".nwb":
         require_pynwb()
     decoder = load_window_decoder(args.model, n_channels=spring_count(args.size))
     transport = open_transport(args)
+    announce_cold_cache("listen")
     names = class_names()
     if several:
-        if args.udp_max_sources < 1:
-            raise ConfigError(f"--udp-max-sources must be 1 or more, got {args.udp_max_sources}")
         bus = BusReceiver(transport, decoder, args.board_ids if args.can else (),
                           max_sources=args.udp_max_sources, allow=args.udp_allow,
                           listeners=lambda key, rx: [LivePrinter(rx, args.json, names, key)])
         return run_bus(args, bus, names)
     receiver = Receiver(transport, decoder, board_id=args.board_ids[0],
                         reopen=lambda: open_transport(args))
-    recorder = SessionRecorder() if args.record is not None else None
+    recorder = SessionRecorder() if record is not None else None
     receiver.add_listener(LivePrinter(receiver, args.json, names))
     if recorder is not None:
         receiver.add_listener(recorder)
@@ -268,16 +267,16 @@ def run(args: argparse.Namespace) -> int:
     listen_until_stopped(args, receiver, lambda: receiver.link_report().as_dict(),
                          lambda: False)
     info = summary(receiver, time.monotonic() - t0)
-    if recorder is not None and args.record.suffix == ".nwb":
+    if recorder is not None and record is not None and record.suffix == ".nwb":
         p = SkinParams(size=args.size)
-        write_session(args.record, mesh=build_mesh(p.spacing_m, p.layer_gap_m, p.size),
+        write_session(record, mesh=build_mesh(p.spacing_m, p.layer_gap_m, p.size),
                       events=recorder.events, markers=recorder.markers,
                       decisions=recorder.decisions, names=names,
                       description=f"skinhil listen: {describe_transport(args)}, "
                                   f"model {args.model}")
-    elif recorder is not None:
-        recorder.save(args.record, {"model": str(args.model), "link": describe_transport(args),
-                                    "summary": info})
+    elif recorder is not None and record is not None:
+        recorder.save(record, {"model": str(args.model), "link": describe_transport(args),
+                               "summary": info})
     if args.json:
         print(json.dumps(info), flush=True)
     else:

@@ -4,35 +4,25 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
+from pathlib import Path
 
-from skinhil.errors import ConfigError
-from skinhil.model.geometry import PAPER_SIZE, MeshSize, parse_size
+from skinhil.cli.values import integer, real, seed_value, size_value, snr_value
+from skinhil.model.geometry import PAPER_SIZE, MeshSize
 from skinhil.model.mechanics.readout import READOUTS
 from skinhil.model.neurons import NoiseParams
+from skinhil.model.schedule_file import MAX_FILE_BYTES, load_schedule
 from skinhil.model.skin import AUTO_GEOMETRIC_MAX_SPRINGS, SkinModel, SkinParams
+from skinhil.model.stimuli import Schedule
 
+DT_RANGE_S = (1e-6, 1e-3)
+"""Simulation steps (s) the model takes: a whole number of microseconds, at most the 1 ms
+publish tick (the skin's fastest modes need steps well below a millisecond)."""
+MAX_THREADS = 256
+"""Most model threads."""
 DECODE_SNR_DB = 10.0
 """Default noise level (dB) of ``skinhil train`` and ``skinhil demo``: the paper's operating
 point (Figure 4)."""
-
-
-def snr_value(text: str) -> float:
-    """argparse type: an SNR in dB, or 'inf' for no noise."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number of dB (or 'inf')") from None
-    if math.isnan(value) or value == -math.inf:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number of dB (or 'inf')")
-    return value
-
-
-def size_value(text: str) -> MeshSize:
-    """argparse type: a mesh size ROWSxCOLS (>= 3x3)."""
-    try:
-        return parse_size(text)
-    except ConfigError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def add_size_option(parser: argparse.ArgumentParser) -> None:
@@ -57,16 +47,20 @@ def add_model_options(parser: argparse.ArgumentParser, snr_default: float = math
                         help="what each spring reports: 'length', k x its length change "
                              "(default), or 'axial', the small-displacement projection "
                              "k e.(q_j - q_i)")
-    parser.add_argument("--dt", dest="dt_s", type=float, default=1e-4, metavar="SECONDS",
-                        help="simulation step in seconds (default: 1e-4)")
+    parser.add_argument("--dt", dest="dt_s", type=real(*DT_RANGE_S, "seconds"), default=1e-4,
+                        metavar="SECONDS",
+                        help=f"simulation step in seconds, {DT_RANGE_S[0]:g}..{DT_RANGE_S[1]:g}"
+                             " (default: 1e-4)")
     parser.add_argument("--snr-db", type=snr_value, default=snr_default, metavar="DB",
                         help=f"neuron noise SNR in dB, 'inf' for none (default: {snr_default:g})")
     parser.add_argument("--noise", choices=("diffusion", "measured"), default="diffusion",
                         help="how the SNR becomes neuron noise: 'diffusion', sigma^2 = 1 mV^2 x "
                              "10^(-SNR/10) per ms whatever the step (default), or 'measured', "
                              "awgn(x, snr, 'measured') every step (runs away below ~24 dB)")
-    parser.add_argument("--seed", type=int, default=0, help="noise seed (default: 0)")
-    parser.add_argument("--threads", type=int, default=1, metavar="N",
+    parser.add_argument("--seed", type=seed_value, default=0,
+                        help="noise seed, 0..2^63-1 (default: 0)")
+    parser.add_argument("--threads", type=integer(1, MAX_THREADS, "thread count"), default=1,
+                        metavar="N",
                         help="threads for the model (diffusion noise), worth it from a few "
                              "thousand channels: offline the neurons share them (the same "
                              "spikes as one thread); serve steps the mechanics on one and the "
@@ -80,7 +74,24 @@ def noise_from_args(args: argparse.Namespace) -> NoiseParams:
 
 def model_from_args(args: argparse.Namespace) -> SkinModel:
     """The skin model selected by :func:`add_model_options`' options."""
-    if not (math.isfinite(args.dt_s) and args.dt_s > 0):
-        raise ConfigError(f"--dt must be a positive number of seconds, got {args.dt_s!r}")
     return SkinModel(SkinParams(mechanics=args.mechanics, readout=args.readout,
                                 size=args.size))
+
+
+SCHEDULE_HELP = "schedule file (TOML; format and limits: docs/schedule.md)"
+"""The help text of every option that takes a schedule file."""
+SCHEDULE_NOTICE_BYTES = 1 << 20
+"""Schedule files from this size (1 MiB, ~0.3 s to read) on are announced before reading."""
+
+
+def read_schedule(path: Path, size: MeshSize) -> Schedule:
+    """The schedule file ``path`` for a skin of top-layer ``size``, checked against its
+    schema; a big file is announced on stderr first (its reading takes a while)."""
+    try:
+        n_bytes = path.stat().st_size
+    except OSError:
+        n_bytes = 0  # load_schedule says what is wrong with the path
+    if SCHEDULE_NOTICE_BYTES <= n_bytes <= MAX_FILE_BYTES:  # larger ones are refused at once
+        print(f"skinhil: reading schedule {path} ({n_bytes / 2**20:.1f} MiB, about "
+              f"{n_bytes / 2**20 * 0.3:.0f} s)", file=sys.stderr, flush=True)
+    return load_schedule(path, size)

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import time
 from dataclasses import replace
 from pathlib import Path
 
-from skinhil.errors import ConfigError
+from skinhil.cli.values import integer
 from skinhil.reproduce import ReproduceConfig, reproduce
 
 
@@ -21,35 +22,36 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
     p.add_argument("--quick", action="store_true",
                    help="small grids and few repeats (under a minute), for tests")
-    p.add_argument("--workers", type=int, metavar="N",
+    p.add_argument("--workers", type=integer(1, 256, "worker count"), metavar="N",
                    help="local worker processes for sweeps and cross-validation "
                         "(default: all cores)")
     p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                    help="run the sweeps on this Dask distributed scheduler")
-    p.add_argument("--grid", type=int, metavar="N",
+    p.add_argument("--grid", type=integer(1, 101, "grid side"), metavar="N",
                    help="N x N stiffness x damping grid for both mechanics (default: 15, "
                         "--quick: 5 and 3)")
-    p.add_argument("--repeats", type=int, metavar="R",
+    p.add_argument("--repeats", type=integer(1, 1000, "count"), metavar="R",
                    help="cross-validation repeats (default: 10, --quick: 2)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
 
 
 def run(args: argparse.Namespace) -> int:
     cfg = ReproduceConfig.quick() if args.quick else ReproduceConfig()
-    if args.workers is not None and args.workers < 1:
-        raise ConfigError(f"--workers must be >= 1, got {args.workers}")
     cfg = replace(cfg, workers=args.workers, scheduler=args.scheduler,
                   progress=not args.no_progress)
     if args.grid is not None:
-        if args.grid < 1:
-            raise ConfigError(f"--grid must be >= 1, got {args.grid}")
         cfg = replace(cfg, sweep_linear=(args.grid, args.grid),
                       sweep_geometric=(args.grid, args.grid))
     if args.repeats is not None:
-        if args.repeats < 1:
-            raise ConfigError(f"--repeats must be >= 1, got {args.repeats}")
         cfg = replace(cfg, decoding=replace(cfg.decoding, repeats=args.repeats))
-    outcome = reproduce(args.out, cfg, quick=args.quick)
+    t0 = time.monotonic()
+    try:
+        outcome = reproduce(args.out, cfg, quick=args.quick)
+    except KeyboardInterrupt:
+        done = sorted(p.name for p in Path(args.out).glob("*") if not p.name.startswith("."))
+        print(f"reproduce: stopped after {time.monotonic() - t0:.1f} s; {len(done)} files "
+              f"complete in {args.out}{': ' + ', '.join(done) if done else ''}", flush=True)
+        raise
     print(f"wrote {outcome.report} and {len(outcome.figures)} figures in "
           f"{outcome.seconds:.1f} s")
     for r in outcome.results:

@@ -4,20 +4,19 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
-import signal
 import sys
-import threading
 from pathlib import Path
 from typing import Any
 
 from firmware_sim.board import REALTIME_SPIN_S, Board, BoardConfig, BoardSummary
 from firmware_sim.clock import request_realtime
-from skinhil.cli.options import add_model_options, noise_from_args
+from skinhil.cli import signals
+from skinhil.cli.kernel_notice import announce_cold_cache
+from skinhil.cli.options import SCHEDULE_HELP, add_model_options, noise_from_args, read_schedule
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
+from skinhil.cli.values import MAX_DURATION_S, MAX_REST_S, integer, real
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import format_size
-from skinhil.model.stimuli import load_schedule
 from skinhil.model.timeline import Timeline
 
 LIVE_WINDOW_TICKS = 1000
@@ -25,11 +24,17 @@ LIVE_WINDOW_TICKS = 1000
 whole run): percentiles over the whole history inside the tick loop would stall it."""
 MAX_BOARD_ID = 15
 """Largest board id (the CAN layout reserves 4 bits for it)."""
+MAX_TICK_S = 1.0
+"""Longest publish tick (s)."""
+MAX_FIFO_EVENTS = 1 << 22
+"""Largest event FIFO (4,194,304 events, 48 MB)."""
+STATUS_PERIOD_RANGE_S = (1e-3, 60.0)
+"""Status/heartbeat periods (s) the board takes."""
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
-        "serve", help="run the emulated sensor board in real time over serial or CAN",
+        "serve", help="run the emulated sensor board in real time over serial, CAN or UDP",
         description="Run the emulated e-skin board in real time: the skin, its neurons (338 "
                     "at 6x6) and the AER link, paced to the baud rate or CAN bitrate. By default "
                     "it plays a seeded random sequence of the 9 direction conditions with rests, "
@@ -37,21 +42,30 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     add_transport_args(p)
     src = p.add_mutually_exclusive_group()
     src.add_argument("--schedule", type=Path, metavar="TOML",
-                     help="play this schedule file (format: skinhil simulate --help)")
+                     help=f"play this {SCHEDULE_HELP}")
     src.add_argument("--host-driven", action="store_true",
                      help="no schedule: stimuli only on host commands")
-    p.add_argument("--rest", dest="rest_s", type=float, default=0.25, metavar="SECONDS",
-                   help="rest after each stimulus of the random schedule (default: 0.25)")
-    p.add_argument("--duration", dest="duration_s", type=float, metavar="SECONDS",
+    p.add_argument("--rest", dest="rest_s", type=real(0, MAX_REST_S, "seconds"), default=0.25,
+                   metavar="SECONDS", help="rest after each stimulus of the random schedule, "
+                                           f"0..{MAX_REST_S:g} (default: 0.25)")
+    p.add_argument("--duration", dest="duration_s", type=real(0, MAX_DURATION_S, "seconds",
+                                                               lo_open=True),
+                   metavar="SECONDS",
                    help="stop after this much board time (default: run until Ctrl-C)")
-    p.add_argument("--board-id", type=int, default=0, metavar="N",
+    p.add_argument("--board-id", type=integer(0, MAX_BOARD_ID, "board id"), default=0,
+                   metavar="N",
                    help=f"board id on the CAN bus, 0..{MAX_BOARD_ID} (default: 0)")
-    p.add_argument("--tick", dest="tick_s", type=float, default=1e-3, metavar="SECONDS",
+    p.add_argument("--tick", dest="tick_s", type=real(0, MAX_TICK_S, "seconds", lo_open=True),
+                   default=1e-3, metavar="SECONDS",
                    help="publish tick, a whole number of steps (default: 0.001)")
-    p.add_argument("--fifo", dest="fifo_events", type=int, default=16384, metavar="EVENTS",
-                   help="event FIFO capacity (default: 16384)")
-    p.add_argument("--status-period", dest="status_period_s", type=float, default=0.1,
-                   metavar="SECONDS", help="status/heartbeat period (default: 0.1)")
+    p.add_argument("--fifo", dest="fifo_events", type=integer(1, MAX_FIFO_EVENTS, "capacity"),
+                   default=16384, metavar="EVENTS",
+                   help=f"event FIFO capacity, 1..{MAX_FIFO_EVENTS} (default: 16384)")
+    p.add_argument("--status-period", dest="status_period_s",
+                   type=real(*STATUS_PERIOD_RANGE_S, "seconds"), default=0.1,
+                   metavar="SECONDS", help="status/heartbeat period, "
+                                           f"{STATUS_PERIOD_RANGE_S[0]:g}.."
+                                           f"{STATUS_PERIOD_RANGE_S[1]:g} (default: 0.1)")
     p.add_argument("--stopped", action="store_true",
                    help="start stopped: stream only after a START command")
     p.add_argument("--reconnect", action="store_true",
@@ -68,16 +82,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _config(args: argparse.Namespace) -> BoardConfig:
-    if args.duration_s is not None and not (math.isfinite(args.duration_s)
-                                            and args.duration_s > 0):
-        raise ConfigError(f"--duration must be a positive number of seconds, "
-                          f"got {args.duration_s!r}")
-    if not 0 <= args.board_id <= MAX_BOARD_ID:
-        raise ConfigError(f"--board-id must be 0..{MAX_BOARD_ID}, got {args.board_id}")
-    if not (math.isfinite(args.rest_s) and args.rest_s >= 0):
-        raise ConfigError(f"--rest must be >= 0 seconds, got {args.rest_s!r}")
-    if not (math.isfinite(args.tick_s) and args.tick_s > 0):
-        raise ConfigError(f"--tick must be a positive number of seconds, got {args.tick_s!r}")
     if args.schedule is not None:
         mode = Timeline.SCHEDULE_FILE
     elif args.host_driven:
@@ -92,6 +96,33 @@ def _config(args: argparse.Namespace) -> BoardConfig:
                        size=args.size, threads=args.threads, schedule_mode=mode, rest_s=args.rest_s,
                        start_running=not args.stopped, reconnect=args.reconnect,
                        spin_s=REALTIME_SPIN_S if args.realtime else 0.0).check()
+
+
+DRAIN_NOTICE_S = 2.0
+"""A stop whose drain onto the link takes longer than this (s) says so."""
+
+
+def _drain_notice(board: Board) -> str | None:
+    """What a clean stop waits for, when it is long (a slow link): the FIFO's drain (at
+    most ``drain_timeout_s``) and the transmit queue at the link's rate."""
+    link = board.link
+    if link is None:
+        return None
+    wait_s = (board.config.drain_timeout_s if len(board.fifo) else 0.0) + link.backlog_s()
+    if wait_s <= DRAIN_NOTICE_S:
+        return None
+    return (f"stopping: sending what is queued ({len(board.fifo)} events, "
+            f"{link.queued_units()} {'frames' if link.is_can else 'bytes'}) takes up to "
+            f"{wait_s:.0f} s on this link; Ctrl-C again stops at once")
+
+
+def _undrained(board: Board) -> str:
+    """What a second Ctrl-C leaves unsent."""
+    link = board.link
+    queued = 0 if link is None else link.queued_units()
+    unit = "frames" if link is not None and link.is_can else "bytes"
+    return (f"stopped at once: {len(board.fifo)} events in the FIFO and {queued} {unit} "
+            "queued for the link were not sent")
 
 
 def _live(board: Board) -> dict[str, Any]:
@@ -122,7 +153,7 @@ def _summary_text(s: BoardSummary) -> str:
 
 def run(args: argparse.Namespace) -> int:
     config = _config(args)
-    schedule = (load_schedule(args.schedule, args.size) if args.schedule is not None
+    schedule = (read_schedule(args.schedule, args.size) if args.schedule is not None
                 else None)
     tty = sys.stderr.isatty() and not args.quiet and not args.json
     where = describe_transport(args)
@@ -133,11 +164,12 @@ def run(args: argparse.Namespace) -> int:
         elif not args.quiet:
             print(("\n" if tty else "") + f"skinhil serve: {msg}", file=sys.stderr, flush=True)
 
-    board = Board(config, lambda: open_transport(args), schedule, on_link)
+    board = Board(config, lambda: open_transport(args), schedule, on_link)  # opens the link
     if args.realtime:
         why = request_realtime()
         if why is not None:
             raise ConfigError(f"--realtime: {why}")
+    announce_cold_cache("serve")  # board.run compiles: its warm-up runs every kernel once
 
     def on_second(b: Board) -> None:
         info = _live(b)
@@ -153,12 +185,6 @@ def run(args: argparse.Namespace) -> int:
                 f"{'' if info['link_up'] else '  LINK DOWN'}\x1b[K")
             sys.stderr.flush()
 
-    stop = threading.Event()
-
-    def on_signal(signum: int, frame: object) -> None:
-        stop.set()
-
-    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     if not args.quiet and not args.json:
         model = board.sensor.model
         print(f"skinhil serve: board {args.board_id} on {where}; skin {format_size(model.size)}"
@@ -167,11 +193,11 @@ def run(args: argparse.Namespace) -> int:
               f"{model.params.describe_mechanics()}; Ctrl-C stops",
               file=sys.stderr, flush=True)
     try:
-        summary = board.run(args.duration_s, stop,
-                            on_second if (args.json or tty) else None)
+        with signals.stop_event(lambda: _drain_notice(board),
+                                lambda: _undrained(board)) as stop:
+            summary = board.run(args.duration_s, stop,
+                                on_second if (args.json or tty) else None)
     finally:
-        for s, h in old.items():
-            signal.signal(s, h)
         if tty:
             sys.stderr.write("\n")
     if args.json:

@@ -10,12 +10,25 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
-from skinhil.cli.options import add_model_options, model_from_args, noise_from_args
+from skinhil.cli.kernel_notice import announce_cold_cache
+from skinhil.cli.options import (
+    SCHEDULE_HELP,
+    add_model_options,
+    model_from_args,
+    noise_from_args,
+    read_schedule,
+)
+from skinhil.cli.values import check_memory, real
 from skinhil.errors import ConfigError
 from skinhil.model.sensor import SkinSensor
-from skinhil.model.stimuli import Schedule, ScheduledStimulus, builtin_catalog, load_schedule
+from skinhil.model.stimuli import Schedule, ScheduledStimulus, builtin_catalog
 from skinhil.nwb import require_pynwb, write_simulation
+from skinhil.output_files import atomic_path, check_output_path
 
+MAX_DURATION_S = 1e6
+"""Longest simulation (s of model time); memory is estimated before any is allocated."""
+OUT_SUFFIXES = (".npz", ".nwb")
+"""What ``--out`` may end in: the format it selects."""
 BLOCK_S = 0.05
 """Simulated seconds per progress-bar update."""
 
@@ -33,8 +46,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     src.add_argument("--stimulus", default="A", metavar="NAME",
                      help="built-in stimulus: A..E (Fig 3) or e.g. 0deg_0.5N (Fig 4) "
                           "(default: A)")
-    src.add_argument("--schedule", type=Path, metavar="TOML", help="schedule file")
-    p.add_argument("--duration", dest="duration_s", type=float, metavar="SECONDS",
+    src.add_argument("--schedule", type=Path, metavar="TOML", help=SCHEDULE_HELP)
+    p.add_argument("--duration", dest="duration_s",
+                   type=real(0, MAX_DURATION_S, "seconds", lo_open=True), metavar="SECONDS",
                    help="simulated time (default: until 0.25 s after the last stimulus ends)")
     p.add_argument("--out", type=Path, default=Path("run.npz"),
                    help="output file: .npz (default run.npz) or .nwb")
@@ -47,7 +61,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 def _schedule(args: argparse.Namespace) -> Schedule:
     if args.schedule is not None:
-        return load_schedule(args.schedule, args.size)
+        return read_schedule(args.schedule, args.size)
     catalog = builtin_catalog(args.size)
     if args.stimulus not in catalog:
         raise ConfigError(f"unknown stimulus {args.stimulus!r}; choose one of "
@@ -57,16 +71,20 @@ def _schedule(args: argparse.Namespace) -> Schedule:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.out.suffix == ".nwb":
+    out = check_output_path(args.out, OUT_SUFFIXES)
+    if out.suffix == ".nwb":
         require_pynwb()
     schedule = _schedule(args)
     duration = args.duration_s if args.duration_s is not None else schedule.duration_s + 0.25
-    if not (math.isfinite(duration) and duration > 0):
-        raise ConfigError(f"--duration must be a positive number of seconds, got {duration!r}")
     model = model_from_args(args)
+    n_steps = int(round(duration / args.dt_s))
+    if args.forces:
+        check_memory(n_steps * model.n_springs * 4, f"the spring forces of {duration:g} s "
+                     f"at --dt {args.dt_s:g} ({n_steps} steps x {model.n_springs} springs)",
+                     "give --no-forces, a shorter --duration or a larger --dt")
+    announce_cold_cache("simulate")
     sensor = SkinSensor(model, args.dt_s, args.snr_db, args.seed,
                         noise=noise_from_args(args), threads=args.threads)
-    n_steps = int(round(duration / args.dt_s))
     block = max(1, int(round(BLOCK_S / args.dt_s)))
     forces = np.empty((n_steps if args.forces else 0, model.n_springs), dtype=np.float32)
     peak = 0.0
@@ -81,6 +99,9 @@ def run(args: argparse.Namespace) -> int:
                 forces[start:start + n] = f
             events.append(sensor.events(spikes, start))
             bar.update(n * args.dt_s)
+    if not math.isfinite(peak):
+        raise ConfigError(f"the spring forces overflowed (peak |force| {peak}) — give "
+                          "smaller forces or a smaller --dt; nothing written")
     ev = np.concatenate(events)
     markers = np.array([(e.onset_s, e.end_s, e.stimulus_id) for e in schedule.entries],
                        dtype=[("onset_s", "<f8"), ("end_s", "<f8"), ("stimulus_id", "<i4")])
@@ -90,15 +111,15 @@ def run(args: argparse.Namespace) -> int:
             "duration_s": n_steps * args.dt_s,
             "stimuli": [e.stimulus.name for e in schedule.entries],
             "params": {k: v for k, v in vars(model.params).items()}}
-    if args.out.suffix == ".nwb":
-        write_simulation(args.out, mesh=model.mesh, schedule=schedule, events=ev,
+    if out.suffix == ".nwb":
+        write_simulation(out, mesh=model.mesh, schedule=schedule, events=ev,
                          forces_n=forces if args.forces else None, dt_s=args.dt_s,
                          description=f"skinhil simulate: {json.dumps(meta)}")
     else:
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        np.savez_compressed(args.out, forces_n=forces, events=ev, markers=markers,
-                            meta=np.array(json.dumps(meta)))
+        with atomic_path(out) as tmp, tmp.open("wb") as fh:
+            np.savez_compressed(fh, forces_n=forces, events=ev, markers=markers,
+                                meta=np.array(json.dumps(meta)))
     rate = len(ev) / (n_steps * args.dt_s) / model.n_springs
-    print(f"wrote {args.out}: {n_steps} steps of {args.dt_s * 1e3:g} ms, {len(ev)} spikes "
+    print(f"wrote {out}: {n_steps} steps of {args.dt_s * 1e3:g} ms, {len(ev)} spikes "
           f"({rate:.1f} Hz per sensor), peak |force| {peak:.3g} N")
     return 0

@@ -3,14 +3,18 @@
 from __future__ import annotations
 
 import argparse
-import math
 import time
 from pathlib import Path
 
-from skinhil.cli.options import DECODE_SNR_DB, add_size_option, snr_value
-from skinhil.errors import ConfigError
+from skinhil.cli.kernel_notice import announce_cold_cache
+from skinhil.cli.options import DECODE_SNR_DB, add_size_option
+from skinhil.cli.values import MAX_REST_S, integer, real, seed_value, snr_value
 from skinhil.model.timeline import DEFAULT_REST_S
+from skinhil.output_files import check_output_path
 from skinhil.receiver.training import BIN_S, WINDOW_S, TrainingReport, train_decoder
+
+MAX_REPS = 10_000
+"""Most stimuli per condition."""
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -30,12 +34,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--snr-db", type=snr_value, default=DECODE_SNR_DB, metavar="DB",
                    help="neuron noise SNR in dB, 'inf' for none (default: "
                         f"{DECODE_SNR_DB:g}, the paper's)")
-    p.add_argument("--reps", type=int, default=50,
-                   help="stimuli per condition on average (9 x reps in all; default: 50)")
-    p.add_argument("--rest", dest="rest_s", type=float, default=DEFAULT_REST_S,
+    p.add_argument("--reps", type=integer(1, MAX_REPS, "count"), default=50,
+                   help=f"stimuli per condition on average (9 x reps in all), 1..{MAX_REPS} "
+                        "(default: 50)")
+    p.add_argument("--rest", dest="rest_s", type=real(0, MAX_REST_S, "seconds"),
+                   default=DEFAULT_REST_S,
                    metavar="SECONDS", help="rest after each stimulus, as the board's --rest "
                                            f"(default: {DEFAULT_REST_S:g})")
-    p.add_argument("--seed", type=int, default=0, help="noise and schedule seed (default: 0)")
+    p.add_argument("--seed", type=seed_value, default=0,
+                   help="noise and schedule seed, 0..2^63-1 (default: 0)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_size_option(p)
 
@@ -60,17 +67,18 @@ def print_report(report: TrainingReport, names: dict[int, str]) -> None:
 def run(args: argparse.Namespace) -> int:
     from skinhil.cli.listen import class_names
 
-    if args.reps < 1:
-        raise ConfigError(f"--reps must be at least 1, got {args.reps}")
-    if math.isnan(args.snr_db):
-        raise ConfigError("--snr-db must be a number of dB or inf")
-    if not (math.isfinite(args.rest_s) and args.rest_s >= 0):
-        raise ConfigError(f"--rest must be >= 0 seconds, got {args.rest_s!r}")
+    out = check_output_path(args.out, (".npz",))  # before minutes of training
+    announce_cold_cache("train")
     t0 = time.monotonic()
-    decoder, report = train_decoder(args.snr_db, args.reps, args.seed, rest_s=args.rest_s,
-                                    progress=not args.no_progress, size=args.size)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    decoder.save(args.out)
+    try:
+        decoder, report = train_decoder(args.snr_db, args.reps, args.seed, rest_s=args.rest_s,
+                                        progress=not args.no_progress, size=args.size)
+    except KeyboardInterrupt:
+        kept = "the previous file kept" if out.exists() else "nothing written"
+        print(f"train: stopped after {time.monotonic() - t0:.1f} s of training; {kept} "
+              f"({out})", flush=True)
+        raise
+    decoder.save(out)
     print_report(report, class_names())
-    print(f"wrote {args.out} in {time.monotonic() - t0:.1f} s")
+    print(f"wrote {out} in {time.monotonic() - t0:.1f} s")
     return 0

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 
+from skinhil.cli.values import integer
 from skinhil.errors import ConfigError
 from skinhil.transports import CanTransport, SerialTransport, Transport, UdpTransport
 from skinhil.transports.udp import DEFAULT_UDP_BITRATE, parse_address
@@ -23,11 +24,12 @@ UDP_LISTEN_HOST = "127.0.0.1"
 """Address a host listens on when ``--udp`` gives only a port (0.0.0.0: every interface)."""
 
 
-def _int_value(text: str) -> int:
-    try:
-        return int(text, 0)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+MAX_BITRATE = 100_000_000
+"""Highest baud rate or bitrate (bits/s) an option takes; each link checks its own."""
+baud_value = integer(1, MAX_BITRATE, "baud rate")
+"""argparse type: a serial baud rate (bits/s)."""
+bitrate_value = integer(1, MAX_BITRATE, "bitrate")
+"""argparse type: a CAN or UDP bitrate (bits/s)."""
 
 
 def add_transport_args(parser: argparse.ArgumentParser, udp_listen: bool = False) -> None:
@@ -51,16 +53,16 @@ def add_transport_args(parser: argparse.ArgumentParser, udp_listen: bool = False
     else:
         which.add_argument("--udp", metavar="HOST:PORT",
                            help="send the serial packet stream in UDP datagrams to HOST:PORT")
-    group.add_argument("--baud", type=_int_value, default=DEFAULT_BAUD, metavar="N",
+    group.add_argument("--baud", type=baud_value, default=DEFAULT_BAUD, metavar="N",
                        help=f"serial baud rate, bits/s, 8N1 (default: {DEFAULT_BAUD})")
     group.add_argument("--interface", default="socketcan", metavar="NAME",
                        help="python-can interface: socketcan, virtual, pcan, kvaser, slcan, "
                             "udp_multicast, ... (default: socketcan)")
     group.add_argument("--fd", action="store_true", help="use CAN FD (64-byte frames)")
-    group.add_argument("--bitrate", type=_int_value, default=None, metavar="N",
+    group.add_argument("--bitrate", type=bitrate_value, default=None, metavar="N",
                        help=f"CAN (arbitration) bitrate, bits/s (default: {DEFAULT_BITRATE}); "
                             f"UDP wire budget (default: {DEFAULT_UDP_BITRATE})")
-    group.add_argument("--data-bitrate", type=_int_value, default=None, metavar="N",
+    group.add_argument("--data-bitrate", type=bitrate_value, default=None, metavar="N",
                        help="CAN FD data-phase bitrate, bits/s (default: same as --bitrate)")
 
 
@@ -78,12 +80,12 @@ def open_transport(args: argparse.Namespace) -> Transport[bytes] | Transport[lis
     if args.udp is not None:
         host, port = parse_address(args.udp, UDP_LISTEN_HOST if args.udp_listen else None)
         return UdpTransport(host, port, listen=args.udp_listen,
-                            bitrate=args.bitrate or DEFAULT_UDP_BITRATE)
+                            bitrate=_or(args.bitrate, DEFAULT_UDP_BITRATE))
     if args.can is None:
         raise ConfigError("give a link: --port PORT (serial), --can CHANNEL (CAN) or "
                           "--udp HOST:PORT (UDP)")
     return CanTransport(args.can, args.interface, fd=args.fd,
-                        bitrate=args.bitrate or DEFAULT_BITRATE, data_bitrate=args.data_bitrate)
+                        bitrate=_or(args.bitrate, DEFAULT_BITRATE), data_bitrate=args.data_bitrate)
 
 
 def describe_transport(args: argparse.Namespace) -> str:
@@ -92,7 +94,12 @@ def describe_transport(args: argparse.Namespace) -> str:
         return f"serial {args.port} @ {args.baud} baud"
     if args.udp is not None:
         return (f"UDP {'listening on' if args.udp_listen else 'to'} {args.udp} @ "
-                f"{args.bitrate or DEFAULT_UDP_BITRATE} bit/s")
-    rate = f"{args.bitrate or DEFAULT_BITRATE} bit/s" + (f", data {args.data_bitrate} bit/s"
+                f"{_or(args.bitrate, DEFAULT_UDP_BITRATE)} bit/s")
+    rate = f"{_or(args.bitrate, DEFAULT_BITRATE)} bit/s" + (f", data {args.data_bitrate} bit/s"
                                       if args.data_bitrate else "")
     return f"CAN{' FD' if args.fd else ''} {args.interface}:{args.can} @ {rate}"
+
+
+def _or(value: int | None, default: int) -> int:
+    """``value``, or ``default`` when the option was not given (0 is not "not given")."""
+    return default if value is None else value

@@ -112,7 +112,7 @@ class FeatureSpec:
     @property
     def n_features(self) -> int:
         """Length of one feature vector: ``n_bins`` x selected channels."""
-        return self.n_bins * int(self.channel_index.size)
+        return self.n_bins * (self.n_channels if self.channels is None else len(self.channels))
 
     def transform(self, psp: np.ndarray) -> np.ndarray:
         """PSP traces (..., n, n_channels) starting at the onset → features (..., n_features).

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,6 +30,16 @@ import numpy as np
 
 from skinhil.decoding.features import FeatureSpec
 from skinhil.errors import ConfigError, ModelFileError
+from skinhil.output_files import atomic_path
+
+MAX_FILE_BYTES = 128 * 1024 * 1024
+"""Largest decoder file (128 MiB) read at all."""
+MAX_ARRAY_BYTES = 128 * 1024 * 1024
+"""Most bytes its arrays may expand to (128 MiB: the decoder of 9 classes for the largest
+skin the wire addresses, 65,535 sensors x 5 bins, holds 95 MiB); checked from the zip
+directory and the arrays' headers before anything is decompressed."""
+MAX_HEADER_BYTES = 1024 * 1024
+"""Largest JSON header entry (1 MiB)."""
 
 FORMAT = "skinhil-direction-decoder"
 FORMAT_VERSION = 1
@@ -77,7 +88,8 @@ def _digest(arrays: dict[str, np.ndarray], header: dict[str, Any]) -> str:
 
 
 def save_decoder(decoder: FittedDecoder, path: str | Path) -> None:
-    """Write a fitted decoder to ``path`` (conventionally ``*.npz``)."""
+    """Write a fitted decoder to ``path`` (conventionally ``*.npz``), whole or not at all
+    (:func:`skinhil.output_files.atomic_path`)."""
     classes = np.asarray(decoder.classes_)
     if classes.dtype.kind in "iub":
         classes, kind = classes.astype(np.int64), "int"
@@ -101,7 +113,7 @@ def save_decoder(decoder: FittedDecoder, path: str | Path) -> None:
     header["sha256"] = _digest(arrays, header)
     p = Path(path)
     try:
-        with p.open("wb") as fh:
+        with atomic_path(p) as tmp, tmp.open("wb") as fh:
             entries: dict[str, Any] = {"header": np.array(json.dumps(header, sort_keys=True)),
                                        **arrays}
             np.savez(fh, **entries)
@@ -110,17 +122,76 @@ def save_decoder(decoder: FittedDecoder, path: str | Path) -> None:
             from None
 
 
+def _member_shape(zf: zipfile.ZipFile, info: zipfile.ZipInfo, where: str) -> None:
+    """Refuse an ``.npy`` member whose header is malformed, holds an object (pickle) dtype
+    or claims more data than the member holds (e.g. a 10^11-element array): only the
+    header is read."""
+    fmt = np.lib.format
+    try:
+        with zf.open(info) as fh:
+            version = fmt.read_magic(fh)
+            if version == (1, 0):
+                shape, _, dtype = fmt.read_array_header_1_0(fh)
+            else:
+                shape, _, dtype = fmt.read_array_header_2_0(fh)
+    except (ValueError, SyntaxError, RecursionError, OverflowError, MemoryError, EOFError,
+            zipfile.BadZipFile, OSError) as exc:
+        raise ModelFileError(f"{where}: entry {info.filename!r} has a malformed array header "
+                             f"({type(exc).__name__}) — it is not a decoder file") from None
+    if dtype.hasobject:
+        raise ModelFileError(f"{where} holds pickled objects; refused (plain data only)")
+    n_bytes = math.prod(shape) * dtype.itemsize
+    if n_bytes > info.file_size:
+        raise ModelFileError(f"{where}: entry {info.filename!r} claims an array of "
+                             f"{shape} ({n_bytes} bytes) but holds {info.file_size} bytes — "
+                             "the file is corrupted or hostile")
+
+
+def _check_zip(p: Path, where: str) -> None:
+    """Refuse, from the zip directory and the arrays' headers alone, a file that is too big,
+    has other entries, or would expand beyond :data:`MAX_ARRAY_BYTES` (a compression
+    bomb)."""
+    try:
+        with zipfile.ZipFile(p) as zf:
+            infos = zf.infolist()
+            names = sorted(i.filename for i in infos)
+            expected = sorted(f"{n}.npy" for n in ("header", *ARRAYS))
+            if len(infos) > len(expected) or set(names) - set(expected):
+                raise ModelFileError(f"{where} has entries {names[:8]}, not those of a decoder "
+                                     f"file ({', '.join(expected)})")
+            total = sum(i.file_size for i in infos)
+            header = next((i for i in infos if i.filename == "header.npy"), None)
+            if total > MAX_ARRAY_BYTES or (header is not None
+                                           and header.file_size > MAX_HEADER_BYTES):
+                raise ModelFileError(f"{where} expands to {total} bytes — more than a decoder "
+                                     f"holds ({MAX_ARRAY_BYTES // 2**20} MiB of arrays, a "
+                                     f"{MAX_HEADER_BYTES // 1024} KiB header); refused")
+            for info in infos:
+                _member_shape(zf, info, where)
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, NotImplementedError, ValueError,
+            EOFError) as exc:
+        raise ModelFileError(f"{where} is corrupted: {exc}") from None
+
+
 def _read(p: Path) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     where = f"decoder file {str(p)!r}"
     if not p.is_file():
         raise ModelFileError(f"{where} not found; train one with 'skinhil train'")
-    with p.open("rb") as fh:
-        magic = fh.read(4)
+    try:
+        if p.stat().st_size > MAX_FILE_BYTES:
+            raise ModelFileError(f"{where} is larger than {MAX_FILE_BYTES // 2**20} MiB, more "
+                                 "than any decoder; refused")
+        with p.open("rb") as fh:
+            magic = fh.read(4)
+    except OSError as exc:
+        raise ModelFileError(f"{where} cannot be read: {exc.strerror or exc} — check its "
+                             "permissions") from None
     if magic[:1] == b"\x80":
         raise ModelFileError(f"{where} is a pickle; pickled models are refused, save the "
                              "decoder with DirectionDecoder.save")
     if magic != b"PK\x03\x04":
         raise ModelFileError(f"{where} is not a decoder .npz file (wrong magic bytes)")
+    _check_zip(p, where)
     try:
         with np.load(p, allow_pickle=False) as data:
             names = set(data.files)
@@ -143,8 +214,9 @@ def _read(p: Path) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
         raise ModelFileError(f"{where} has no readable JSON header")
     try:
         header = json.loads(str(header_arr))
-    except json.JSONDecodeError as exc:
-        raise ModelFileError(f"{where} has a corrupted JSON header: {exc}") from None
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise ModelFileError(f"{where} has a corrupted JSON header: "
+                             f"{type(exc).__name__}") from None
     if not isinstance(header, dict):
         raise ModelFileError(f"{where} has a JSON header that is not an object")
     return header, arrays
@@ -172,8 +244,16 @@ def load_decoder(path: str | Path) -> DecoderFile:
                                  "this skinhil reads 'ovo'")
         n_features, n_classes = int(header["n_features"]), int(header["n_classes"])
         c, max_iter, tol = float(params["C"]), int(params["max_iter"]), float(params["tol"])
-    except (KeyError, TypeError, ValueError) as exc:
-        raise ModelFileError(f"{where} has an invalid header: {exc}") from None
+    except (KeyError, TypeError, ValueError, OverflowError, RecursionError, AttributeError) \
+            as exc:
+        raise ModelFileError(f"{where} has an invalid header ({type(exc).__name__}: "
+                             f"{str(exc)[:80]}) — retrain with 'skinhil train'") from None
+    if spec.n_steps * spec.n_channels * 8 > MAX_ARRAY_BYTES:
+        many = spec.n_channels if spec.n_channels < 10**9 else "over 10^9"
+        raise ModelFileError(f"{where}: its feature window ({spec.n_steps} steps x {many} "
+                             "channels) would need more than "
+                             f"{MAX_ARRAY_BYTES // 2**20} MiB per window — not a decoder of "
+                             "this skinhil")
     if n_classes < 2:
         raise ModelFileError(f"{where} holds {n_classes} class(es); a decoder needs two or more")
     n_rows = n_classes * (n_classes - 1) // 2
@@ -189,5 +269,9 @@ def load_decoder(path: str | Path) -> DecoderFile:
     for name in ("coef", "intercept", "mean", "scale"):
         if arrays[name].dtype != np.float64 or not np.all(np.isfinite(arrays[name])):
             raise ModelFileError(f"{where}: array {name!r} is not finite float64")
+    if not np.all(arrays["scale"] > 0):
+        raise ModelFileError(f"{where}: its standardisation 'scale' has zero or negative "
+                             "entries (features would be divided by them) — retrain with "
+                             "'skinhil train'")
     return DecoderFile(spec=spec, C=c, max_iter=max_iter, tol=tol, n_features=n_features,
                        arrays={name: arrays[name] for name in ARRAYS})

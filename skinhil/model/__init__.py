@@ -7,3 +7,5 @@ sensor that steps skin and neurons block by block (:mod:`.sensor`, :mod:`.pipeli
 offline trials (:mod:`.trials`). Nothing here knows the board, the wire, the receiver or the
 command line.
 """
+
+import protocols.kernel_cache  # noqa: F401  (numba's cache keyed on the sources, before any kernel)

@@ -43,16 +43,15 @@ shifted by ``trunc((rows − 6)/2)`` (``trunc((cols − 6)/2)``), so M15 (layer 
 fixed mass (B and C, on M16, at 3x3) is refused by the model with a clear error.
 
 Schedules place stimuli on a timeline (``start_s`` of each), from code, from
-:func:`random_schedule` or from a TOML file (:func:`load_schedule`, format in its docstring).
+:func:`random_schedule` or from a TOML file (:func:`skinhil.model.schedule_file.load_schedule`,
+format and limits in ``docs/schedule.md``).
 """
 
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from types import MappingProxyType
 
 import numba
@@ -395,73 +394,4 @@ def random_schedule(stimuli: Sequence[Stimulus], n: int, rest_s: float = 0.25,
         stim = stimuli[int(p)]
         entries.append(ScheduledStimulus(t, stim, ids[int(p)]))
         t += stim.end_s + rest_s
-    return Schedule(tuple(entries))
-
-
-def _stimulus_from_table(table: Mapping[str, object], where: str, size: MeshSize) -> Stimulus:
-    known = {"name", "forces", "onset_s", "indentation_s", "decay_tau_s", "id"}
-    unknown = set(table) - known
-    if unknown:
-        raise ConfigError(f"{where}: unknown key(s) {sorted(unknown)}; allowed: {sorted(known)}")
-    name = table.get("name")
-    forces = table.get("forces")
-    if not isinstance(name, str) or not isinstance(forces, Mapping) or not forces:
-        raise ConfigError(f"{where}: needs name = \"...\" and forces = {{ 15 = [fx, fy, fz] }}")
-    kwargs = {k: float(table[k]) for k in ("onset_s", "indentation_s", "decay_tau_s")  # type: ignore[arg-type]
-              if k in table}
-    return Stimulus(name, forces, size=size, **kwargs)  # type: ignore[arg-type]
-
-
-def load_schedule(path: str | Path, size: MeshSize = PAPER_SIZE) -> Schedule:
-    """Read a schedule from a TOML file for a skin of top-layer ``size`` (mass numbers of that
-    size; built-in stimuli moved to it by :func:`at_size`).
-
-    Format::
-
-        [[stimulus]]                 # optional user stimuli (ids 100, 101, ... in file order)
-        name = "poke"
-        forces = { 15 = [0.0, 0.0, -0.4], 16 = [0.0, 0.0, -0.1] }   # N, mass numbers
-        indentation_s = 0.2          # optional: onset_s, indentation_s, decay_tau_s
-        decay_tau_s = 0.05
-
-        [[event]]                    # the timeline
-        start_s = 0.5
-        stimulus = "poke"            # a user stimulus or a built-in ("A".."E", "0deg_0.1N", ...)
-
-    Raises :class:`ConfigError` naming the problem for a missing, unreadable or malformed file.
-    """
-    p = Path(path)
-    try:
-        doc = tomllib.loads(p.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ConfigError(f"schedule file {str(p)!r} not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"schedule file {str(p)!r} cannot be read: {exc}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"schedule file {str(p)!r} is not valid TOML: {exc}") from None
-    unknown = set(doc) - {"stimulus", "event"}
-    if unknown:
-        raise ConfigError(f"schedule file {str(p)!r}: unknown section(s) {sorted(unknown)}; "
-                          "use [[stimulus]] and [[event]]")
-    catalog = builtin_catalog(size)
-    for i, table in enumerate(doc.get("stimulus", [])):
-        stim = _stimulus_from_table(table, f"{p.name}: [[stimulus]] #{i + 1}", size)
-        catalog[stim.name] = (USER_STIMULUS_ID_BASE + i, stim)
-    events = doc.get("event", [])
-    if not isinstance(events, list) or not events:
-        raise ConfigError(f"schedule file {str(p)!r} has no [[event]] entries")
-    entries = []
-    for i, ev in enumerate(events):
-        where = f"{p.name}: [[event]] #{i + 1}"
-        if not isinstance(ev, Mapping) or set(ev) - {"start_s", "stimulus"}:
-            raise ConfigError(f"{where}: needs exactly start_s = <seconds> and stimulus = \"name\"")
-        name = ev.get("stimulus")
-        if name not in catalog:
-            raise ConfigError(f"{where}: unknown stimulus {name!r}; known: {sorted(catalog)}")
-        try:
-            start = float(ev["start_s"])
-        except (KeyError, TypeError, ValueError):
-            raise ConfigError(f"{where}: start_s must be a number of seconds") from None
-        sid, stim = catalog[str(name)]
-        entries.append(ScheduledStimulus(start, stim, sid))
     return Schedule(tuple(entries))

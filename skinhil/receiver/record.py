@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from skinhil.events import EVENT_DTYPE
+from skinhil.output_files import atomic_path
 from skinhil.receiver.receiver import ReceiverListener
 from skinhil.receiver.scoring import ScoredDecision
 
@@ -66,9 +67,8 @@ class SessionRecorder(ReceiverListener):
         return np.array(self._decisions, dtype=DECISION_DTYPE)
 
     def save(self, path: str | Path, meta: dict[str, Any] | None = None) -> None:
-        """Write the session to ``path`` (.npz, plain arrays, no pickle)."""
-        p = Path(path)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        np.savez_compressed(p, events=self.events, decisions=self.decisions,
-                            markers=self.markers,
-                            meta=np.array(json.dumps(meta or {})))
+        """Write the session to ``path`` (.npz, plain arrays, no pickle), whole or not at all
+        (:func:`skinhil.output_files.atomic_path`)."""
+        with atomic_path(Path(path)) as tmp, tmp.open("wb") as fh:
+            np.savez_compressed(fh, events=self.events, decisions=self.decisions,
+                                markers=self.markers, meta=np.array(json.dumps(meta or {})))

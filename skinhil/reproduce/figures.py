@@ -17,6 +17,7 @@ from skinhil.analysis.sweep import SweepResult
 from skinhil.errors import ConfigError
 from skinhil.model.psp import PSPFilterBank
 from skinhil.model.stimuli import direction_conditions, paper_stimuli
+from skinhil.output_files import atomic_path
 from skinhil.reproduce import claims
 from skinhil.reproduce.compute import (
     ALL_SET,
@@ -71,7 +72,8 @@ def _pyplot() -> Any:
 
 def _save(fig: Any, out: Path, name: str) -> Path:
     path = out / name
-    fig.savefig(path, dpi=110, bbox_inches="tight")
+    with atomic_path(path) as tmp:  # keeps the suffix: matplotlib picks the format by it
+        fig.savefig(tmp, dpi=110, bbox_inches="tight")
     fig.clf()
     return path
 

@@ -16,6 +16,7 @@ from skinhil.analysis.sweep import SweepResult
 from skinhil.decoding import CVResult
 from skinhil.model.skin import SkinModel, SkinParams
 from skinhil.model.stimuli import paper_stimuli
+from skinhil.output_files import write_text
 from skinhil.reproduce import claims
 from skinhil.reproduce.compute import (
     ALL_SET,
@@ -346,11 +347,9 @@ def write_report(results: Sequence[MechanicsResults], regime: Regime, config: Re
     for r in results:
         lines += _mechanics_section(r, config)
     lines += ["## Figures", ""] + [f"- [{k}]({k}): {v}" for k, v in FIGURES.items()] + [""]
-    path = out / "REPORT.md"
-    path.write_text("\n".join(lines), encoding="utf-8")
-    (out / "results.json").write_text(json.dumps(_json(results, regime, total_s), indent=1,
-                                                 allow_nan=True), encoding="utf-8")
-    return path
+    write_text(out / "results.json", json.dumps(_json(results, regime, total_s), indent=1,
+                                                allow_nan=True))
+    return write_text(out / "REPORT.md", "\n".join(lines))
 
 
 def _cv_json(snrs: Sequence[float], results: Sequence[CVResult]) -> list[dict[str, Any]]:

@@ -7,12 +7,68 @@ from __future__ import annotations
 
 import errno
 import logging
+import os
 import queue
+import sys
 
 from skinhil.errors import TransportError
 from skinhil.transports.base import Deadline, Transport, check_baud, write_fd
 
 log = logging.getLogger(__name__)
+
+LOCK_DIRS: tuple[str, ...] = ("/var/lock", "/run/lock")
+"""Where programs that follow the UUCP convention (minicom, cu, ModemManager, ...) leave
+``LCK..<device>`` files holding their process id."""
+
+
+def uucp_lock_holder(port: str) -> tuple[int, str] | None:
+    """(pid, lock file) of another live process holding device ``port`` by a UUCP lock file
+    (``LCK..ttyUSB0``; ``LCK..pts_3`` or ``LCK..3`` for ``/dev/pts/3``), else None. A lock
+    of a process that no longer exists is stale and ignored; URLs have no lock files."""
+    if "://" in port:
+        return None
+    real = os.path.realpath(port)
+    rel = real[len("/dev/"):] if real.startswith("/dev/") else os.path.basename(real)
+    names = {f"LCK..{os.path.basename(real)}", f"LCK..{rel.replace('/', '_')}"}
+    seen = set()
+    for folder in LOCK_DIRS:
+        for name in sorted(names):
+            path = os.path.join(folder, name)
+            if os.path.realpath(path) in seen:
+                continue
+            seen.add(os.path.realpath(path))
+            try:
+                with open(path, "rb") as f:
+                    raw = f.read(64)
+            except OSError:
+                continue
+            pid = _lock_pid(raw)
+            if pid is not None and pid != os.getpid() and _process_exists(pid):
+                return pid, path
+            log.info("ignoring stale lock file %s", path)
+    return None
+
+
+def _lock_pid(raw: bytes) -> int | None:
+    """The process id in a UUCP lock file: ASCII (HDB, the common form) or a 4-byte int."""
+    text = raw.strip()
+    if text.isdigit():
+        return int(text)
+    if len(raw) == 4:
+        return int.from_bytes(raw, sys.byteorder)
+    return None
+
+
+def _process_exists(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's live process
+        return True
+    except OSError:
+        return False
+    return pid > 0
 
 
 class SerialTransport(Transport[bytes]):
@@ -32,6 +88,12 @@ class SerialTransport(Transport[bytes]):
         self._timeout: float | None = -1.0
         self._write_timeout: float | None = -1.0
         self._closed = False
+        holder = uucp_lock_holder(port)
+        if holder is not None:
+            pid, lock = holder
+            raise TransportError(f"serial port {port!r} is busy: process {pid} holds it (UUCP "
+                                 f"lock file {lock}) — stop that program, or remove the lock "
+                                 "file if it is stale")
         try:
             self._ser = serial.serial_for_url(port, baudrate=self.baud, timeout=0,
                                               write_timeout=0, exclusive=True)

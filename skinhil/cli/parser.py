@@ -1,0 +1,58 @@
+"""The command line's parser: every subcommand registered, and argparse's errors as one
+``skinhil: error:`` line with exit status 2 (:class:`ArgumentParser`)."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from typing import NoReturn
+
+SUBCOMMANDS: tuple[str, ...] = (
+    "demo",
+    "serve",
+    "listen",
+    "train",
+    "simulate",
+    "reproduce",
+    "dbc",
+    "compile",
+)
+
+ERROR_STATUS = 2
+"""Exit status of every refusal (bad option, bad file, unusable port, ...)."""
+
+
+def error_line(what: str) -> str:
+    """The one line every refusal prints: ``skinhil: error: <what — what to do>``."""
+    return f"skinhil: error: {what}"
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """argparse with skinhil's error path: a bad option is one ``skinhil: error:`` line
+    saying where to read the usage, exit status 2, no usage block."""
+
+    def error(self, message: str) -> NoReturn:
+        print(error_line(f"{message} — see '{self.prog} --help'"), file=sys.stderr)
+        sys.exit(ERROR_STATUS)
+
+
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The top-level parser with every available subcommand registered, or only ``only``
+    when it names one (each subcommand module imports what it runs on: a board start need
+    not pay for scikit-learn's import)."""
+    parser = ArgumentParser(
+        prog="skinhil",
+        description="Real-time neuromorphic hardware-in-the-loop emulator of touch.")
+    parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=ArgumentParser)
+    sub.required = True
+    for name in (only,) if only in SUBCOMMANDS else SUBCOMMANDS:
+        try:
+            module = importlib.import_module(f"skinhil.cli.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name == f"skinhil.cli.{name}":
+                continue
+            raise
+        module.add_parser(sub)
+    return parser

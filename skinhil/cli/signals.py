@@ -1,0 +1,169 @@
+"""How the command line stops: SIGINT (Ctrl-C) and SIGTERM, from the first instruction on.
+
+:func:`install` is the first thing :func:`skinhil.cli.main` does (before any heavy import):
+from then on either signal raises :class:`Stopped` (a ``KeyboardInterrupt``) in the main
+thread, so every ``finally`` runs (temporary output files are removed, links closed, worker
+processes ended) and :func:`skinhil.cli.main` exits with status 130 (SIGINT) or 143
+(SIGTERM) and one line, never a traceback. A command with a summary catches
+:class:`Stopped`, prints what it has and re-raises.
+
+A command that stops cleanly on request (``serve``, ``listen``: they drain the link and print
+their totals) runs its loop inside :func:`stop_event`: the first signal only sets the event;
+a second one raises :class:`Stopped` at once, after saying what was left undrained.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from types import FrameType
+
+STOP_SIGNALS: tuple[signal.Signals, ...] = (signal.SIGINT, signal.SIGTERM)
+"""The signals that stop a command."""
+
+_received: list[int] = []
+_deferred: list[bool] = [False]
+
+
+class Stopped(KeyboardInterrupt):
+    """Raised in the main thread by SIGINT or SIGTERM; ``signum`` says which."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+    @property
+    def exit_status(self) -> int:
+        """The shell's convention: 128 + the signal number (130 SIGINT, 143 SIGTERM)."""
+        return 128 + self.signum
+
+
+def _raise(signum: int, frame: FrameType | None) -> None:
+    _received.append(signum)
+    if not _deferred[0]:
+        raise Stopped(signum)
+
+
+Handlers = dict[signal.Signals, object]
+"""Signal handlers as :func:`signal.signal` returns them."""
+
+
+def install() -> Handlers:
+    """Make SIGINT and SIGTERM raise :class:`Stopped` in the main thread, once
+    :func:`resume` is called: until then (the start-up's imports) they are only recorded,
+    since an exception inside an extension module's import (numpy's) turns into an
+    ImportError with pages of advice instead of a clean stop. Returns the handlers it
+    replaced, for :func:`restore`."""
+    _received.clear()
+    _deferred[0] = True
+    return {s: signal.signal(s, _raise) for s in STOP_SIGNALS}
+
+
+def restore(handlers: Handlers) -> None:
+    """Put back the handlers :func:`install` replaced (a caller in the same process, such
+    as a test calling :func:`skinhil.cli.main`, gets its own back)."""
+    for s, h in handlers.items():
+        signal.signal(s, h)  # type: ignore[arg-type]
+
+
+def resume() -> None:
+    """End the start-up: a stop signal received meanwhile raises :class:`Stopped` now, later
+    ones at once."""
+    _deferred[0] = False
+    if _received:
+        raise Stopped(_received[0])
+
+
+def received() -> int | None:
+    """The first stop signal received so far (None: none)."""
+    return _received[0] if _received else None
+
+
+def exit_status(status: int) -> int:
+    """``status``, or 128 + the signal number when a stop signal was received (a command
+    that stopped cleanly on Ctrl-C still exits 130)."""
+    first = received()
+    return status if first is None else 128 + first
+
+
+@contextlib.contextmanager
+def stop_event(on_first: Callable[[], str | None] | None = None,
+               on_second: Callable[[], str | None] | None = None) -> Iterator[threading.Event]:
+    """While the body runs, the first SIGINT/SIGTERM sets the yielded event (the body stops
+    cleanly: drains, prints totals) and prints ``on_first()``'s line, if any (say what the
+    clean stop will wait for); a second one prints ``on_second()``'s line (what is left
+    undrained) and raises :class:`Stopped` at once. The previous handlers come back after."""
+    stop = threading.Event()
+
+    def handler(signum: int, frame: FrameType | None) -> None:
+        _received.append(signum)
+        if not stop.is_set():
+            stop.set()
+            line = on_first() if on_first is not None else None
+        else:
+            line = on_second() if on_second is not None else None
+            if line:
+                print(f"skinhil: {line}", file=sys.stderr, flush=True)
+            raise Stopped(signum)
+        if line:
+            print(f"skinhil: {line}", file=sys.stderr, flush=True)
+
+    old = {s: signal.signal(s, handler) for s in STOP_SIGNALS}
+    try:
+        yield stop
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+
+
+CHILD_GRACE_S = 1.0
+"""How long (s) child processes get to exit on SIGTERM before they are killed."""
+
+
+def _descendants(pid: int) -> list[int]:
+    """Every live descendant of process ``pid`` (Linux ``/proc``; none elsewhere)."""
+    parents: dict[int, list[int]] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            text = stat.read_text()
+        except OSError:  # the process ended meanwhile
+            continue
+        fields = text[text.rfind(")") + 2:].split()
+        parents.setdefault(int(fields[1]), []).append(int(stat.parent.name))
+    out, todo = [], [pid]
+    while todo:
+        kids = parents.get(todo.pop(), [])
+        out += kids
+        todo += kids
+    return out
+
+
+def end_children(grace_s: float = CHILD_GRACE_S) -> None:
+    """End every process this one started (worker pools, a board in a subprocess): SIGTERM,
+    then SIGKILL to those still alive after ``grace_s`` (s)."""
+    kids = _descendants(os.getpid())
+    for pid in kids:
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGTERM)
+    end = time.monotonic() + grace_s
+    while kids and time.monotonic() < end:
+        kids = [pid for pid in kids if _alive(pid)]
+        time.sleep(0.02)
+    for pid in kids:
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGKILL)
+
+
+def _alive(pid: int) -> bool:
+    """Whether ``pid`` still runs (an exited child not yet reaped, a zombie, does not)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return state[state.rfind(")") + 2:][:1] not in ("Z", "X")

@@ -1,0 +1,184 @@
+"""Schedule files: a TOML timeline of stimuli, checked against a schema before any use.
+
+The format and its limits are documented in ``docs/schedule.md``; in short::
+
+    [[stimulus]]                 # optional user stimuli (ids 100, 101, ... in file order)
+    name = "poke"
+    forces = { 15 = [0.0, 0.0, -0.4], 16 = [0.0, 0.0, -0.1] }   # N, mass numbers
+    indentation_s = 0.2          # optional: onset_s, indentation_s, decay_tau_s
+    decay_tau_s = 0.05
+
+    [[event]]                    # the timeline
+    start_s = 0.5
+    stimulus = "poke"            # a user stimulus or a built-in ("A".."E", "0deg_0.1N", ...)
+
+Every value has a type and a range (:data:`LIMITS`), unknown keys are refused, and the file
+is capped in size (:data:`MAX_FILE_BYTES`), number of stimuli and events, and nesting, so a
+hostile or mistaken file is refused with one line naming the entry and the key, in well
+under a second, whatever it holds.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+
+from skinhil.errors import ConfigError
+from skinhil.model.geometry import PAPER_SIZE, MeshSize
+from skinhil.model.stimuli import (
+    USER_STIMULUS_ID_BASE,
+    Schedule,
+    ScheduledStimulus,
+    Stimulus,
+    builtin_catalog,
+)
+
+MAX_FILE_BYTES = 4 * 1024 * 1024
+"""Largest schedule file (4 MiB: about 60,000 events)."""
+MAX_STIMULI = 1000
+"""Most ``[[stimulus]]`` tables."""
+MAX_EVENTS = 100_000
+"""Most ``[[event]]`` tables."""
+MAX_NAME_CHARS = 64
+"""Longest stimulus name."""
+MAX_TIME_S = 1e6
+"""Largest time (s, 11.6 days) of any ``start_s``, ``onset_s``, ``indentation_s`` or
+``decay_tau_s``."""
+MAX_FORCE_N = 100.0
+"""Largest force component (N): 200 times the paper's 0.5 N; larger forces tear any real
+skin and overflow the model."""
+
+STIMULUS_KEYS = ("name", "forces", "onset_s", "indentation_s", "decay_tau_s")
+EVENT_KEYS = ("start_s", "stimulus")
+LIMITS: dict[str, tuple[float, float]] = {
+    "start_s": (0.0, MAX_TIME_S),
+    "onset_s": (0.0, MAX_TIME_S),
+    "indentation_s": (0.0, MAX_TIME_S),
+    "decay_tau_s": (0.0, math.inf),
+}
+"""Range of each number key (inclusive; ``decay_tau_s`` > 0, ``inf`` for a constant force)."""
+
+
+def _number(value: object, where: str, key: str) -> float:
+    lo, hi = LIMITS[key]
+    ok = isinstance(value, int | float) and not isinstance(value, bool)
+    x = float(value) if ok else math.nan  # type: ignore[arg-type]
+    in_range = (lo < x <= hi) if key == "decay_tau_s" else (lo <= x <= hi)
+    if not (ok and (math.isfinite(x) or (key == "decay_tau_s" and x == math.inf))
+            and in_range):
+        span = "a number > 0 (inf: constant)" if key == "decay_tau_s" else \
+            f"a number in {lo:g}..{hi:g}"
+        raise ConfigError(f"{where}: {key} = {value!r} — give {span} (seconds, no quotes)")
+    return x
+
+
+def _force(value: object, where: str, mass: str) -> tuple[float, float, float]:
+    if not (isinstance(value, list) and len(value) == 3
+            and all(isinstance(v, int | float) and not isinstance(v, bool)
+                    and math.isfinite(v) and abs(v) <= MAX_FORCE_N for v in value)):
+        raise ConfigError(f"{where}: forces.{mass} = {value!r} — give [fx, fy, fz], three "
+                          f"numbers of newtons within ±{MAX_FORCE_N:g}")
+    return float(value[0]), float(value[1]), float(value[2])
+
+
+def _keys(table: object, allowed: tuple[str, ...], where: str) -> Mapping[str, object]:
+    if not isinstance(table, Mapping):
+        raise ConfigError(f"{where} is not a table — write it as [[...]] with keys "
+                          f"{', '.join(allowed)}")
+    unknown = sorted(set(table) - set(allowed))
+    if unknown:
+        raise ConfigError(f"{where}: unknown key(s) {', '.join(unknown)} — allowed: "
+                          f"{', '.join(allowed)}")
+    return table
+
+
+def _stimulus(table: object, where: str, size: MeshSize) -> Stimulus:
+    t = _keys(table, STIMULUS_KEYS, where)
+    name, forces = t.get("name"), t.get("forces")
+    if not (isinstance(name, str) and 0 < len(name) <= MAX_NAME_CHARS):
+        raise ConfigError(f"{where}: name = {name!r} — give a name of 1..{MAX_NAME_CHARS} "
+                          "characters in quotes")
+    if not (isinstance(forces, Mapping) and forces):
+        raise ConfigError(f"{where}: forces = {forces!r} — give a table such as "
+                          "forces = { 15 = [0.0, 0.0, -0.4] } (mass number = [fx, fy, fz] N)")
+    vectors = {mass: _force(vec, where, mass) for mass, vec in forces.items()}
+    times = {k: _number(t[k], where, k) for k in ("onset_s", "indentation_s", "decay_tau_s")
+             if k in t}
+    return Stimulus(name, vectors, size=size, **times)  # type: ignore[arg-type]
+
+
+def _tables(doc: Mapping[str, object], key: str, cap: int, where: str) -> list[object]:
+    tables = doc.get(key, [])
+    if not isinstance(tables, list):
+        raise ConfigError(f"{where}: '{key}' is not a list of tables — write [[{key}]]")
+    if len(tables) > cap:
+        raise ConfigError(f"{where} has {len(tables)} [[{key}]] tables — at most {cap}; "
+                          "split the schedule")
+    return tables
+
+
+def parse_schedule(text: str, where: str, size: MeshSize = PAPER_SIZE) -> Schedule:
+    """The schedule of TOML ``text`` (named ``where`` in errors) for a skin of top-layer
+    ``size``. Raises :class:`ConfigError` naming the entry and key for anything off-schema."""
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{where} is not valid TOML: {exc} — see docs/schedule.md") from None
+    except RecursionError:
+        raise ConfigError(f"{where} nests arrays or tables too deeply — a schedule nests at "
+                          "most 3 levels (see docs/schedule.md)") from None
+    unknown = sorted(set(doc) - {"stimulus", "event"})
+    if unknown:
+        raise ConfigError(f"{where}: unknown section(s) {', '.join(unknown)} — use "
+                          "[[stimulus]] and [[event]]")
+    catalog = builtin_catalog(size)
+    for i, table in enumerate(_tables(doc, "stimulus", MAX_STIMULI, where)):
+        stim = _stimulus(table, f"{where}: [[stimulus]] #{i + 1}", size)
+        catalog[stim.name] = (USER_STIMULUS_ID_BASE + i, stim)
+    events = _tables(doc, "event", MAX_EVENTS, where)
+    if not events:
+        raise ConfigError(f"{where} has no [[event]] entries — add [[event]] tables with "
+                          "start_s and stimulus")
+    entries = []
+    for i, table in enumerate(events):
+        at = f"{where}: [[event]] #{i + 1}"
+        ev = _keys(table, EVENT_KEYS, at)
+        if "start_s" not in ev or "stimulus" not in ev:
+            raise ConfigError(f"{at}: needs start_s = <seconds> and stimulus = \"name\"")
+        name = ev["stimulus"]
+        if not isinstance(name, str) or name not in catalog:
+            raise ConfigError(f"{at}: unknown stimulus {name!r} — give the name of a "
+                              f"[[stimulus]] or a built-in: {', '.join(builtin_catalog())}")
+        sid, stim = catalog[name]
+        entries.append(ScheduledStimulus(_number(ev["start_s"], at, "start_s"), stim, sid))
+    return Schedule(tuple(entries))
+
+
+def load_schedule(path: str | Path, size: MeshSize = PAPER_SIZE) -> Schedule:
+    """Read the schedule file ``path`` (format and caps: module docstring, docs/schedule.md)
+    for a skin of top-layer ``size`` (mass numbers of that size; built-in stimuli moved to it
+    by :func:`skinhil.model.stimuli.at_size`).
+
+    Raises :class:`ConfigError` naming the problem for a missing, unreadable, oversized or
+    malformed file.
+    """
+    p = Path(path)
+    where = f"schedule file {str(p)!r}"
+    try:
+        with p.open("rb") as fh:
+            data = fh.read(MAX_FILE_BYTES + 1)
+    except FileNotFoundError:
+        raise ConfigError(f"{where} not found — check the path") from None
+    except OSError as exc:
+        raise ConfigError(f"{where} cannot be read: {exc.strerror or exc} — check the path "
+                          "and its permissions") from None
+    if len(data) > MAX_FILE_BYTES:
+        raise ConfigError(f"{where} is larger than {MAX_FILE_BYTES // 2**20} MiB — split it "
+                          "into shorter schedules")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise ConfigError(f"{where} is not UTF-8 text — save it as UTF-8") from None
+    return parse_schedule(text, where, size)

@@ -1,0 +1,45 @@
+"""A cold kernel cache is announced at once: ``serve`` and ``listen`` on an empty
+``NUMBA_CACHE_DIR`` say within 2 s of launch (once their input is checked) that they
+compile, for about how long, and where the kernels go; SIGTERM then stops them cleanly
+(status 143, no traceback)."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from harness.hostile_models import write_good
+from harness.serve import RUN_DIR, serve_env
+
+NOTICE_WITHIN_S = 2.0
+
+
+@pytest.mark.parametrize("command", ["serve", "listen"])
+def test_cold_cache_announced_within_2_s(command: str, tmp_path: Path) -> None:
+    argv = ["--port", "loop://", "--duration", "30"]
+    if command == "listen":
+        argv += ["--model", str(write_good(tmp_path / "m.npz", n_channels=338))]
+    env = {**serve_env(), "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
+    t0 = time.monotonic()
+    proc = subprocess.Popen([sys.executable, "-m", "skinhil", command, *argv], cwd=RUN_DIR,
+                            env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stderr is not None
+        line = proc.stderr.readline()
+        elapsed = time.monotonic() - t0
+        assert "compiling" in line and str(tmp_path / "numba") in line, line
+        assert "s before it starts" in line and "skinhil compile" in line, line
+        assert elapsed < NOTICE_WITHIN_S, (elapsed, line)
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=60)
+        assert proc.returncode == 143, err
+        assert "Traceback" not in err, err
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
