@@ -100,7 +100,7 @@ class OnsetMatcher:
         for onset in self._open:
             if onset.resolved:
                 continue
-            if onset.t_us + self.window_us + self.lag_us > now_us:
+            if onset.t_us + self.window_us + self.lag_us >= now_us:
                 break
             onset.resolved = True
             new += not onset.decided
