@@ -24,6 +24,7 @@ from skinhil.model.skin import SkinParams
 from skinhil.nwb import require_pynwb, write_session
 from skinhil.receiver import (
     BusReceiver,
+    DecisionAnswerer,
     Receiver,
     ReceiverListener,
     ScoredDecision,
@@ -57,6 +58,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--record", type=Path, metavar="FILE",
                    help="save events (tonic-compatible), markers and decisions to this .npz, "
                         "or to NWB if it ends in .nwb (pip install \"skinhil[nwb]\")")
+    p.add_argument("--answer", action="store_true",
+                   help="send each decision back to the board as a DECISION, so the board "
+                        "scores this receiver as a decoder under test (serve --score)")
     p.add_argument("--udp-max-sources", type=int, default=MAX_UDP_SOURCES, metavar="N",
                    help=f"with --udp: decode at most N sending boards; datagrams of further "
                         f"sources are refused and counted (default: {MAX_UDP_SOURCES})")
@@ -243,6 +247,9 @@ def run(args: argparse.Namespace) -> int:
     if several and args.record is not None:
         raise ConfigError("--record saves one board's session: use it with one board on "
                           "--port or --can")
+    if several and args.answer:
+        raise ConfigError("--answer sends one board its decisions: use it with one board on "
+                          "--port or --can")
     if args.record is not None and args.record.suffix == ".nwb":
         require_pynwb()
     decoder = load_window_decoder(args.model, n_channels=spring_count(args.size))
@@ -259,6 +266,9 @@ def run(args: argparse.Namespace) -> int:
                         reopen=lambda: open_transport(args))
     recorder = SessionRecorder() if args.record is not None else None
     receiver.add_listener(LivePrinter(receiver, args.json, names))
+    answerer = DecisionAnswerer(receiver) if args.answer else None
+    if answerer is not None:
+        receiver.add_listener(answerer)
     if recorder is not None:
         receiver.add_listener(recorder)
     if not args.json:
@@ -268,6 +278,8 @@ def run(args: argparse.Namespace) -> int:
     listen_until_stopped(args, receiver, lambda: receiver.link_report().as_dict(),
                          lambda: False)
     info = summary(receiver, time.monotonic() - t0)
+    if answerer is not None:
+        info["answers"] = answerer.as_dict()
     if recorder is not None and args.record.suffix == ".nwb":
         p = SkinParams(size=args.size)
         write_session(args.record, mesh=build_mesh(p.spacing_m, p.layer_gap_m, p.size),
@@ -282,6 +294,10 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(info), flush=True)
     else:
         print_summary(info, names)
+        if answerer is not None:
+            a = info["answers"]
+            print(f"answers: {a['sent']} DECISIONs sent to the board ({a['acked']} ACK, "
+                  f"{a['nacked']} NACK, {a['unsent']} not sent)")
     return 0
 
 

@@ -2,19 +2,20 @@
 offline, by the matching rule of :mod:`skinhil.scoring.matching`.
 
 A marker says stimulus ``stimulus_id`` started at board time ``t_us``. The receiver matches
-each decision at its **detection time** (the step its onset was detected at) with a window
-of ``match_window_s``:
+each decision at its **decision time** (``decided_t_us``: the end of its decision window, the
+board time the decision needed; the board matches a DECISION at its arrival, which is later
+by the link alone) with a window of ``match_window_s`` plus the decision window (an onset
+detected at most ``match_window_s`` after the marker):
 
 - matched to an onset without a decision: scored (confusion, latency);
 - anything else (a duplicate, a late or a stimulus-less detection) is a **false alarm**:
   counted and reported, not in the accuracy (it has no true class); in training it gives
   no window;
 - an onset marker still without a decision once board time has passed
-  ``t + match_window + resolve_lag`` (``resolve_lag``: the decision window's length, so a
-  late detection's decision can still arrive) is a **miss** and counts as a wrong decision;
+  ``t + match_window + decision window`` is a **miss** and counts as a wrong decision;
 - **accuracy** = correct decisions / scored markers (matched + missed).
 
-Offline training (:mod:`skinhil.receiver.training`) applies the same rule to the detections
+Offline training (:mod:`skinhil.receiver.training`) applies the same rule to the windows
 on its simulated stream: its accuracy is the cross-validated window accuracy times the
 fraction of markers matched, the same definition as online.
 
@@ -58,8 +59,6 @@ class Scoreboard:
 
     classes: tuple[int, ...]
     match_window_us: int
-    resolve_lag_us: int = 0
-    """Extra board time (µs) after the match window before an undecided marker is a miss."""
     decisions: list[ScoredDecision] = field(default_factory=list)
     false_alarms: int = 0
     unknown_class_markers: int = 0
@@ -69,7 +68,7 @@ class Scoreboard:
         self.confusion = np.zeros((n, n), dtype=np.int64)
         """Rows: true class, columns: predicted class (order of ``classes``)."""
         self._index = {c: i for i, c in enumerate(self.classes)}
-        self.matcher = OnsetMatcher(self.match_window_us, self.resolve_lag_us)
+        self.matcher = OnsetMatcher(self.match_window_us)
         """The onsets and the matching rule (:mod:`skinhil.scoring.matching`)."""
 
     def add_marker(self, t_us: int, stimulus_id: int) -> None:
@@ -79,10 +78,10 @@ class Scoreboard:
             return
         self.matcher.add_onset(t_us, stimulus_id)
 
-    def claim(self, detect_t_us: int) -> Onset | None:
-        """Match a detection at board time ``detect_t_us`` (µs) to an onset (see the module
-        rule): the onset, now taken; None for a false alarm (counted)."""
-        m = self.matcher.match(detect_t_us)
+    def claim(self, decided_t_us: int) -> Onset | None:
+        """Match a decision made at board time ``decided_t_us`` (µs) to an onset (see the
+        module rule): the onset, now taken; None for a false alarm (counted)."""
+        m = self.matcher.match(decided_t_us)
         if m.kind is MatchKind.MATCHED:
             return m.onset
         self.false_alarms += 1
@@ -91,7 +90,7 @@ class Scoreboard:
     def add_prediction(self, pred: Prediction,
                        to_host_s: Callable[[int], float | None] | None = None) -> ScoredDecision:
         """Score one decision; ``to_host_s`` maps a board time (µs) to host time (s)."""
-        onset = self.claim(pred.detect_t_us)
+        onset = self.claim(pred.decided_t_us)
         if onset is None:
             scored = ScoredDecision(pred, None, None, None)
         else:
@@ -137,6 +136,7 @@ class Scoreboard:
 
 def scoreboard_for(classes: tuple[int, ...], windows: OnsetWindows,
                    match_window_s: float) -> Scoreboard:
-    """The scoreboard of a stream cut into ``windows`` (its window length is the lag)."""
-    return Scoreboard(tuple(int(c) for c in classes), int(round(match_window_s * 1e6)),
-                      windows.window_steps * windows.dt_us)
+    """The scoreboard of a stream cut into ``windows``: decisions matched at their decision
+    time within ``match_window_s`` plus the window's length."""
+    return Scoreboard(tuple(int(c) for c in classes),
+                      int(round(match_window_s * 1e6)) + windows.window_steps * windows.dt_us)

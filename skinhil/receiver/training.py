@@ -204,7 +204,7 @@ def stream_windows(n_stimuli: int, snr_db: float, rest_s: float, seed: int,
                 board.add_marker(m.t_us, m.stimulus_id)
         windows.push(events)
         for w in windows.advance(end_us):
-            onset = board.claim(w.detect_step * windows.dt_us)
+            onset = board.claim((w.start_step + windows.window_steps) * windows.dt_us)
             if onset is not None:
                 xs.append(spec.transform(w.psp))
                 ys.append(onset.stimulus_id)

@@ -11,9 +11,10 @@ A decision at board time ``t_us`` answers the **latest onset at or before** ``t_
 - no onset at or before ``t_us``, or ``t_us - t0 > window_us`` after a decided onset:
   :attr:`MatchKind.NO_STIMULUS`.
 
-An onset still undecided once board time passes ``t0 + window_us + lag_us`` is a **miss**
-(:meth:`OnsetMatcher.resolve`). The receiver matches at its onset-detection time, the board
-at a DECISION's arrival (``protocols/SPEC.md`` §3.5.2); both through :class:`OnsetMatcher`.
+An onset still undecided once board time passes ``t0 + window_us`` is a **miss**
+(:meth:`OnsetMatcher.resolve`). The receiver matches a decision at the board time it was
+made, the board at a DECISION's arrival (``protocols/SPEC.md`` §3.5.2): the same rule, the
+board's time later by the decoder's link alone.
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ class Onset:
     decided: bool = False
     """True once a decision matched it."""
     resolved: bool = False
-    """True once its window (and lag) passed: decided, or counted as a miss."""
+    """True once its window passed: decided, or counted as a miss."""
 
 
 @dataclass(frozen=True)
@@ -54,16 +55,14 @@ class Match:
 
 
 class OnsetMatcher:
-    """Onsets in time order and the module's rule; ``window_us`` the response window (µs),
-    ``lag_us`` the extra board time (µs) after it before an undecided onset is a miss.
+    """Onsets in time order and the module's rule; ``window_us`` the response window (µs).
 
     Memory is bounded: onsets whose miss verdict is given are forgotten, except the latest
     (a later decision is still told apart as late or no-stimulus against it).
     """
 
-    def __init__(self, window_us: int, lag_us: int = 0) -> None:
+    def __init__(self, window_us: int) -> None:
         self.window_us = int(window_us)
-        self.lag_us = int(lag_us)
         self._open: deque[Onset] = deque()
         """Onsets not yet resolved (and the latest one, always)."""
         self.onsets = 0
@@ -94,13 +93,13 @@ class OnsetMatcher:
         return Match(MatchKind.LATE, onset)  # its miss is (or will be) counted
 
     def resolve(self, now_us: int) -> int:
-        """Give the miss verdict of every onset whose window and lag have passed by board
+        """Give the miss verdict of every onset whose window has passed by board
         time ``now_us`` (µs) without a decision; return how many new misses."""
         new = 0
         for onset in self._open:
             if onset.resolved:
                 continue
-            if onset.t_us + self.window_us + self.lag_us >= now_us:
+            if onset.t_us + self.window_us >= now_us:
                 break
             onset.resolved = True
             new += not onset.decided
