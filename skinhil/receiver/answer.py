@@ -18,7 +18,7 @@ from skinhil.receiver.scoring import ScoredDecision
 
 log = logging.getLogger(__name__)
 
-SEND_TIMEOUT_S = 0.1
+SEND_TIMEOUT_S = 0.5
 """Longest a DECISION may wait for room on the link (s); one that cannot go is counted."""
 
 
@@ -49,9 +49,13 @@ class DecisionAnswerer(ReceiverListener):
         payload = self.encoder.command(
             protocols.Decision(self._token, int(decision.prediction.label)))
         try:
-            self.receiver.transport.send(payload, timeout=SEND_TIMEOUT_S)
+            done = self.receiver.transport.send(payload, timeout=SEND_TIMEOUT_S)
         except TransportError as exc:
             log.warning("DECISION not sent: %s", exc)
+            done = -1
+        if done < len(payload):  # bytes (serial) or frames (CAN) handed to the link
+            log.warning("DECISION for stimulus %d not sent: the link had no room for %g s",
+                        decision.prediction.label, SEND_TIMEOUT_S)
             self.unsent += 1
             return
         self._tokens.add(self._token)
