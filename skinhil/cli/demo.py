@@ -139,9 +139,9 @@ def print_beside(own: dict[str, Any], board: dict[str, Any]) -> None:
              str(board["false_alarms"] + board["duplicates"] + board["late"])),
             ("latency p50 / p99 (ms)", lat(own["decision_latency_board_ms"]),
              lat(board["latency_ms"]))]
-    print("scored by            the receiver itself   the board (its DECISIONs)")
+    print(f"{'scored by':<24}{'the receiver itself':>21}{'the board (its DECISIONs)':>28}")
     for name, a, b in rows:
-        print(f"{name:<24}{a:>17}{b:>27}")
+        print(f"{name:<24}{a:>21}{b:>28}")
     print("(latency: the receiver's from onset to its decision; the board's from onset to the "
           f"DECISION's arrival; {board['pending']} stimuli still open when the board stopped)")
 
