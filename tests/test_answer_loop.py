@@ -4,9 +4,10 @@
 The receiver matches a decision at the board time it made it, the board at its arrival: the
 same rule (:mod:`skinhil.scoring.matching`), the board's time later by the receiver's 20 ms
 guard and the link. The two can differ only for a decision made within that delay before an
-onset or the end of a window (a detection of noise just before a stimulus: about one run in
-two has one); the test tells those apart by their times, checks every other decision alike,
-and the counts and accuracy equal up to those few.
+onset or the end of a window (a detection of noise just before a stimulus; 0 to 3 of ~100
+decisions in the runs seen, more as the machine's load stretches the delay); the test tells
+those apart by their times, checks every other decision alike, and the counts and accuracy
+equal up to those few.
 
 100 stimuli at the paper's 10 dB from a schedule file (0.3 s apart, as the receiver's own
 end-to-end test; then 1 s of tail so every answer arrives and every onset is resolved while
@@ -32,16 +33,11 @@ import pytest
 from skinhil.model.stimuli import direction_conditions
 from skinhil.receiver import DecisionAnswerer, Receiver, WindowDecoder
 from skinhil.receiver.session import run_against_board, serve_command
-from skinhil.receiver.training import train_decoder
+from skinhil.receiver.training import LEAD_S, train_decoder
 from skinhil.transports import CanTransport, PtyMasterTransport
 
-N_STIMULI = 100
-SPACING_S = 0.3
-LEAD_S = 0.1
-TAIL_S = 1.0
+N_STIMULI, SPACING_S, TAIL_S = 100, 0.3, 1.0
 SNR_DB = 10.0
-RESPONSE_WINDOW_S = 0.15
-"""The receiver's own: its match window (0.1 s) plus its decision window (0.05 s)."""
 
 
 @pytest.fixture(scope="module")
@@ -69,8 +65,9 @@ def _play(receiver: Receiver, link_args: list[str], tmp_path: Path) -> dict[str,
     receiver.add_listener(answerer)
     score = tmp_path / "score.json"
     duration = _schedule(tmp_path / "schedule.toml")
+    window_s = receiver.scoreboard.match_window_us * 1e-6  # the receiver's own (0.15 s)
     cmd = serve_command([*link_args, "--schedule", str(tmp_path / "schedule.toml"),
-                         "--response-window", str(RESPONSE_WINDOW_S), "--score", str(score)],
+                         "--response-window", f"{window_s:.6f}", "--score", str(score)],
                         duration, SNR_DB, seed=3)
     try:
         status, _, err = run_against_board(receiver, cmd)
@@ -86,12 +83,12 @@ def _play(receiver: Receiver, link_args: list[str], tmp_path: Path) -> dict[str,
     return board
 
 
-def _straddles(decided_us: int, arrival_us: int) -> bool:
+def _straddles(decided_us: int, arrival_us: int, window_us: int) -> bool:
     """Whether an onset or the end of an onset's window lies after the receiver's decision
     time and at or before its arrival at the board (the receiver's 20 ms guard and the link):
     there the two times may see different onsets, by the rule itself."""
     onsets = [round((LEAD_S + i * SPACING_S) * 1e6) for i in range(N_STIMULI)]
-    edges = onsets + [t + round(RESPONSE_WINDOW_S * 1e6) for t in onsets]
+    edges = onsets + [t + window_us for t in onsets]
     return any(decided_us < t <= arrival_us for t in edges)
 
 
@@ -105,7 +102,7 @@ def _check_same_scoring(receiver: Receiver, board: dict[str, Any]) -> None:
         assert b["stimulus_id"] == d.prediction.label
         # the board stamps arrival: at least the board time the decision needed
         assert b["t_us"] >= d.prediction.decided_t_us
-        if _straddles(d.prediction.decided_t_us, b["t_us"]):
+        if _straddles(d.prediction.decided_t_us, b["t_us"], sb.match_window_us):
             straddling += 1
             continue
         if d.true_label is None:
@@ -119,7 +116,7 @@ def _check_same_scoring(receiver: Receiver, board: dict[str, Any]) -> None:
           f"{json.dumps({k: v for k, v in board.items() if k not in ('log', 'confusion')})}; "
           f"{straddling} decision(s) made within the link's delay before an onset or a "
           "window's end")
-    assert straddling <= 3
+    assert straddling <= len(mine) // 10  # the rest, at least 90 %, checked one by one
     for got, want in ((board["right"], sb.correct), (board["misses"], sb.misses),
                       (board["matched"], sb.scored - sb.misses)):
         assert abs(got - want) <= straddling
