@@ -149,8 +149,8 @@ class BoardConfig:
             raise ConfigError(f"spin {self.spin_s!r} s must lie in [0, tick {self.tick_s!r} s)")
         check_threads(self.threads)
         if not (math.isfinite(self.response_window_s) and self.response_window_s > 0):
-            raise ConfigError(f"response window must be a positive number of seconds, got "
-                              f"{self.response_window_s!r}")
+            raise ConfigError(f"response window (--response-window) {self.response_window_s!r}"
+                              " is not a positive number of seconds: give one such as 0.5")
         return self
 
 

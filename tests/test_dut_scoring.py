@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 from harness.peers import PtyPeer
-from harness.serve import ServeProcess
+from harness.serve import ServeProcess, run_serve
 
 import protocols
 from skinhil.errors import ConfigError
@@ -131,6 +131,8 @@ def test_scripted_dut_lands_in_every_counter(pty_pair, tmp_path: Path) -> None:
     written = json.loads(score.read_text())
     board = serve.summary()["scoreboard"]
     assert {k: v for k, v in written.items() if k != "log"} == board
+    live = [x["scoreboard"] for x in serve.lines if x.get("type") == "status"]
+    assert live[0]["decisions"] == 0 and 1 <= live[-1]["decisions"] <= board["decisions"]
     counts = {k: board[k] for k in ("right", "wrong", "duplicates", "late", "false_alarms",
                                     "unknown_id", "while_stopped")}
     assert counts == {"right": 1, "wrong": 1, "duplicates": 1, "late": 1, "false_alarms": 1,
@@ -143,3 +145,15 @@ def test_scripted_dut_lands_in_every_counter(pty_pair, tmp_path: Path) -> None:
     log = {d["outcome"]: d for d in written["log"]}
     assert log["right"]["confidence"] == pytest.approx(0.75, abs=0.5 / 254)
     assert log["late"]["t_us"] - log["late"]["onset_us"] > window_s * 1e6
+
+
+@pytest.mark.parametrize(("args", "says"), [
+    (("--response-window", "0"), "response window"),
+    (("--response-window", "nan"), "response window"),
+    (("--score", "/nonexistent-folder/score.json"), "does not exist"),
+])
+def test_serve_refuses_bad_scoring_options(args: tuple[str, ...], says: str) -> None:
+    res = run_serve("--port", "loop://", "--duration", "0.1", *args)
+    lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
+    assert res.returncode == 2 and "Traceback" not in res.stderr, res.stderr
+    assert len(lines) == 1 and lines[0].startswith("skinhil: error: ") and says in lines[0]
