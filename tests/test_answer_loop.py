@@ -26,16 +26,12 @@ import json
 import math
 import os
 import random
-import shutil
-import signal
-import subprocess
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
 import pytest
-from harness.serve import RUN_DIR, run_serve, serve_env
+from harness.host_link import host_beside_serve
 
 from skinhil.decoding.model_file import save_decoder
 from skinhil.model.stimuli import direction_conditions
@@ -156,35 +152,16 @@ def test_board_scores_the_answering_receiver_as_it_scores_itself_on_vcan(
 def test_listen_answer_on_the_command_line(tmp_path: Path) -> None:
     """``skinhil listen --answer`` as a user runs it, beside ``skinhil serve --score``: every
     decision it prints goes to the board, is ACKed and scored."""
-    if shutil.which("socat") is None:
-        pytest.skip("socat is not installed (apt-get install socat)")
     model, _ = train_decoder(math.inf, reps=2, seed=0, rest_s=0.25, cross_validation=False)
     save_decoder(model, tmp_path / "model.npz")
-    board_end, host_end = tmp_path / "ttyBOARD", tmp_path / "ttyHOST"
-    socat = subprocess.Popen(["socat", f"pty,raw,echo=0,link={board_end}",
-                              f"pty,raw,echo=0,link={host_end}"])
-    listen = None
-    try:
-        end = time.monotonic() + 10
-        while not (board_end.exists() and host_end.exists()):
-            assert time.monotonic() < end, "socat made no pty pair"
-            time.sleep(0.05)
-        listen = subprocess.Popen(
-            [sys.executable, "-m", "skinhil", "listen", "--port", str(host_end), "--model",
-             str(tmp_path / "model.npz"), "--answer", "--json"], cwd=RUN_DIR, env=serve_env(),
-            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        board = run_serve("--port", str(board_end), "--duration", "5", "--snr-db", "inf",
-                          "--score", str(tmp_path / "score.json"), "--json", timeout_s=90)
-        assert board.returncode == 0, board.stderr
-        time.sleep(0.5)
-        listen.send_signal(signal.SIGINT)
-        out, err = listen.communicate(timeout=30)
-    finally:
-        if listen is not None and listen.poll() is None:
-            listen.kill()
-        socat.kill()
-    assert listen.returncode == 0, err
-    lines = [json.loads(line) for line in out.splitlines() if line.startswith("{")]
+    board, listen = host_beside_serve(
+        tmp_path, [sys.executable, "-m", "skinhil", "listen", "--port", "{HOST}", "--model",
+                   str(tmp_path / "model.npz"), "--answer", "--json"],
+        ["--duration", "5", "--snr-db", "inf", "--score", str(tmp_path / "score.json"),
+         "--json"])
+    assert board.returncode == 0, board.stderr
+    assert listen.returncode == 0, listen.stderr
+    lines = [json.loads(line) for line in listen.stdout.splitlines() if line.startswith("{")]
     decisions = [x for x in lines if x["type"] == "decision"]
     answers = [x for x in lines if x["type"] == "summary"][-1]["answers"]
     score = json.loads((tmp_path / "score.json").read_text())

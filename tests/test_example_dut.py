@@ -8,15 +8,11 @@ from __future__ import annotations
 
 import ast
 import json
-import shutil
-import signal
-import subprocess
 import sys
-import time
 from pathlib import Path
 
-import pytest
-from harness.serve import REPO, RUN_DIR, run_serve, serve_env
+from harness.host_link import host_beside_serve
+from harness.serve import REPO
 
 EXAMPLE = REPO / "examples" / "dut_threshold.py"
 DURATION_S = 30.0
@@ -34,32 +30,14 @@ def test_example_imports_only_the_codecs_and_the_links() -> None:
 
 
 def test_example_dut_is_scored_above_chance_on_a_pty(tmp_path: Path) -> None:
-    if shutil.which("socat") is None:
-        pytest.skip("socat is not installed (apt-get install socat)")
-    board_end, host_end = tmp_path / "ttyBOARD", tmp_path / "ttyHOST"
-    socat = subprocess.Popen(["socat", f"pty,raw,echo=0,link={board_end}",
-                              f"pty,raw,echo=0,link={host_end}"])
-    dut = None
     score = tmp_path / "score.json"
-    try:
-        end = time.monotonic() + 10
-        while not (board_end.exists() and host_end.exists()):
-            assert time.monotonic() < end, "socat made no pty pair"
-            time.sleep(0.05)
-        dut = subprocess.Popen([sys.executable, str(EXAMPLE), "--port", str(host_end)],
-                               cwd=RUN_DIR, env=serve_env(), stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True)
-        board = run_serve("--port", str(board_end), "--duration", str(DURATION_S), "--seed",
-                          "2", "--snr-db", "10", "--score", str(score), "--quiet",
-                          timeout_s=DURATION_S + 60)
-        assert board.returncode == 0, board.stderr
-        dut.send_signal(signal.SIGINT)
-        out, err = dut.communicate(timeout=10)
-    finally:
-        if dut is not None and dut.poll() is None:
-            dut.kill()
-        socat.kill()
-    assert dut.returncode == 0, err
+    board, dut = host_beside_serve(
+        tmp_path, [sys.executable, str(EXAMPLE), "--port", "{HOST}"],
+        ["--duration", str(DURATION_S), "--seed", "2", "--snr-db", "10", "--score", str(score),
+         "--quiet"], timeout_s=DURATION_S + 60)
+    assert board.returncode == 0, board.stderr
+    assert dut.returncode == 0, dut.stderr
+    out = dut.stdout
     s = json.loads(score.read_text())
     print(f"\nexample DUT: {s['decisions']} decisions for {s['onsets']} stimuli: {s['right']} "
           f"right, {s['wrong']} wrong, {s['misses']} missed, accuracy {s['accuracy']:.3f}, "
