@@ -157,6 +157,9 @@ class DecisionScoreboard:
 
 def scoreboard_text(summary: dict[str, Any]) -> str:
     """One line of a :meth:`DecisionScoreboard.summary`, for people."""
+    if not summary["decisions"]:
+        return (f"DUT: no DECISION received for {summary['onsets']} stimuli (a decoder under "
+                "test answers with DECISION: protocols/SPEC.md §3.5.1)")
     acc = summary["accuracy"]
     lat = summary["latency_ms"]
     lat_text = ("no latency yet" if lat["p50"] is None
