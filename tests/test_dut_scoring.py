@@ -17,7 +17,13 @@ from harness.serve import ServeProcess, run_serve
 
 import protocols
 from skinhil.errors import ConfigError
-from skinhil.scoring import DecisionScoreboard, MatchKind, OnsetMatcher, Outcome
+from skinhil.scoring import (
+    DecisionScoreboard,
+    MatchKind,
+    OnsetMatcher,
+    Outcome,
+    scoreboard_text,
+)
 
 MS = 1000
 
@@ -73,6 +79,10 @@ def test_scoreboard_counts_every_decision_once() -> None:
     assert s["log"][0] == {"t_us": 40 * MS, "stimulus_id": 1, "confidence": 0.9,
                            "outcome": "right", "onset_us": 0, "true_id": 1}
     json.dumps(s)  # JSON-ready
+    text = scoreboard_text(s)
+    assert "6 decisions for 3 stimuli: 1 right, 0 wrong, 2 missed (accuracy 33.3 %)" in text
+    assert "2 late, 1 duplicates, 0 false alarms, 1 while stopped, 1 unknown id" in text
+    assert "no DECISION" in scoreboard_text(DecisionScoreboard(0.1).summary())
     with pytest.raises(ConfigError, match="response window"):
         DecisionScoreboard(0.0)
 
