@@ -12,7 +12,10 @@ Per publish tick ``k`` (default 1 ms = 10 steps of 0.1 ms), due at ``t0 + (k+1)�
    before, two ticks more latency for a tick that costs the larger stage, not the sum;
 3. events: spikes → events stamped with board time in µs (step resolution) → counted as
    generated → the event FIFO (or dropped by reason, :mod:`firmware_sim.counters`);
-4. host commands received since the last tick are executed and answered (ACK/NACK);
+4. host commands received since the last tick are executed and answered (ACK/NACK); a
+   DECISION of the decoder under test is stamped with the board time and scored
+   (:attr:`Board.scoreboard`, :mod:`skinhil.scoring`), then onsets whose response window
+   passed without one become misses;
 5. events from the FIFO are encoded in filled frames into the transmit queue while it
    holds less than ``tx_target_s`` of wire time (:meth:`Board._fill`: the tick is the flush
    period); each ground-truth marker follows every event before its time; a status record
@@ -54,6 +57,7 @@ from skinhil.model.sensor import SkinSensor
 from skinhil.model.skin import SkinModel, SkinParams
 from skinhil.model.stimuli import Schedule, ScheduledStimulus
 from skinhil.model.timeline import MarkerEvent, Timeline
+from skinhil.scoring import DecisionScoreboard, Outcome
 from skinhil.transports import Transport
 
 log = logging.getLogger(__name__)
@@ -69,6 +73,10 @@ points more of one core (35 % to 55 %)."""
 SWITCH_INTERVAL_S = 2e-4
 """Python's thread switch interval (s) while the board runs (default 5 ms): a transport's
 reader thread never holds the interpreter lock for longer than this against the tick."""
+
+
+DEFAULT_RESPONSE_WINDOW_S = 0.5
+"""Default response window (s) of the board's scoreboard (``serve --response-window``)."""
 
 
 @dataclass(frozen=True)
@@ -119,6 +127,8 @@ class BoardConfig:
     reconnect_period_s: float = 0.5
     drain_timeout_s: float = 5.0
     """At the end, how long (s) the FIFO may take to drain onto the wire."""
+    response_window_s: float = DEFAULT_RESPONSE_WINDOW_S
+    """How long (s) after a stimulus onset a DECISION may arrive and still answer it."""
 
     @property
     def steps_per_tick(self) -> int:
@@ -142,6 +152,9 @@ class BoardConfig:
         if not 0 <= self.spin_s < self.tick_s:
             raise ConfigError(f"spin {self.spin_s!r} s must lie in [0, tick {self.tick_s!r} s)")
         check_threads(self.threads)
+        if not (math.isfinite(self.response_window_s) and self.response_window_s > 0):
+            raise ConfigError(f"response window (--response-window) {self.response_window_s!r}"
+                              " is not a positive number of seconds: give one such as 0.5")
         return self
 
 
@@ -172,6 +185,8 @@ class BoardSummary:
     """Bytes (serial) or frames (CAN) handed to the link."""
     wire_busy_s: float
     """Wire time (s) used."""
+    scoreboard: dict[str, Any] = field(default_factory=dict)
+    """The decoder under test's scoreboard (:meth:`DecisionScoreboard.summary`)."""
 
     def as_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
@@ -202,6 +217,9 @@ class Board:
                  model.size[0], model.size[1], model.n_springs, config.threads)
         self.timeline = Timeline(config.dt_s, file_schedule, config.seed, config.rest_s,
                                  config.schedule_mode, model.size)
+        self.scoreboard = DecisionScoreboard(config.response_window_s,
+                                             lambda sid: sid in self.timeline.catalog)
+        """The decoder under test's DECISIONs scored against the onsets the board sent."""
         self.fifo = EventFifo(config.fifo_events)
         self.counters = BoardCounters()
         self.clock = TickClock(config.tick_s, spin_s=config.spin_s)
@@ -305,7 +323,9 @@ class Board:
         op = cmd.opcode
         reason = why.NONE
         try:
-            if op == codes.START:
+            if isinstance(cmd, protocols.Decision):
+                reason = self._score(cmd)
+            elif op == codes.START:
                 self.running = True
             elif op == codes.STOP:
                 self.running = False
@@ -337,6 +357,17 @@ class Board:
             self.counters.rx_errors += 1  # a refused command shows in the next STATUS
         return protocols.Ack(token=cmd.token, opcode=op, ok=ok, reason=reason)
 
+    def _score(self, decision: Any) -> Any:
+        """Stamp a DECISION with the board time and score it; its NACK reason (NONE when
+        scored, NOT_RUNNING while stopped, UNKNOWN_STIMULUS for an id the board does not
+        know: counted all the same)."""
+        outcome = self.scoreboard.decision(decision.stimulus_id, self.board_time_us(),
+                                           decision.confidence, self.running)
+        log.debug("decision %r: %s", decision, outcome.value)
+        return {Outcome.WHILE_STOPPED: protocols.NackReason.NOT_RUNNING,
+                Outcome.UNKNOWN_ID: protocols.NackReason.UNKNOWN_STIMULUS}.get(
+                    outcome, protocols.NackReason.NONE)
+
     # -- one tick -----------------------------------------------------------------------
     def tick(self) -> None:
         """Run one publish tick (see module docstring for the order)."""
@@ -354,6 +385,7 @@ class Board:
             self._serve_link(self.board_time_us())
         except TransportError as exc:
             self._lose_link(exc)
+        self.scoreboard.advance(self.board_time_us())
 
     def _publish(self, spikes: np.ndarray, first: int) -> bool:
         """The events of a spike block starting at step ``first`` counted as generated and
@@ -375,6 +407,9 @@ class Board:
             return False
         if self.running:
             self._markers.extend(markers)
+            for m in markers:  # the ground truth the decoder under test is scored against
+                if m.phase == "onset":
+                    self.scoreboard.onset(m.stimulus_id, m.t_us)
         else:
             self._drop_markers(markers)
         return True
@@ -543,4 +578,5 @@ class Board:
             nacks=c.nacks, rx_errors=c.rx_errors, link_losses=self.link_losses,
             markers_sent=c.markers_sent, markers_dropped=c.markers_dropped,
             units_sent=self._units_sent + (link.units_sent if link else 0),
-            wire_busy_s=self._wire_busy_s + (link.pacer.busy_s if link else 0.0))
+            wire_busy_s=self._wire_busy_s + (link.pacer.busy_s if link else 0.0),
+            scoreboard=self.scoreboard.summary())

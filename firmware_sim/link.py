@@ -196,7 +196,8 @@ class BoardLink:
 
     # -- receive ------------------------------------------------------------------------
     def poll_commands(self) -> list[Any]:
-        """Host commands received since the last call (never blocks)."""
+        """Host commands and decisions (:class:`protocols.Command`, :class:`protocols.Decision`)
+        received since the last call (never blocks)."""
         data = self.transport.recv(timeout=0)
         if not data:
             return []
@@ -210,7 +211,8 @@ class BoardLink:
         refused = c.crc_errors + c.malformed + c.duplicates
         self.rx_errors += refused - self._rx_reported
         self._rx_reported = refused
-        commands = [r for r in res.records if isinstance(r, protocols.Command)]
+        commands = [r for r in res.records
+                    if isinstance(r, (protocols.Command, protocols.Decision))]
         self.rx_errors += len(res.records) - len(commands)
         return commands
 

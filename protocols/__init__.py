@@ -2,7 +2,8 @@
 
 - Serial: :class:`SerialEncoder` / :class:`SerialDecoder` (COBS-framed packets, CRC-16).
 - CAN and CAN FD: :class:`CanEncoder` / :class:`CanDecoder` over :class:`CanFrame`.
-- Records: :class:`Status`, :class:`Marker`, :class:`Command`, :class:`Ack`.
+- Records: :class:`Status`, :class:`Marker`, :class:`Command`, :class:`Decision` (the
+  decoder under test's answer), :class:`Ack`.
 - Wire time: :func:`serial_seconds`, :func:`can_frame_seconds`.
 
 The normative layout is ``protocols/SPEC.md``; the CAN databases are ``protocols/skinhil.dbc``
@@ -22,6 +23,7 @@ from protocols.records import (
     CanFrame,
     Command,
     CommandCode,
+    Decision,
     DecodeResult,
     LinkCounters,
     Marker,
@@ -44,7 +46,7 @@ SPEC_PATH = Path(__file__).with_name("SPEC.md")
 __all__ = [
     "DBC_FD_PATH", "DBC_PATH", "N_CHANNELS", "SPEC_PATH", "Ack", "CanDecoder", "CanEncoder",
     "CanFrame",
-    "Command", "CommandCode", "DecodeResult", "LinkCounters", "Marker", "MarkerPhase",
+    "Command", "CommandCode", "DecodeResult", "Decision", "LinkCounters", "Marker", "MarkerPhase",
     "MAX_PACKET_BYTES", "NackReason", "Record", "SerialDecoder", "SerialEncoder", "Status",
     "can_frame_seconds", "full_events_frame", "serial_seconds",
 ]

@@ -30,12 +30,13 @@ from protocols.counters import StatusTracker, unwrap
 from protocols.errors import ProtocolError
 from protocols.event_input import E_SIZE, check_step_us, event_steps, idle_sync_step
 from protocols.events import make_events
-from protocols.record_fields import arg_bits, arg_value, check_uint, enum_or_int
+from protocols.record_fields import check_uint, command_fields, command_record, enum_or_int
 from protocols.records import (
     Ack,
     CanFrame,
     Command,
     CommandCode,
+    Decision,
     DecodeResult,
     LinkCounters,
     Marker,
@@ -224,12 +225,11 @@ class CanEncoder:
                                     check_uint(marker.stimulus_id, 16, "stimulus_id (classic)"))
         return [CanFrame(ident, data, False)]
 
-    def command(self, command: Command) -> list[CanFrame]:
+    def command(self, command: Command | Decision) -> list[CanFrame]:
         """A COMMAND frame (host→board; commands have their own sequence counter)."""
+        token, opcode, arg = command_fields(command)
         seq, self._cmd_seq = self._cmd_seq, (self._cmd_seq + 1) % self._seq_mod
-        data = _COMMAND.pack(seq, check_uint(int(command.opcode), 8, "opcode"),
-                             check_uint(command.token, 16, "token"),
-                             arg_bits(command.opcode, command.arg))
+        data = _COMMAND.pack(seq, opcode, token, arg)
         return [CanFrame(self._ids[k.CLS_COMMAND], data, self.fd)]
 
     def ack(self, ack: Ack) -> list[CanFrame]:
@@ -298,7 +298,7 @@ class CanDecoder:
             return Marker(t_us, sid, MarkerPhase(b0 >> 4))
         if cls == k.CLS_COMMAND:
             _, op, token, bits = _COMMAND.unpack(data[:8])
-            return Command(token, enum_or_int(CommandCode, op), arg_value(op, bits))
+            return command_record(token, op, bits)
         _, ok, op, reason, token = _ACK.unpack(data[:6])
         return Ack(token, enum_or_int(CommandCode, op), bool(ok & 1),
                    enum_or_int(NackReason, reason))

@@ -6,7 +6,8 @@ board 0 (``skinhil dbc --board-id N [--fd] --out FILE`` writes the others). Ever
 has one fixed length on the wire, so cantools, SavvyCAN and candump users decode every frame
 with default settings. Event slots after a frame's last event hold the all-ones address
 (511; wide: 1048575), which the DBC names ``NONE`` (an FD frame also says how many events it
-holds in ``Count``).
+holds in ``Count``). A COMMAND frame is multiplexed by its ``Opcode``: ``Arg`` for opcodes
+1..7, ``DecisionStimulusId`` and ``DecisionConfidence`` for DECISION (SPEC.md §3.5.1).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from protocols import can_kernels as k
 from protocols.can_codec import STATUS_LEN_FD, can_id
 from protocols.constants import PROTOCOL_VERSION
 from protocols.errors import ProtocolError
-from protocols.records import CommandCode, MarkerPhase, NackReason
+from protocols.records import CONFIDENCE_STEPS, CommandCode, MarkerPhase, NackReason
 from protocols.status_layout import CLASSIC_STATUS_MUX, STATUS_WORDS
 
 BOARD, HOST = "BOARD", "HOST"
@@ -35,6 +36,9 @@ class Signal:
     unit: str = ""
     mux: str = ""
     """``"M"`` for the multiplexer, ``"m<n>"`` for a field of mux value n, else ``""``."""
+    mux_range: tuple[int, int] | None = None
+    """Mux values ``(first, last)`` of a field present for several (DBC extended
+    multiplexing, ``SG_MUL_VAL_``); its ``mux`` names the first."""
     choices: tuple[tuple[int, str], ...] = ()
 
 
@@ -75,9 +79,14 @@ def messages(fd: bool) -> tuple[Message, ...]:
     """Every frame type of the classic (``fd`` False) or CAN FD layout, as SPEC.md §5 and
     (SKIN_WIDE_EVENTS, sent only by boards of more than 338 channels) §9.2."""
     seq = Signal("Seq", 0, 8 if fd else 4)
+    decision = int(CommandCode.DECISION)
     command = Message(k.CLS_COMMAND, "SKIN_COMMAND", 8, HOST, (
-        seq, Signal("Opcode", 8, 8, choices=_enum_choices(CommandCode)),
-        Signal("Token", 16, 16), Signal("Arg", 32, 32)))
+        seq, Signal("Opcode", 8, 8, mux="M", choices=_enum_choices(CommandCode)),
+        Signal("Token", 16, 16),
+        Signal("Arg", 32, 32, mux="m1", mux_range=(1, decision - 1)),
+        Signal("DecisionStimulusId", 32, 24, mux=f"m{decision}"),
+        Signal("DecisionConfidence", 56, 8, mux=f"m{decision}",
+               choices=((CONFIDENCE_STEPS + 1, "NONE"),))))
     ack = Message(k.CLS_ACK, "SKIN_ACK", 6, BOARD, (
         seq, Signal("Ok", 8, 1), Signal("Opcode", 16, 8, choices=_enum_choices(CommandCode)),
         Signal("Reason", 24, 8, choices=_enum_choices(NackReason)), Signal("Token", 32, 16)))
@@ -131,6 +140,7 @@ def dbc_text(board_id: int = 0, fd: bool = False) -> str:
     lines = [f'VERSION "skinhil protocol {PROTOCOL_VERSION} ({layout}, board {board_id})"', "",
              "NS_ :", "", "BS_:", "", f"BU_: {BOARD} {HOST}", ""]
     values: list[str] = []
+    mux_ranges: list[str] = []
     msgs = messages(fd)
     for m in msgs:
         ident = can_id(m.frame_class, board_id)
@@ -140,6 +150,10 @@ def dbc_text(board_id: int = 0, fd: bool = False) -> str:
             mux = f" {s.mux}" if s.mux else ""
             lines.append(f" SG_ {s.name}{mux} : {s.start}|{s.bits}@1+ (1,0) "
                          f'[0|{(1 << s.bits) - 1}] "{s.unit}" {receiver}')
+            if s.mux_range is not None:
+                mux_name = next(x.name for x in m.signals if x.mux == "M")
+                mux_ranges.append(f"SG_MUL_VAL_ {ident} {s.name} {mux_name} "
+                                  f"{s.mux_range[0]}-{s.mux_range[1]};")
             if s.choices:
                 pairs = " ".join(f'{v} "{n}"' for v, n in s.choices)
                 values.append(f"VAL_ {ident} {s.name} {pairs} ;")
@@ -147,6 +161,8 @@ def dbc_text(board_id: int = 0, fd: bool = False) -> str:
     lines.append(f'CM_ "skinhil wire protocol version {PROTOCOL_VERSION}, {layout}, board id '
                  f"{board_id} (ID = class << 4 | board id). Every frame type has the length "
                  "given here. Event slots after the last event hold address 511 (NONE). "
+                 "A COMMAND of opcode DECISION carries DecisionStimulusId and "
+                 "DecisionConfidence (0..254 = confidence x 254; 255 NONE) instead of Arg. "
                  'Layout: protocols/SPEC.md";')
     if fd:
         lines.append('BA_DEF_ BO_ "VFrameFormat" ENUM "StandardCAN","ExtendedCAN",'
@@ -155,4 +171,5 @@ def dbc_text(board_id: int = 0, fd: bool = False) -> str:
         lines += [f'BA_ "VFrameFormat" BO_ {can_id(m.frame_class, board_id)} {_FD_FORMAT};'
                   for m in msgs]
     lines += values
+    lines += mux_ranges
     return "\n".join(lines) + "\n"

@@ -31,6 +31,8 @@ class CommandCode(enum.IntEnum):
     """Ask for a status packet now (sent right after the ACK)."""
     PING = 7
     """Do nothing but acknowledge (link check)."""
+    DECISION = 8
+    """The decoder under test's answer: a :class:`Decision` (stimulus id, confidence)."""
 
 
 class NackReason(enum.IntEnum):
@@ -125,7 +127,32 @@ class Ack:
     """A :class:`NackReason`; an unknown code decodes as a plain int."""
 
 
-Record = Status | Marker | Command | Ack
+DECISION_MAX_STIMULUS_ID = (1 << 24) - 1
+"""The largest stimulus id a DECISION carries (24 bits, SPEC.md §3.5)."""
+CONFIDENCE_STEPS = 254
+"""A DECISION's confidence travels as ``round(confidence * 254)`` in 0..254 (255: none)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Decision:
+    """The decoder under test's answer (host→board COMMAND of opcode ``DECISION``).
+
+    ``stimulus_id`` (0..2**24-1) is the stimulus the decoder decided on, in the id space of
+    the ground-truth :class:`Marker` records; ``confidence`` (0..1, or None when the decoder
+    gives none) travels in steps of 1/254. ``token`` (0..65535) is echoed in the ACK.
+    """
+
+    token: int
+    stimulus_id: int
+    confidence: float | None = None
+
+    @property
+    def opcode(self) -> CommandCode:
+        """Always :attr:`CommandCode.DECISION` (so a Decision is answered like a command)."""
+        return CommandCode.DECISION
+
+
+Record = Status | Marker | Command | Decision | Ack
 """Any non-event record a decoder returns."""
 
 

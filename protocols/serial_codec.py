@@ -27,11 +27,12 @@ from protocols.errors import ProtocolError
 from protocols.event_input import E_SIZE, check_step_us, event_steps, idle_sync_step
 from protocols.events import make_events
 from protocols.framing import frame_into
-from protocols.record_fields import arg_bits, arg_value, check_uint, enum_or_int
+from protocols.record_fields import check_uint, command_fields, command_record, enum_or_int
 from protocols.records import (
     Ack,
     Command,
     CommandCode,
+    Decision,
     DecodeResult,
     LinkCounters,
     Marker,
@@ -155,11 +156,10 @@ class SerialEncoder:
                             check_uint(int(marker.phase), 8, "marker phase"))
         return self._packet(body)
 
-    def command(self, command: Command) -> bytes:
-        """A COMMAND packet (host→board)."""
-        body = _COMMAND.pack(k.T_COMMAND << 5, 0, check_uint(command.token, 16, "token"),
-                             check_uint(int(command.opcode), 8, "opcode"),
-                             arg_bits(command.opcode, command.arg))
+    def command(self, command: Command | Decision) -> bytes:
+        """A COMMAND packet (host→board): a command or the decoder under test's decision."""
+        token, opcode, arg = command_fields(command)
+        body = _COMMAND.pack(k.T_COMMAND << 5, 0, token, opcode, arg)
         return self._packet(body)
 
     def ack(self, ack: Ack) -> bytes:
@@ -227,7 +227,7 @@ class SerialDecoder:
             return Marker(int.from_bytes(t, "little"), sid, MarkerPhase(phase))
         if typ == k.T_COMMAND:
             _, _, token, op, bits = _COMMAND.unpack(body)
-            return Command(token, enum_or_int(CommandCode, op), arg_value(op, bits))
+            return command_record(token, op, bits)
         _, _, token, op, reason = _ACK.unpack(body)
         return Ack(token, enum_or_int(CommandCode, op), bool(low & 1),
                    enum_or_int(NackReason, reason))

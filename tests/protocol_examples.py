@@ -18,6 +18,7 @@ from protocols import (
     CanFrame,
     Command,
     CommandCode,
+    Decision,
     Marker,
     MarkerPhase,
     NackReason,
@@ -32,6 +33,8 @@ STATUS = Status(t_us=1_000_000, events_generated=20_000, events_sent=19_990, eve
                 dropped_shutdown=0, markers_sent=8, markers_dropped=1)
 MARKER = Marker(t_us=250_000, stimulus_id=3, phase=MarkerPhase.ONSET)
 COMMAND = Command(token=0x1234, opcode=CommandCode.SET_SNR, arg=10.0)
+DECISION = Decision(token=0x1235, stimulus_id=3, confidence=0.5)
+"""The decoder under test decided on stimulus 3, confidence 0.5 (127 / 254)."""
 ACK = Ack(token=0x1234, opcode=CommandCode.SET_STIMULUS, ok=False,
           reason=NackReason.UNKNOWN_STIMULUS)
 EVENTS = make_events([0, 0, 300, 900], [5, 17, 337, 2])
@@ -96,6 +99,7 @@ EXAMPLES: dict[str, Callable[[], str]] = {
     "serial-marker": _serial(lambda e: e.marker(MARKER)),
     "serial-command": _serial(lambda e: e.command(COMMAND)),
     "serial-ack": _serial(lambda e: e.ack(ACK)),
+    "serial-decision": _serial(lambda e: e.command(DECISION)),
 }
 for _fd, _tag in ((False, "can"), (True, "canfd")):
     EXAMPLES[f"{_tag}-events"] = _can(_fd, lambda e: e.events(EVENTS, 1000))
@@ -104,5 +108,6 @@ for _fd, _tag in ((False, "can"), (True, "canfd")):
     EXAMPLES[f"{_tag}-marker"] = _can(_fd, lambda e: e.marker(MARKER))
     EXAMPLES[f"{_tag}-command"] = _can(_fd, lambda e: e.command(COMMAND))
     EXAMPLES[f"{_tag}-ack"] = _can(_fd, lambda e: e.ack(ACK))
+    EXAMPLES[f"{_tag}-decision"] = _can(_fd, lambda e: e.command(DECISION))
     EXAMPLES[f"{_tag}-wide-events"] = (lambda fd: lambda: _frames(
         CanEncoder(board_id=1, fd=fd, n_channels=WIDE_CHANNELS).events(WIDE_EVENTS, 1000)))(_fd)

@@ -197,3 +197,24 @@ def test_dbc_command_writes_the_generator_output(tmp_path, capsys) -> None:
     assert out.read_text(encoding="ascii") == dbc_text(9, fd=True)
     assert main(["dbc", "--board-id", "16"]) == 2
     assert "board id from 0 to 15" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("fd", [False, True])
+def test_cantools_encodes_and_decodes_decisions(fd: bool) -> None:
+    """A DUT written with cantools alone sends the DECISION the codec sends, and reads one:
+    the COMMAND frame is multiplexed by its opcode (Arg, or the decision's two fields)."""
+    db = cantools.database.load_string(dbc_text(9, fd), database_format="dbc")
+    msg = db.get_message_by_name("SKIN_COMMAND")
+    for seq, (sid, conf, raw) in enumerate([(3, 0.5, 127), (70_000, None, 255), (0, 1.0, 254)]):
+        (frame,) = CanEncoder(board_id=9, fd=fd).command(protocols.Decision(seq, sid, conf))
+        assert frame.arbitration_id == msg.frame_id
+        fields = {"Seq": 0, "Opcode": "DECISION", "Token": seq, "DecisionStimulusId": sid,
+                  "DecisionConfidence": raw}
+        assert msg.encode(fields) == frame.data
+        want = dict(fields, DecisionConfidence="NONE" if conf is None else raw)
+        assert msg.decode(frame.data) == want
+        (got,) = protocols.CanDecoder(board_id=9, fd=fd).feed([frame]).records
+        assert got == protocols.Decision(seq, sid, conf)
+    (frame,) = CanEncoder(board_id=9, fd=fd).command(
+        protocols.Command(4, protocols.CommandCode.SET_STIMULUS, 11))
+    assert msg.decode(frame.data) == {"Seq": 0, "Opcode": "SET_STIMULUS", "Token": 4, "Arg": 11}

@@ -16,6 +16,7 @@ from protocols import (
     CanEncoder,
     Command,
     CommandCode,
+    Decision,
     Marker,
     MarkerPhase,
     NackReason,
@@ -23,6 +24,7 @@ from protocols import (
     SerialEncoder,
     Status,
 )
+from protocols.records import CONFIDENCE_STEPS, DECISION_MAX_STIMULUS_ID
 from skinhil.errors import ProtocolError
 from skinhil.events import EVENT_DTYPE, make_events
 
@@ -146,17 +148,23 @@ markers = st.builds(Marker, t_us=st.integers(0, 2**40 - 1), stimulus_id=st.integ
                     phase=st.sampled_from(MarkerPhase))
 commands = st.one_of(
     st.builds(Command, token=st.integers(0, 65535),
-              opcode=st.sampled_from([c for c in CommandCode if c != CommandCode.SET_SNR]),
+              opcode=st.sampled_from([c for c in CommandCode
+                                      if c not in (CommandCode.SET_SNR, CommandCode.DECISION)]),
               arg=st.integers(0, 2**32 - 1)),
     st.builds(Command, token=st.integers(0, 65535), opcode=st.just(CommandCode.SET_SNR),
               arg=st.sampled_from([math.inf, 0.0, -5.5, 10.0, 42.25])))
+decisions = st.builds(Decision, token=st.integers(0, 65535),
+                      stimulus_id=st.integers(0, DECISION_MAX_STIMULUS_ID),
+                      confidence=st.one_of(st.none(), st.integers(0, CONFIDENCE_STEPS).map(
+                          lambda v: v / CONFIDENCE_STEPS)))
 acks = st.builds(Ack, token=st.integers(0, 65535), opcode=st.sampled_from(CommandCode),
                  ok=st.booleans(), reason=st.sampled_from(NackReason))
 
 
 @pytest.mark.parametrize("layout", LAYOUTS)
 @SETTINGS
-@given(records=st.lists(st.one_of(markers, commands, acks), max_size=8), status=statuses,
+@given(records=st.lists(st.one_of(markers, commands, decisions, acks), max_size=8),
+       status=statuses,
        where=st.integers(0, 8))
 def test_records_round_trip(layout: str, records: list, status: Status, where: int) -> None:
     """Records in any order, with one status (a status stream is checked for unwrapping in
@@ -168,10 +176,39 @@ def test_records_round_trip(layout: str, records: list, status: Status, where: i
     got = []
     for rec in records:  # commands come from a host: their own sequence numbers (SPEC.md §6)
         method = {Status: enc.status, Marker: enc.marker, Command: host.command,
-                  Ack: enc.ack}[type(rec)]
+                  Decision: host.command, Ack: enc.ack}[type(rec)]
         got += dec.feed(method(rec)).records
     assert got == records
     assert dec.counters.frames_lost == 0
+
+
+@pytest.mark.parametrize("layout", LAYOUTS)
+@SETTINGS
+@given(token=st.integers(0, 65535), stimulus_id=st.integers(0, DECISION_MAX_STIMULUS_ID),
+       confidence=st.floats(0.0, 1.0))
+def test_decision_confidence_travels_to_the_nearest_step(layout: str, token: int,
+                                                         stimulus_id: int,
+                                                         confidence: float) -> None:
+    """Any confidence in 0..1 comes back within half a step (1/508) of what was sent."""
+    host = SerialEncoder() if layout == "serial" else CanEncoder(5, fd=layout == "canfd")
+    dec = SerialDecoder() if layout == "serial" else CanDecoder(5, fd=layout == "canfd")
+    (got,) = dec.feed(host.command(Decision(token, stimulus_id, confidence))).records
+    assert isinstance(got, Decision) and got.opcode == CommandCode.DECISION
+    assert (got.token, got.stimulus_id) == (token, stimulus_id)
+    assert got.confidence is not None
+    assert abs(got.confidence - confidence) <= 0.5 / CONFIDENCE_STEPS + 1e-12
+
+
+@pytest.mark.parametrize("layout", LAYOUTS)
+def test_bad_decisions_raise_protocol_error(layout: str) -> None:
+    host = SerialEncoder() if layout == "serial" else CanEncoder(fd=layout == "canfd")
+    with pytest.raises(ProtocolError, match="does not fit 24"):
+        host.command(Decision(1, DECISION_MAX_STIMULUS_ID + 1))
+    for bad in (-0.01, 1.5, math.nan):
+        with pytest.raises(ProtocolError, match="outside 0..1"):
+            host.command(Decision(1, 3, bad))
+    with pytest.raises(ProtocolError, match="protocols.Decision"):
+        host.command(Command(1, CommandCode.DECISION, 3))
 
 
 def test_status_counters_unwrap_across_modulo() -> None:

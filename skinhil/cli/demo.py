@@ -4,7 +4,9 @@ No hardware needed: a raw pty pair (``os.openpty()``, a real tty) joins a board,
 ``skinhil serve --port <pty slave>`` in a subprocess (its own core and clock), to the
 reference receiver here, reading the pty master. The board plays its seeded random sequence
 of the 9 direction conditions with ground-truth markers; the receiver decides each stimulus
-from the activity alone and the markers score it.
+from the activity alone and the markers score it. The receiver also answers each decision
+to the board as a DECISION (as ``listen --answer``), and the board's scoreboard of it (the
+way it scores any decoder under test) is shown beside the receiver's own.
 
 The model is ``--model FILE`` or, by default, one trained on first use at the demo's SNR
 and cached under ``$XDG_CACHE_HOME/skinhil`` (``~/.cache/skinhil``).
@@ -14,11 +16,14 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import os
 import subprocess
+import tempfile
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 from protocols.kernel_cache import source_hash
 from skinhil.cli.kernel_notice import announce_cold_cache
@@ -31,7 +36,7 @@ from skinhil.errors import ConfigError
 from skinhil.model.geometry import PAPER_SIZE, spring_count
 from skinhil.model.skin import SkinParams
 from skinhil.model.timeline import DEFAULT_REST_S
-from skinhil.receiver import Receiver
+from skinhil.receiver import DecisionAnswerer, Receiver
 from skinhil.receiver.model_file import load_window_decoder
 from skinhil.receiver.session import run_against_board, serve_command
 from skinhil.receiver.training import train_decoder
@@ -124,6 +129,29 @@ def cached_model(snr_db: float, quiet: bool, baud: int, seed: int) -> Path:
     return path
 
 
+def print_beside(own: dict[str, Any], board: dict[str, Any]) -> None:
+    """The receiver's scoring of itself beside the board's scoring of its DECISIONs."""
+    def pct(v: float | None) -> str:
+        return "n/a" if v is None else f"{100 * v:.1f} %"
+
+    def lat(d: dict[str, Any]) -> str:
+        return "n/a" if d["p50"] is None else f"{d['p50']:.1f} / {d['p99']:.1f}"
+
+    rows = [("accuracy", pct(own["accuracy"]), pct(board["accuracy"])),
+            ("right / scored stimuli", f"{own['correct']}/{own['stimuli_scored']}",
+             f"{board['right']}/{board['matched'] + board['misses']}"),
+            ("missed", str(own["misses"]), str(board["misses"])),
+            ("unmatched decisions", str(own["false_alarms"]),
+             str(board["false_alarms"] + board["duplicates"] + board["late"])),
+            ("latency p50 / p99 (ms)", lat(own["decision_latency_board_ms"]),
+             lat(board["latency_ms"]))]
+    print(f"{'scored by':<24}{'the receiver itself':>21}{'the board (its DECISIONs)':>28}")
+    for name, a, b in rows:
+        print(f"{name:<24}{a:>21}{b:>28}")
+    print("(latency: the receiver's from onset to its decision; the board's from onset to the "
+          f"DECISION's arrival; {board['pending']} stimuli still open when the board stopped)")
+
+
 def run(args: argparse.Namespace) -> int:
     t_start = time.monotonic()
     announce_cold_cache("demo")
@@ -131,10 +159,13 @@ def run(args: argparse.Namespace) -> int:
                   else cached_model(args.snr_db, args.quiet, args.baud, args.seed))
     decoder = load_window_decoder(model_path, n_channels=spring_count(PAPER_SIZE))
     link, slave_fd = PtyMasterTransport.open_pair(args.baud)
-    cmd = serve_command(["--port", link.slave_path, "--baud", str(args.baud)],
-                        args.duration_s, args.snr_db, args.seed, DEMO_REST_S)
+    score_dir = tempfile.TemporaryDirectory(prefix="skinhil-demo-")
+    score = Path(score_dir.name) / "score.json"
+    cmd = serve_command(["--port", link.slave_path, "--baud", str(args.baud), "--score",
+                         str(score)], args.duration_s, args.snr_db, args.seed, DEMO_REST_S)
     names = class_names()
     receiver = Receiver(link, decoder)
+    receiver.add_listener(DecisionAnswerer(receiver))
     if not args.quiet:
         receiver.add_listener(LivePrinter(receiver, False, names))
     print(f"board: {' '.join(cmd[1:])}; mechanics {SkinParams().describe_mechanics()}\n"
@@ -150,12 +181,16 @@ def run(args: argparse.Namespace) -> int:
     finally:
         link.shutdown()
         os.close(slave_fd)
+    with score_dir:
+        board_score = json.loads(score.read_text(encoding="utf-8")) if score.exists() else None
     if status != 0:
         raise ConfigError(f"the board stopped with status {status}: "
                           f"{err.strip().splitlines()[-1] if err.strip() else 'no message'}")
     info = summary(receiver, time.monotonic() - t_link)
     print()
     print_summary(info, names)
+    if board_score is not None:
+        print_beside(info, board_score)
     if out.strip():
         print(f"board: {out.strip().splitlines()[-1]}")
     print(f"demo: {args.duration_s:g} s of board time at {args.snr_db:g} dB, "

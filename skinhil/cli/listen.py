@@ -26,6 +26,7 @@ from skinhil.nwb import require_pynwb, write_session
 from skinhil.output_files import check_output_path
 from skinhil.receiver import (
     BusReceiver,
+    DecisionAnswerer,
     Receiver,
     ReceiverListener,
     ScoredDecision,
@@ -60,6 +61,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--record", type=Path, metavar="FILE",
                    help="save events (tonic-compatible), markers and decisions to this .npz, "
                         "or to NWB if it ends in .nwb (pip install \"skinhil[nwb]\")")
+    p.add_argument("--answer", action="store_true",
+                   help="send each decision back to the board as a DECISION, so the board "
+                        "scores this receiver as a decoder under test (serve --score)")
     p.add_argument("--udp-max-sources", type=integer(1, 4096, "count"),
                    default=MAX_UDP_SOURCES, metavar="N",
                    help=f"with --udp: decode at most N sending boards; datagrams of further "
@@ -242,6 +246,9 @@ def run(args: argparse.Namespace) -> int:
     if several and args.record is not None:
         raise ConfigError("--record saves one board's session: use it with one board on "
                           "--port or --can")
+    if several and args.answer:
+        raise ConfigError("--answer sends one board its decisions: use it with one board on "
+                          "--port or --can")
     record = None if args.record is None else check_output_path(args.record, (".npz", ".nwb"))
     if record is not None and record.suffix == ".nwb":
         require_pynwb()
@@ -258,6 +265,9 @@ def run(args: argparse.Namespace) -> int:
                         reopen=lambda: open_transport(args))
     recorder = SessionRecorder() if record is not None else None
     receiver.add_listener(LivePrinter(receiver, args.json, names))
+    answerer = DecisionAnswerer(receiver) if args.answer else None
+    if answerer is not None:
+        receiver.add_listener(answerer)
     if recorder is not None:
         receiver.add_listener(recorder)
     if not args.json:
@@ -267,6 +277,8 @@ def run(args: argparse.Namespace) -> int:
     listen_until_stopped(args, receiver, lambda: receiver.link_report().as_dict(),
                          lambda: False)
     info = summary(receiver, time.monotonic() - t0)
+    if answerer is not None:
+        info["answers"] = answerer.as_dict()
     if recorder is not None and record is not None and record.suffix == ".nwb":
         p = SkinParams(size=args.size)
         write_session(record, mesh=build_mesh(p.spacing_m, p.layer_gap_m, p.size),
@@ -281,6 +293,10 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(info), flush=True)
     else:
         print_summary(info, names)
+        if answerer is not None:
+            a = info["answers"]
+            print(f"answers: {a['sent']} DECISIONs sent to the board ({a['acked']} ACK, "
+                  f"{a['nacked']} NACK, {a['unsent']} not sent)")
     return 0
 
 

@@ -8,7 +8,13 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from firmware_sim.board import REALTIME_SPIN_S, Board, BoardConfig, BoardSummary
+from firmware_sim.board import (
+    DEFAULT_RESPONSE_WINDOW_S,
+    REALTIME_SPIN_S,
+    Board,
+    BoardConfig,
+    BoardSummary,
+)
 from firmware_sim.clock import request_realtime
 from skinhil.cli import signals
 from skinhil.cli.kernel_notice import announce_cold_cache
@@ -18,6 +24,8 @@ from skinhil.cli.values import MAX_DURATION_S, MAX_REST_S, integer, real
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import format_size
 from skinhil.model.timeline import Timeline
+from skinhil.output_files import atomic_path, check_output_path
+from skinhil.scoring import scoreboard_text
 
 LIVE_WINDOW_TICKS = 1000
 """The live status's lateness p99 is over this many most recent ticks (its max is over the
@@ -74,6 +82,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="run with real-time (FIFO) scheduling so other programs cannot delay "
                         "ticks, and spin the last 0.3 ms before each tick instead of sleeping "
                         "(needs root or CAP_SYS_NICE)")
+    p.add_argument("--response-window", dest="response_window_s", type=float,
+                   default=DEFAULT_RESPONSE_WINDOW_S, metavar="SECONDS",
+                   help="score the decoder under test: a DECISION answers the latest stimulus "
+                        "onset before it if it arrives within this time after it (default: "
+                        f"{DEFAULT_RESPONSE_WINDOW_S:g}; protocols/SPEC.md §3.5.2)")
+    p.add_argument("--score", type=Path, metavar="FILE",
+                   help="write the decoder under test's scoreboard here at the end (JSON, "
+                        "with every decision)")
     out = p.add_mutually_exclusive_group()
     out.add_argument("--quiet", action="store_true", help="print nothing but errors")
     out.add_argument("--json", action="store_true",
@@ -95,6 +111,7 @@ def _config(args: argparse.Namespace) -> BoardConfig:
                        readout=args.readout,
                        size=args.size, threads=args.threads, schedule_mode=mode, rest_s=args.rest_s,
                        start_running=not args.stopped, reconnect=args.reconnect,
+                       response_window_s=args.response_window_s,
                        spin_s=REALTIME_SPIN_S if args.realtime else 0.0).check()
 
 
@@ -134,7 +151,18 @@ def _live(board: Board) -> dict[str, Any]:
             "deadline_misses": board.clock.deadline_misses,
             "lateness_p99_ms": round(lat["p99"], 4), "lateness_max_ms": round(lat["max"], 4),
             "markers_sent": c.markers_sent, "markers_dropped": c.markers_dropped,
-            "running": board.running, "link_up": board.link is not None}
+            "running": board.running, "link_up": board.link is not None,
+            "scoreboard": board.scoreboard.summary()}
+
+
+def _live_score(sb: dict[str, Any]) -> str:
+    """The scoreboard's few live figures for the status line."""
+    if not sb["decisions"]:
+        return f"  DUT: no decision, {sb['onsets']} stimuli"
+    acc = "n/a" if sb["accuracy"] is None else f"{100 * sb['accuracy']:.0f}%"
+    p50 = sb["latency_ms"]["p50"]
+    return (f"  DUT: {sb['decisions']} dec acc {acc} miss {sb['misses']}"
+            f"{'' if p50 is None else f' p50 {p50:.0f} ms'}")
 
 
 def _summary_text(s: BoardSummary) -> str:
@@ -164,6 +192,7 @@ def run(args: argparse.Namespace) -> int:
         elif not args.quiet:
             print(("\n" if tty else "") + f"skinhil serve: {msg}", file=sys.stderr, flush=True)
 
+    score_path = check_output_path(args.score) if args.score is not None else None
     board = Board(config, lambda: open_transport(args), schedule, on_link)  # opens the link
     if args.realtime:
         why = request_realtime()
@@ -181,7 +210,7 @@ def run(args: argparse.Namespace) -> int:
                 f"\r{info['board_time_s']:9.1f} s  {rate:8.0f} ev/s  sent {info['sent']}  "
                 f"dropped {info['dropped']}  queued {info['queued']}  late p99 "
                 f"{info['lateness_p99_ms']:.2f} ms max {info['lateness_max_ms']:.2f} ms  "
-                f"misses {info['deadline_misses']}"
+                f"misses {info['deadline_misses']}{_live_score(info['scoreboard'])}"
                 f"{'' if info['link_up'] else '  LINK DOWN'}\x1b[K")
             sys.stderr.flush()
 
@@ -200,8 +229,13 @@ def run(args: argparse.Namespace) -> int:
     finally:
         if tty:
             sys.stderr.write("\n")
+    if score_path is not None:
+        with atomic_path(score_path) as tmp:
+            tmp.write_text(json.dumps(board.scoreboard.summary(with_log=True), indent=1) + "\n",
+                           encoding="utf-8")
     if args.json:
         print(json.dumps({"type": "summary", **summary.as_dict()}), flush=True)
     elif not args.quiet:
         print(_summary_text(summary), flush=True)
+        print(scoreboard_text(summary.scoreboard), flush=True)
     return 0

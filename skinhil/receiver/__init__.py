@@ -3,6 +3,7 @@
 See ``docs/receiver.md`` for the pipeline, the onset rule and the measured figures.
 """
 
+from skinhil.receiver.answer import DecisionAnswerer
 from skinhil.receiver.bus import BusReceiver
 from skinhil.receiver.clock import BoardClock
 from skinhil.receiver.decoder_adapter import WindowDecoder
@@ -16,6 +17,7 @@ from skinhil.receiver.scoring import Scoreboard, ScoredDecision
 __all__ = [
     "BoardClock",
     "BusReceiver",
+    "DecisionAnswerer",
     "LinkReport",
     "OnlineClassifier",
     "OnsetDetector",

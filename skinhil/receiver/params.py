@@ -57,10 +57,12 @@ class ReceiverParams:
     as late and applied at the current step). When late events arrive, the guard grows to
     twice the largest lateness seen, up to ``max_guard_s`` (s), so a board that lags behind
     real time (a loaded host) is followed without shifting spikes. ``match_window_s`` (s):
-    a decision is scored against the ground-truth marker whose onset precedes its detection
-    by at most this. ``silence_s`` (s): only a stream silent this long is taken as a board
-    that stopped sending (gone, or stalled for good), and then the host clock's estimate of
-    board time (minus the guard) moves board time on, so the decisions it owes are made.
+    a decision is scored against the ground-truth marker whose onset precedes its decision
+    time by at most this plus the decision window (an onset detected at most this after the
+    marker; :mod:`skinhil.receiver.scoring`). ``silence_s`` (s): only a stream silent this
+    long is taken as a board that stopped sending (gone, or stalled for good), and then the
+    host clock's estimate of board time (minus the guard) moves board time on, so the
+    decisions it owes are made.
     The board sends a status every 0.1 s of its time (``BoardConfig.status_period_s``), so a
     shorter silence is a board or link that paused (a loaded host; inside user-mode Linux
     pauses of 50-160 ms were seen): moving on then would make the events after the pause

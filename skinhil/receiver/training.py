@@ -204,10 +204,10 @@ def stream_windows(n_stimuli: int, snr_db: float, rest_s: float, seed: int,
                 board.add_marker(m.t_us, m.stimulus_id)
         windows.push(events)
         for w in windows.advance(end_us):
-            i = board.claim(w.detect_step * windows.dt_us)
-            if i is not None:
+            onset = board.claim((w.start_step + windows.window_steps) * windows.dt_us)
+            if onset is not None:
                 xs.append(spec.transform(w.psp))
-                ys.append(board.markers[i][1])
+                ys.append(onset.stimulus_id)
         board.resolve(windows.board_time_us)
         bar.update(round(end_us * 1e-6 - bar.n, 3))
     bar.close()

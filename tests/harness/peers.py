@@ -84,6 +84,12 @@ class Peer:
         self._send_command(protocols.Command(token=token, opcode=opcode, arg=arg))
         return token
 
+    def decision(self, stimulus_id: int, confidence: float | None = None) -> int:
+        """Send a DECISION (the decoder under test's answer); return its token."""
+        token = self.next_token()
+        self._send_command(protocols.Decision(token, stimulus_id, confidence))
+        return token
+
     def _send_command(self, cmd: Any) -> None:
         raise NotImplementedError
 

@@ -1,0 +1,75 @@
+"""The reference receiver as a decoder under test: each of its decisions goes back to the
+board as a DECISION (``skinhil listen --answer``), so the board scores it with no hardware.
+
+Every decision is answered, false alarms included (the board scores what it gets, as it
+would a user's decoder); no confidence is sent (the linear decoder's decision values are not
+probabilities). The board's ACKs of these DECISIONs are counted.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+import protocols
+from skinhil.errors import TransportError
+from skinhil.receiver.receiver import Receiver, ReceiverListener
+from skinhil.receiver.scoring import ScoredDecision
+
+log = logging.getLogger(__name__)
+
+SEND_TIMEOUT_S = 0.5
+"""Longest a DECISION may wait for room on the link (s); one that cannot go is counted."""
+
+
+def host_encoder(transport: Any, board_id: int) -> Any:
+    """The protocols encoder a host uses to send COMMAND units on ``transport``'s link."""
+    if transport.kind == "can":
+        return protocols.CanEncoder(board_id=board_id, fd=bool(getattr(transport, "fd", False)))
+    return protocols.SerialEncoder()
+
+
+class DecisionAnswerer(ReceiverListener):
+    """Sends each decision of ``receiver`` to its board as a DECISION (SPEC.md §3.5.1)."""
+
+    def __init__(self, receiver: Receiver) -> None:
+        self.receiver = receiver
+        self.encoder = host_encoder(receiver.transport, receiver.board_id)
+        self._token = 0
+        self._tokens: set[int] = set()
+        self.sent = 0
+        """DECISIONs handed to the link."""
+        self.unsent = 0
+        """DECISIONs the link refused (gone, or no room within :data:`SEND_TIMEOUT_S`)."""
+        self.acked = 0
+        self.nacked = 0
+
+    def on_decision(self, decision: ScoredDecision) -> None:
+        self._token = (self._token + 1) % 65536
+        payload = self.encoder.command(
+            protocols.Decision(self._token, int(decision.prediction.label)))
+        try:
+            done = self.receiver.transport.send(payload, timeout=SEND_TIMEOUT_S)
+        except TransportError as exc:
+            log.warning("DECISION not sent: %s", exc)
+            done = -1
+        if done < len(payload):  # bytes (serial) or frames (CAN) handed to the link
+            log.warning("DECISION for stimulus %d not sent: the link had no room for %g s",
+                        decision.prediction.label, SEND_TIMEOUT_S)
+            self.unsent += 1
+            return
+        self._tokens.add(self._token)
+        self.sent += 1
+
+    def on_ack(self, ack: Any) -> None:
+        if ack.opcode == protocols.CommandCode.DECISION and ack.token in self._tokens:
+            self._tokens.discard(ack.token)
+            if ack.ok:
+                self.acked += 1
+            else:
+                self.nacked += 1
+
+    def as_dict(self) -> dict[str, int]:
+        """The answers' counters: sent, unsent, acked, nacked."""
+        return {"sent": self.sent, "unsent": self.unsent, "acked": self.acked,
+                "nacked": self.nacked}
