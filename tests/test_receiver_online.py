@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 import protocols
-from skinhil.receiver import Receiver, SessionRecorder, WindowDecoder
+from skinhil.receiver import Receiver, WindowDecoder
 from skinhil.receiver.session import run_against_board, serve_command
 from skinhil.receiver.training import (
     TrainingReport,
@@ -32,6 +32,7 @@ from skinhil.receiver.training import (
     stream_windows,
     train_decoder,
 )
+from skinhil.recording import SessionRecorder
 from skinhil.transports import CanTransport, FaultParams, FaultyTransport, PtyMasterTransport
 
 N_STIMULI = 100

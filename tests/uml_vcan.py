@@ -105,7 +105,7 @@ def host_max_map_count() -> int | None:
 
 WARM_CACHE_CODE = """
 import protocols
-from firmware_sim.link import exercise_codecs
+from protocols.warm_up import exercise_codecs
 status = protocols.Status(t_us=0, events_generated=0, events_sent=0, events_dropped=0,
                           events_queued=0, late_ticks=0, rx_errors=0, running=True)
 for fd in (False, True):

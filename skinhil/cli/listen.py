@@ -22,15 +22,16 @@ from skinhil.errors import ConfigError
 from skinhil.model.geometry import build_mesh, spring_count
 from skinhil.model.skin import SkinParams
 from skinhil.nwb import require_pynwb, write_session
+from skinhil.output_files import check_output_path
 from skinhil.receiver import (
     BusReceiver,
     Receiver,
     ReceiverListener,
     ScoredDecision,
-    SessionRecorder,
 )
 from skinhil.receiver.bus import MAX_UDP_SOURCES, BoardKey
 from skinhil.receiver.model_file import load_window_decoder
+from skinhil.recording import SessionRecorder
 
 STATUS_PERIOD_S = 1.0
 """Seconds between link-counter lines."""
@@ -257,32 +258,45 @@ def run(args: argparse.Namespace) -> int:
         return run_bus(args, bus, names)
     receiver = Receiver(transport, decoder, board_id=args.board_ids[0],
                         reopen=lambda: open_transport(args))
-    recorder = SessionRecorder() if args.record is not None else None
     receiver.add_listener(LivePrinter(receiver, args.json, names))
-    if recorder is not None:
-        receiver.add_listener(recorder)
+    if args.record is None:
+        info = listen_one(args, receiver)
+    else:
+        with SessionRecorder(check_output_path(args.record).parent) as recorder:
+            receiver.add_listener(recorder)
+            info = listen_one(args, receiver)
+            save_session(args, recorder, names, info)
+    if args.json:
+        print(json.dumps(info), flush=True)
+    else:
+        print_summary(info, names)
+    return 0
+
+
+def listen_one(args: argparse.Namespace, receiver: Receiver) -> dict[str, Any]:
+    """Receive until Ctrl-C or --duration; the summary."""
     if not args.json:
         print(f"skinhil listen: {describe_transport(args)}, model {args.model}; Ctrl-C stops",
               file=sys.stderr, flush=True)
     t0 = time.monotonic()
     listen_until_stopped(args, receiver, lambda: receiver.link_report().as_dict(),
                          lambda: False)
-    info = summary(receiver, time.monotonic() - t0)
-    if recorder is not None and args.record.suffix == ".nwb":
+    return summary(receiver, time.monotonic() - t0)
+
+
+def save_session(args: argparse.Namespace, recorder: SessionRecorder, names: dict[int, str],
+                 info: dict[str, Any]) -> None:
+    """Write the recorded session to --record: NWB for .nwb, else .npz."""
+    if args.record.suffix == ".nwb":
         p = SkinParams(size=args.size)
         write_session(args.record, mesh=build_mesh(p.spacing_m, p.layer_gap_m, p.size),
                       events=recorder.events, markers=recorder.markers,
                       decisions=recorder.decisions, names=names,
                       description=f"skinhil listen: {describe_transport(args)}, "
                                   f"model {args.model}")
-    elif recorder is not None:
+    else:
         recorder.save(args.record, {"model": str(args.model), "link": describe_transport(args),
                                     "summary": info})
-    if args.json:
-        print(json.dumps(info), flush=True)
-    else:
-        print_summary(info, names)
-    return 0
 
 
 def class_names() -> dict[int, str]:

@@ -3,22 +3,34 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import signal
 import sys
 import threading
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 from firmware_sim.board import REALTIME_SPIN_S, Board, BoardConfig, BoardSummary
 from firmware_sim.clock import request_realtime
+from protocols.versions import wire_version
 from skinhil.cli.options import add_model_options, noise_from_args
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.errors import ConfigError
-from skinhil.model.geometry import format_size
+from skinhil.model.geometry import format_size, spring_count
 from skinhil.model.stimuli import load_schedule
 from skinhil.model.timeline import Timeline
+from skinhil.recording import (
+    CAPTURE_SUFFIX,
+    RecordingTransport,
+    Replayer,
+    ReplaySummary,
+    check_link_fits,
+    link_recorder,
+    open_recording,
+)
 
 LIVE_WINDOW_TICKS = 1000
 """The live status's lateness p99 is over this many most recent ticks (its max is over the
@@ -40,6 +52,18 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                      help="play this schedule file (format: skinhil simulate --help)")
     src.add_argument("--host-driven", action="store_true",
                      help="no schedule: stimuli only on host commands")
+    src.add_argument("--replay", type=Path, metavar="FILE",
+                     help="play this recording (serve --record) onto the link instead of "
+                          "running the board: byte for byte (serial, UDP), frame for frame "
+                          "(CAN), at its recorded pace; host commands get a NACK (REPLAYING)")
+    p.add_argument("--speed", type=float, default=1.0, metavar="X",
+                   help="--replay at X times the recorded pace (default: 1; inf: as fast "
+                        "as the link takes)")
+    p.add_argument("--record", type=Path, metavar="FILE",
+                   help="record what the board puts on the link, as it goes: CAN to a "
+                        f"python-can log chosen by the extension (.blf, .asc, .log, .csv, "
+                        f".trc, ...), serial and UDP to a {CAPTURE_SUFFIX} capture (SPEC.md "
+                        "\"Capture files\")")
     p.add_argument("--rest", dest="rest_s", type=float, default=0.25, metavar="SECONDS",
                    help="rest after each stimulus of the random schedule (default: 0.25)")
     p.add_argument("--duration", dest="duration_s", type=float, metavar="SECONDS",
@@ -119,7 +143,78 @@ def _summary_text(s: BoardSummary) -> str:
             "link down)")
 
 
+def _link_kind(args: argparse.Namespace) -> str:
+    """"serial", "udp" or "can": the kind of link the options select."""
+    return "can" if args.can is not None else "udp" if args.udp is not None else "serial"
+
+
+@contextlib.contextmanager
+def _stop_on_signals() -> Iterator[threading.Event]:
+    """An event set by SIGINT or SIGTERM while the block runs."""
+    stop = threading.Event()
+
+    def on_signal(signum: int, frame: object) -> None:
+        stop.set()
+
+    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield stop
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+
+
+def _replay_text(s: ReplaySummary, path: Path, link: str) -> str:
+    return (f"replayed {s.units} units of {path} ({s.recorded_s:.3f} s recorded) in "
+            f"{s.wall_s:.3f} s at speed {s.speed:g}{'' if s.complete else ' (stopped early)'}"
+            f": {s.wire_units} {'frames' if link == 'can' else 'bytes'} sent, "
+            f"{s.events} events, {s.markers} markers; pace error p50 "
+            f"{s.lateness_ms['p50']:.3f} ms p99 {s.lateness_ms['p99']:.3f} ms max "
+            f"{s.lateness_ms['max']:.3f} ms; {s.commands} host commands (NACK, REPLAYING)")
+
+
+def run_replay(args: argparse.Namespace) -> int:
+    """``serve --replay FILE``: the recording checked whole, then played onto the link."""
+    if args.record is not None:
+        raise ConfigError("--record and --replay do not go together: a replay is already "
+                          "a recording; copy the file instead")
+    check_link_fits(args.replay, _link_kind(args))
+    recording = open_recording(args.replay)
+    with open_transport(args) as transport:
+        replayer = Replayer(recording, transport, args.speed)
+        if not args.quiet and not args.json:
+            print(f"skinhil serve: replaying {args.replay} ({recording.units} units, "
+                  f"{recording.duration_s:.3f} s) onto {describe_transport(args)} at speed "
+                  f"{args.speed:g}; Ctrl-C stops", file=sys.stderr, flush=True)
+        with _stop_on_signals() as stop:
+            summary = replayer.run(stop)
+    if args.json:
+        print(json.dumps({"type": "replay", **summary.as_dict()}), flush=True)
+    elif not args.quiet:
+        print(_replay_text(summary, args.replay, recording.link), flush=True)
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
+    if args.replay is not None:
+        return run_replay(args)
+    if args.record is None:
+        return run_board(args, open_link=lambda: open_transport(args))
+    n_channels = spring_count(args.size)
+    with link_recorder(args.record, _link_kind(args), wire_version(n_channels),
+                       int(round(args.dt_s * 1e6))) as recorder:
+        boards: list[Board] = []
+
+        def board_time_us() -> int:
+            return boards[0].board_time_us() if boards else 0
+
+        return run_board(args, lambda: RecordingTransport(open_transport(args), recorder,
+                                                          board_time_us), boards)
+
+
+def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None = None
+              ) -> int:
+    """Run the board over the links ``open_link()`` opens; ``made`` receives the board."""
     config = _config(args)
     schedule = (load_schedule(args.schedule, args.size) if args.schedule is not None
                 else None)
@@ -132,7 +227,9 @@ def run(args: argparse.Namespace) -> int:
         elif not args.quiet:
             print(("\n" if tty else "") + f"skinhil serve: {msg}", file=sys.stderr, flush=True)
 
-    board = Board(config, lambda: open_transport(args), schedule, on_link)
+    board = Board(config, open_link, schedule, on_link)
+    if made is not None:
+        made.append(board)
     if args.realtime:
         why = request_realtime()
         if why is not None:
@@ -152,12 +249,6 @@ def run(args: argparse.Namespace) -> int:
                 f"{'' if info['link_up'] else '  LINK DOWN'}\x1b[K")
             sys.stderr.flush()
 
-    stop = threading.Event()
-
-    def on_signal(signum: int, frame: object) -> None:
-        stop.set()
-
-    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     if not args.quiet and not args.json:
         model = board.sensor.model
         print(f"skinhil serve: board {args.board_id} on {where}; skin {format_size(model.size)}"
@@ -165,11 +256,10 @@ def run(args: argparse.Namespace) -> int:
               f"{'s' if board.config.threads > 1 else ''}; Ctrl-C stops",
               file=sys.stderr, flush=True)
     try:
-        summary = board.run(args.duration_s, stop,
-                            on_second if (args.json or tty) else None)
+        with _stop_on_signals() as stop:
+            summary = board.run(args.duration_s, stop,
+                                on_second if (args.json or tty) else None)
     finally:
-        for s, h in old.items():
-            signal.signal(s, h)
         if tty:
             sys.stderr.write("\n")
     if args.json:
