@@ -167,13 +167,22 @@ class Replayer:
             payload = payload[n:]
 
     def _play(self, sends: list[Any], stop: threading.Event) -> None:
-        for payload in sends:
+        """Send ``sends`` (a CAN stream's frames together; a byte stream's payloads one by
+        one: each answer apart from the recorded datagrams) and decode what was played."""
+        for payload in ([sends] if self.is_can else sends):
             if not payload:
                 continue
             self._send(payload, stop)
             for record in self._played.feed(payload).records:
                 if isinstance(record, protocols.Marker):
                     self.on_marker(record)
+
+    def lateness_s(self) -> np.ndarray:
+        """Each unit's send start minus its due time (s), in play order, for the last
+        :data:`LATENESS_WINDOW` units."""
+        n = min(self._units, LATENESS_WINDOW)
+        start = self._units % LATENESS_WINDOW if self._units > LATENESS_WINDOW else 0
+        return np.roll(self._lateness, -start)[:n]
 
     def run(self, stop: threading.Event | None = None) -> ReplaySummary:
         """Play the whole recording (or until ``stop`` is set); return what was done.
@@ -200,7 +209,7 @@ class Replayer:
             self._play(self._stream.out(unit), stop)
         self._poll_commands()
         self._play(self._stream.flush(), stop)
-        window = self._lateness[:min(self._units, LATENESS_WINDOW)] * 1e3
+        window = self.lateness_s() * 1e3
         pct = ({"p50": float(np.percentile(window, 50)), "p99": float(np.percentile(window, 99)),
                 "max": self._late_max * 1e3} if window.size else
                {"p50": 0.0, "p99": 0.0, "max": 0.0})
