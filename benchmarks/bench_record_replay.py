@@ -190,15 +190,16 @@ def part_record(n_events: int, tmp: Path) -> None:
         path.unlink()
 
 
-def part_listen(n_events: int, tmp: Path) -> None:
+def part_listen(n_events: int, tmp: Path, record: bool = True) -> None:
     model = tmp / "decoder.npz"
     subprocess.run([sys.executable, "-m", "skinhil", "train", "--out", str(model), "--reps",
-                    "2", "--no-progress"], cwd=RUN_DIR, env=serve_env(), check=True,
-                   capture_output=True)
+                    "8", "--snr-db", "inf", "--no-progress"], cwd=RUN_DIR, env=serve_env(),
+                   check=True, capture_output=True)
     out = tmp / "session.npz"
     pair = PtyPair()
     proc = subprocess.Popen([sys.executable, "-m", "skinhil", "listen", "--port", pair.path,
-                             "--model", str(model), "--record", str(out), "--json"],
+                             "--model", str(model), "--json"]
+                            + (["--record", str(out)] if record else []),
                             cwd=RUN_DIR, env=serve_env(), stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True)
     samples: list[tuple[float, float]] = []
@@ -236,13 +237,26 @@ def part_listen(n_events: int, tmp: Path) -> None:
     done.set()
     sampler.join()
     pair.close()
-    with np.load(out) as z:
-        n_saved = z["events"].shape[0]
+    n_saved = 0
+    if record:
+        with np.load(out) as z:
+            n_saved = z["events"].shape[0]
     peak = max(m for _, m in samples)
-    print(f"\n[listen] {n_events:,} events fed in {fed:.1f} s to listen --record .npz "
+    at = [m for t, m in samples if t >= t0 + 0.1 * fed][:1] + \
+        [m for t, m in samples if t >= t0 + 0.5 * fed][:1] + \
+        [m for t, m in samples if t <= t0 + fed][-1:]
+    after = [f"{t - t0 - fed:.1f} s {m:.0f}" for t, m in samples if t > t0 + fed]
+    warm = [m for t, m in samples if t >= t0 + 0.01 * fed][0]
+    print("  VmRSS after the stream (s after, MB):", ", ".join(after))
+    print(f"\n[listen] {n_events:,} events fed in {fed:.1f} s to listen "
+          f"{'--record .npz' if record else '(no --record: the control)'} "
           f"(exit {proc.returncode}); {n_saved:,} events in the file "
-          f"({out.stat().st_size / 1e6:.1f} MB); listen VmRSS {base:.1f} MB before the "
-          f"stream, peak {peak:.1f} MB (growth {peak - base:+.1f} MB) including the save; "
+          f"({out.stat().st_size / 1e6 if record else 0:.1f} MB); listen VmRSS {base:.1f} MB "
+          "before the "
+          f"stream, {' / '.join(f'{m:.1f}' for m in at)} MB at 10 % / 50 % / the end of the "
+          f"stream, peak {peak:.1f} MB including the save: growth {peak - base:+.1f} MB from "
+          f"before the stream, {peak - warm:+.1f} MB from 1 % into it ({warm:.1f} MB: the "
+          "receiver's kernels loaded by the first data); "
           f"{load_average()}")
     if proc.returncode != 0:
         print(err[-2000:])
@@ -265,6 +279,8 @@ def main() -> None:
             part_record(args.events, tmp)
         if "listen" in parts:
             part_listen(args.events, tmp)
+        if "listen-control" in parts:
+            part_listen(args.events, tmp, record=False)
 
 
 if __name__ == "__main__":

@@ -349,3 +349,25 @@ def test_bad_recordings_give_one_error_line(tmp_path, pty_pair) -> None:
         line = _one_error_line(serve_argv(*args))
         assert needle in line, (name, line)
 
+
+
+# -- listen --record: the session recorder streams to disk ----------------------------------
+def test_session_recorder_streams_events_to_a_spool_and_saves_them_whole(tmp_path) -> None:
+    from skinhil.recording import SessionRecorder
+
+    rng = np.random.default_rng(1)
+    chunks = [make_events(np.sort(rng.integers(0, 10**6, n)) * 100,
+                          rng.integers(0, protocols.N_CHANNELS, n)) for n in (5, 0, 700, 33)]
+    with SessionRecorder(tmp_path) as rec:
+        for c in chunks:
+            rec.on_events(c, 0.0)
+        spool = list(tmp_path.glob(".skinhil-events.*.spool"))
+        assert len(spool) == 1 and spool[0].stat().st_size == 738 * 11  # on disk, not in memory
+        rec.on_marker(protocols.Marker(t_us=5, stimulus_id=2, phase=protocols.MarkerPhase.ONSET))
+        out = rec.save(tmp_path / "session.npz", {"k": 1})
+        assert np.array_equal(rec.events, np.concatenate(chunks))
+    assert not list(tmp_path.glob(".skinhil-events.*"))  # the spool is gone
+    with np.load(out, allow_pickle=False) as z:
+        assert np.array_equal(z["events"], np.concatenate(chunks))
+        assert z["markers"].tolist() == [(5, 2, "onset")]
+        assert json.loads(str(z["meta"])) == {"k": 1} and z["decisions"].shape == (0,)
