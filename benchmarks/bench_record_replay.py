@@ -9,13 +9,17 @@
   .skcap capture, and into a CAN FD .blf log) fed a long stream at full speed:
   ``--events`` (default 10 million) synthetic events encoded in 1 ms flushes, as the board
   sends them. Reports the process's resident memory (VmRSS) before, at its peak, and after.
+- ``session``: the recorder of ``listen --record`` (:class:`SessionRecorder`) fed the same
+  events and saving the .npz: VmRSS from the first flush to the peak (VmHWM) of the save.
 - ``listen``: ``skinhil listen --port PTY --record out.npz`` (a subprocess) fed the same
   long stream, as fast as it reads; its VmRSS sampled every 0.2 s from the first byte to
-  its exit (the .npz written), and the events in the file counted.
+  its exit (the .npz written), and the events in the file counted; ``listen-control``: the
+  same without ``--record`` (the receiver's own memory, which grows when it falls behind).
 
 Usage::
 
-    python benchmarks/bench_record_replay.py [--parts pace,record,listen] [--duration 20]
+    python benchmarks/bench_record_replay.py [--parts pace,record,session,listen,...]
+                                             [--duration 20]
                                              [--events 10000000]
 """
 
@@ -49,6 +53,7 @@ from protocols.events import make_events  # noqa: E402
 from skinhil.recording import (  # noqa: E402
     RecordingTransport,
     Replayer,
+    SessionRecorder,
     link_recorder,
     open_recording,
 )
@@ -61,11 +66,12 @@ WARM_TICKS = 1000
 """Memory is measured from this flush on (the first ones load the codec's kernels)."""
 
 
-def rss_mb(pid: int | str = "self") -> float:
-    """Resident memory (MB) of process ``pid`` (VmRSS)."""
+def rss_mb(pid: int | str = "self", field: str = "VmRSS") -> float:
+    """Resident memory (MB) of process ``pid`` (VmRSS; ``field`` RssAnon: its anonymous
+    part, RssFile: file pages mapped)."""
     with open(f"/proc/{pid}/status", encoding="ascii") as f:
         for line in f:
-            if line.startswith("VmRSS:"):
+            if line.startswith(f"{field}:"):
                 return int(line.split()[1]) / 1024
     return float("nan")
 
@@ -190,6 +196,32 @@ def part_record(n_events: int, tmp: Path) -> None:
         path.unlink()
 
 
+def part_session(n_events: int, tmp: Path) -> None:
+    """listen --record's recorder alone: the decoded events of a long stream into a
+    SessionRecorder, then the .npz; memory from the first flush to the end of the save."""
+    rec = SessionRecorder(tmp)
+    start = peak = 0.0
+    t0 = time.perf_counter()
+    for k, (_, ev, marker) in enumerate(synthetic_ticks(n_events)):
+        rec.on_events(ev, 0.0)
+        if marker is not None:
+            rec.on_marker(marker)
+        if k == WARM_TICKS:
+            start = peak = rss_mb()
+        elif k % 2000 == 0:
+            peak = max(peak, rss_mb())
+    fed = time.perf_counter() - t0
+    out = rec.save(tmp / "session.npz")
+    peak = max(peak, rss_mb("self", "VmHWM"))
+    rec.close()
+    print(f"\n[session] {n_events:,} events into listen --record's SessionRecorder in "
+          f"{fed:.1f} s, saved to .npz in {time.perf_counter() - t0 - fed:.1f} s "
+          f"({out.stat().st_size / 1e6:.1f} MB): VmRSS {start:.1f} MB at the start, peak "
+          f"{peak:.1f} MB (VmHWM, the save included; growth {peak - start:+.1f} MB); "
+          f"{load_average()}")
+    out.unlink()
+
+
 def part_listen(n_events: int, tmp: Path, record: bool = True) -> None:
     model = tmp / "decoder.npz"
     subprocess.run([sys.executable, "-m", "skinhil", "train", "--out", str(model), "--reps",
@@ -203,12 +235,14 @@ def part_listen(n_events: int, tmp: Path, record: bool = True) -> None:
                             cwd=RUN_DIR, env=serve_env(), stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True)
     samples: list[tuple[float, float]] = []
+    anon: list[float] = []
     done = threading.Event()
 
     def sample() -> None:
         while not done.is_set():
             try:
                 samples.append((time.monotonic(), rss_mb(proc.pid)))
+                anon.append(rss_mb(proc.pid, "RssAnon"))
             except OSError:
                 return
             time.sleep(0.2)
@@ -245,9 +279,10 @@ def part_listen(n_events: int, tmp: Path, record: bool = True) -> None:
     at = [m for t, m in samples if t >= t0 + 0.1 * fed][:1] + \
         [m for t, m in samples if t >= t0 + 0.5 * fed][:1] + \
         [m for t, m in samples if t <= t0 + fed][-1:]
-    after = [f"{t - t0 - fed:.1f} s {m:.0f}" for t, m in samples if t > t0 + fed]
+    after = [f"{t - t0 - fed:.1f} s {m:.0f} ({a:.0f})"
+             for (t, m), a in zip(samples, anon, strict=False) if t > t0 + fed]
     warm = [m for t, m in samples if t >= t0 + 0.01 * fed][0]
-    print("  VmRSS after the stream (s after, MB):", ", ".join(after))
+    print("  VmRSS (RssAnon) after the stream (s after, MB):", ", ".join(after))
     print(f"\n[listen] {n_events:,} events fed in {fed:.1f} s to listen "
           f"{'--record .npz' if record else '(no --record: the control)'} "
           f"(exit {proc.returncode}); {n_saved:,} events in the file "
@@ -264,7 +299,7 @@ def part_listen(n_events: int, tmp: Path, record: bool = True) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--parts", default="pace,record,listen")
+    ap.add_argument("--parts", default="pace,record,session,listen,listen-control")
     ap.add_argument("--duration", type=float, default=20.0)
     ap.add_argument("--events", type=int, default=10_000_000)
     args = ap.parse_args()
@@ -277,6 +312,8 @@ def main() -> None:
             part_pace(args.duration, tmp)
         if "record" in parts:
             part_record(args.events, tmp)
+        if "session" in parts:
+            part_session(args.events, tmp)
         if "listen" in parts:
             part_listen(args.events, tmp)
         if "listen-control" in parts:

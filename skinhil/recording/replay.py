@@ -104,6 +104,9 @@ class Replayer:
             self._answers = protocols.SerialEncoder()
         self.commands = 0
         self.markers = 0
+        self.board_time_us = 0
+        """The latest board time (µs) the played stream carried (events, statuses, markers):
+        what a host command received now is stamped with."""
         self._lateness = np.zeros(LATENESS_WINDOW)
         self._late_max = 0.0
         self._units = 0
@@ -173,7 +176,12 @@ class Replayer:
             if not payload:
                 continue
             self._send(payload, stop)
-            for record in self._played.feed(payload).records:
+            res = self._played.feed(payload)
+            if len(res.events):
+                self.board_time_us = max(self.board_time_us, int(res.events["t"][-1]))
+            for record in res.records:
+                if isinstance(record, protocols.Status | protocols.Marker):
+                    self.board_time_us = max(self.board_time_us, int(record.t_us))
                 if isinstance(record, protocols.Marker):
                     self.on_marker(record)
 

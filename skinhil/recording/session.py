@@ -30,8 +30,8 @@ DECISION_DTYPE = np.dtype([("detect_t_us", "<i8"), ("window_t_us", "<i8"),
 
 MARKER_DTYPE = np.dtype([("t_us", "<i8"), ("stimulus_id", "<i4"), ("phase", "U16")])
 
-COPY_CHUNK_EVENTS = 1 << 18
-"""Events copied from the spool into the .npz at a time (3 MB)."""
+COPY_CHUNK_EVENTS = 1 << 16
+"""Events copied from the spool into the .npz at a time (0.7 MB)."""
 
 
 class SessionRecorder(ReceiverListener):
@@ -107,9 +107,10 @@ class SessionRecorder(ReceiverListener):
                     "descr": np.lib.format.dtype_to_descr(EVENT_DTYPE),
                     "fortran_order": False, "shape": (self._n_events,)})
                 self._spool.seek(0)
-                chunk = COPY_CHUNK_EVENTS * EVENT_DTYPE.itemsize
-                while data := self._spool.read(chunk):
-                    f.write(data)
+                buf = bytearray(COPY_CHUNK_EVENTS * EVENT_DTYPE.itemsize)  # reused: no churn
+                view = memoryview(buf)
+                while n := self._spool.readinto(buf):
+                    f.write(view[:n])
                 self._spool.seek(0, os.SEEK_END)
             for name, arr in (("decisions", self.decisions), ("markers", self.markers),
                               ("meta", np.array(json.dumps(meta or {})))):
