@@ -49,6 +49,7 @@ from harness.serve import RUN_DIR, run_serve, serve_env  # noqa: E402
 from machine import describe, load_average  # noqa: E402
 
 import protocols  # noqa: E402
+from firmware_sim.clock import request_realtime  # noqa: E402
 from protocols.events import make_events  # noqa: E402
 from skinhil.recording import (  # noqa: E402
     RecordingTransport,
@@ -83,10 +84,15 @@ def pct(x: np.ndarray) -> str:
 
 
 # -- pace -------------------------------------------------------------------------------
-def replay_pace(rec: Path, transport: Transport[Any]) -> None:
+def replay_pace(rec: Path, transport: Transport[Any], realtime: bool) -> None:
     recording = open_recording(rec)
+    if realtime:
+        why = request_realtime()
+        assert why is None, why
     replayer = Replayer(recording, transport)
     summary = replayer.run()
+    if realtime:
+        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
     late = replayer.lateness_s()
     recorded = np.array([ts for ts, _ in recording.read()])
     interval_err = np.abs(np.diff(late))  # (sent interval) - (recorded interval)
@@ -98,29 +104,30 @@ def replay_pace(rec: Path, transport: Transport[Any]) -> None:
     print(f"  {load_average()}")
 
 
-def part_pace(duration_s: float, tmp: Path) -> None:
+def part_pace(duration_s: float, tmp: Path, realtime: bool) -> None:
     print(f"\n[pace] serial: serve --port PTY --record, {duration_s:g} s; replay onto a "
           "second pty")
     rec = tmp / "pace.skcap"
     first, second = PtyPair(), PtyPair()
     reader = PtyReader(first.master)
+    rt = ["--realtime"] if realtime else []
     out = run_serve("--port", first.path, "--record", str(rec), "--duration", str(duration_s),
-                    "--quiet", timeout_s=duration_s + 120)
+                    "--quiet", *rt, timeout_s=duration_s + 120)
     reader.stop()
     assert out.returncode == 0, out.stderr
     reader = PtyReader(second.master)
     with SerialTransport(second.path) as link:
-        replay_pace(rec, link)
+        replay_pace(rec, link, realtime)
     reader.stop()
     print(f"\n[pace] UDP: serve --udp --record, {duration_s:g} s; replay onto a second port")
     rec = tmp / "pace_udp.skcap"
     with UdpTransport("127.0.0.1", 0, listen=True) as host:
         port = host.port
         out = run_serve("--udp", f"127.0.0.1:{port}", "--record", str(rec), "--duration",
-                        str(duration_s), "--quiet", timeout_s=duration_s + 120)
+                        str(duration_s), "--quiet", *rt, timeout_s=duration_s + 120)
         assert out.returncode == 0, out.stderr
         with UdpTransport("127.0.0.1", port) as link:
-            replay_pace(rec, link)
+            replay_pace(rec, link, realtime)
 
 
 # -- a long stream ------------------------------------------------------------------------
@@ -302,6 +309,8 @@ def main() -> None:
     ap.add_argument("--parts", default="pace,record,session,listen,listen-control")
     ap.add_argument("--duration", type=float, default=20.0)
     ap.add_argument("--events", type=int, default=10_000_000)
+    ap.add_argument("--realtime", action="store_true",
+                    help="pace: the board and the replay with real-time scheduling (root)")
     args = ap.parse_args()
     print(describe())
     print(load_average())
@@ -309,7 +318,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
         if "pace" in parts:
-            part_pace(args.duration, tmp)
+            part_pace(args.duration, tmp, args.realtime)
         if "record" in parts:
             part_record(args.events, tmp)
         if "session" in parts:

@@ -82,8 +82,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="when the link goes away, keep running and reopen it when it returns")
     p.add_argument("--realtime", action="store_true",
                    help="run with real-time (FIFO) scheduling so other programs cannot delay "
-                        "ticks, and spin the last 0.3 ms before each tick instead of sleeping "
-                        "(needs root or CAP_SYS_NICE)")
+                        "ticks (or replayed units), and spin the last 0.3 ms before each tick "
+                        "instead of sleeping (needs root or CAP_SYS_NICE)")
     out = p.add_mutually_exclusive_group()
     out.add_argument("--quiet", action="store_true", help="print nothing but errors")
     out.add_argument("--json", action="store_true",
@@ -180,6 +180,10 @@ def run_replay(args: argparse.Namespace) -> int:
                           "a recording; copy the file instead")
     check_link_fits(args.replay, _link_kind(args))
     recording = open_recording(args.replay)
+    if args.realtime:
+        why = request_realtime()
+        if why is not None:
+            raise ConfigError(f"--realtime: {why}")
     with open_transport(args) as transport:
         replayer = Replayer(recording, transport, args.speed)
         if not args.quiet and not args.json:
