@@ -92,7 +92,7 @@ class Replayer:
         self.speed = float(speed)
         self.is_can = recording.link == "can"
         if self.is_can:
-            args = {"board_id": recording.board_id, "fd": recording.fd}
+            args: dict[str, Any] = {"board_id": recording.board_id, "fd": recording.fd}
             self._stream: Any = CanReplayStream()
             self._commands: Any = protocols.CanDecoder(**args)
             self._played: Any = protocols.CanDecoder(**args)
@@ -128,10 +128,11 @@ class Replayer:
         """Run every encode, decode and renumbering path once on throwaway codecs, off the
         clock (a kernel compiled inside the loop would stall the replay for up to a
         second)."""
-        wide = {"n_channels": protocols.N_CHANNELS + 1} if self.recording.wire_version == 4 \
-            else {}
+        wide: dict[str, Any] = ({"n_channels": protocols.N_CHANNELS + 1}
+                                if self.recording.wire_version == 4 else {})
         if self.is_can:
-            args = {"board_id": self.recording.board_id, "fd": self.recording.fd}
+            args: dict[str, Any] = {"board_id": self.recording.board_id,
+                                    "fd": self.recording.fd}
             payloads = exercise_codecs(protocols.CanEncoder(**args, **wide),
                                        protocols.CanDecoder(**args), DEFAULT_STEP_US,
                                        _IDLE_STATUS)
