@@ -373,3 +373,72 @@ def test_session_recorder_streams_events_to_a_spool_and_saves_them_whole(tmp_pat
         assert np.array_equal(z["events"], np.concatenate(chunks))
         assert z["markers"].tolist() == [(5, 2, "onset")]
         assert json.loads(str(z["meta"])) == {"k": 1} and z["decisions"].shape == (0,)
+
+
+# -- answers inserted into the replayed stream ----------------------------------------------
+def _board_units(encoder: Any, n: int) -> list[Any]:
+    """``n`` flushes of a board's stream (events of 3 channels per ms, a marker every 10)."""
+    out: list[Any] = []
+    for k in range(n):
+        ev = make_events(np.array([k * 1000, k * 1000, k * 1000 + 500]),
+                         np.array([1, 2 + k % 300, 7]))
+        out.append(encoder.events(ev, (k + 1) * 1000))
+        if k % 10 == 0:
+            out.append(encoder.marker(protocols.Marker(t_us=k * 1000, stimulus_id=k // 10,
+                                                       phase=protocols.MarkerPhase.ONSET)))
+    return out
+
+
+@pytest.mark.parametrize("fd", [False, True])
+def test_can_replay_stream_inserts_answers_with_an_unbroken_sequence(fd: bool) -> None:
+    from skinhil.recording.replay_stream import CanReplayStream
+
+    frames = [f for unit in _board_units(protocols.CanEncoder(fd=fd), 200) for f in unit]
+    stream = CanReplayStream()
+    answers = protocols.CanEncoder(fd=fd)
+    played: list[protocols.CanFrame] = []
+    for k, frame in enumerate(frames):
+        if k % 37 == 5:  # a command arrived: its NACK goes before the next frame
+            stream.answer(answers.ack(protocols.Ack(token=k, opcode=protocols.CommandCode.PING,
+                                                    ok=False,
+                                                    reason=protocols.NackReason.REPLAYING))[0])
+        played += stream.out(frame)
+    played += stream.flush()
+    dec, ref = protocols.CanDecoder(fd=fd), protocols.CanDecoder(fd=fd)
+    got, want = dec.feed(played), ref.feed(frames)
+    acks = [r for r in got.records if isinstance(r, protocols.Ack)]
+    assert len(acks) == stream.shift == len(range(5, len(frames), 37)) > 5
+    assert all(a.reason == protocols.NackReason.REPLAYING for a in acks)
+    assert dec.counters.seq_gaps == 0 and dec.counters.duplicates == 0
+    assert np.array_equal(got.events, want.events)
+    assert [r for r in got.records if not isinstance(r, protocols.Ack)] == want.records
+
+
+def test_serial_replay_stream_inserts_answers_between_packets_of_any_chunking() -> None:
+    """Units cut anywhere (a serial write holds any bytes): answers go in at packet
+    boundaries only, and the stream decodes whole with an unbroken sequence."""
+    from skinhil.recording.replay_stream import SerialReplayStream
+
+    data = b"".join(_board_units(protocols.SerialEncoder(), 300))
+    rng = np.random.default_rng(5)
+    cuts = np.sort(rng.choice(np.arange(1, len(data)), 400, replace=False))
+    units = [data[a:b] for a, b in zip([0, *cuts], [*cuts, len(data)], strict=True)]
+    stream = SerialReplayStream()
+    answers = protocols.SerialEncoder()
+    played = []
+    for k, unit in enumerate(units):
+        if k % 23 == 3:
+            stream.answer(answers.ack(protocols.Ack(token=k, opcode=protocols.CommandCode.PING,
+                                                    ok=False,
+                                                    reason=protocols.NackReason.REPLAYING)))
+        played += stream.out(unit)
+    played += stream.flush()
+    assert b"".join(played[:1]) == units[0]  # as recorded until the first answer
+    dec = protocols.SerialDecoder()
+    got, want = dec.feed(b"".join(played)), decoded(data)
+    acks = [r for r in got.records if isinstance(r, protocols.Ack)]
+    assert [a.token for a in acks] == list(range(3, len(units), 23))
+    c = dec.counters
+    assert c.seq_gaps == 0 and c.duplicates == 0 and c.crc_errors == 0 and c.malformed == 0
+    assert np.array_equal(got.events, want.events)
+    assert [r for r in got.records if not isinstance(r, protocols.Ack)] == want.records

@@ -21,6 +21,7 @@ from protocols.capture import CaptureHeader, CaptureWriter
 from skinhil.output_files import atomic_path
 from skinhil.recording.formats import check_link_fits
 from skinhil.transports import Transport
+from skinhil.transports.base import WrappedTransport
 
 
 class LinkRecorder(abc.ABC):
@@ -98,38 +99,18 @@ def link_recorder(path: Path, link: str, wire_version: int, step_us: int
                 cap.close()
 
 
-class RecordingTransport(Transport[Any]):
+class RecordingTransport(WrappedTransport[Any]):
     """``inner`` with every unit it accepts written to ``recorder``; ``board_time_us()``
     gives the board time (µs) each is stamped with. Everything else is ``inner``'s."""
 
     def __init__(self, inner: Transport[Any], recorder: LinkRecorder,
                  board_time_us: Callable[[], int]) -> None:
-        self.inner = inner
-        self.kind = inner.kind
+        super().__init__(inner)
         self.recorder = recorder
         self._board_time_us = board_time_us
-
-    def __getattr__(self, name: str) -> Any:  # fd, bitrate, ... of the inner link
-        return getattr(self.inner, name)
-
-    @property
-    def name(self) -> str:
-        return self.inner.name
 
     def send(self, payload: Any, timeout: float | None = None) -> int:
         n = self.inner.send(payload, timeout)
         if n:
             self.recorder.write(payload[:n], self._board_time_us())
         return n
-
-    def recv(self, timeout: float | None = None) -> Any:
-        return self.inner.recv(timeout)
-
-    def wire_seconds(self, payload: Any) -> float:
-        return self.inner.wire_seconds(payload)
-
-    def empty(self) -> Any:
-        return self.inner.empty()
-
-    def shutdown(self) -> None:
-        self.inner.shutdown()

@@ -8,7 +8,7 @@ count. With no answer inserted, :meth:`out` returns each unit as it was recorded
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 from protocols.records import CanFrame
 from protocols.resequence import (
@@ -18,32 +18,42 @@ from protocols.resequence import (
     serial_packet_with_seq,
 )
 
+U = TypeVar("U")
+
 MAX_OPEN_BYTES = 2064
 """Bytes of a packet still open (no delimiter yet) kept to read its sequence number; a
 longer run is no packet (SPEC.md §6 rule 3)."""
 
 
-class SerialReplayStream:
-    """A recorded serial (or UDP) byte stream, with answer packets inserted at packet
-    boundaries and the packets after them renumbered."""
+class ReplayStream(Generic[U]):
+    """What both streams keep: the answers waiting, how many went in, the last number."""
 
     def __init__(self) -> None:
         self._shift = 0
         self._last_seq: int | None = None
+        self._answers: list[U] = []
+
+    @property
+    def shift(self) -> int:
+        """Answers inserted so far: what every later packet's (frame's) sequence number is
+        advanced by."""
+        return self._shift
+
+    def answer(self, unit: U) -> None:
+        """Insert ``unit`` (an ACK packet or frame) at the next packet (frame) boundary."""
+        self._answers.append(unit)
+
+
+class SerialReplayStream(ReplayStream[bytes]):
+    """A recorded serial (or UDP) byte stream, with answer packets inserted at packet
+    boundaries and the packets after them renumbered."""
+
+    def __init__(self) -> None:
+        super().__init__()
         self._open = b""
         """The start of a packet already sent as recorded, its delimiter still to come."""
         self._carry = b""
         """The start of a packet held back: it will be renumbered once whole."""
-        self._answers: list[bytes] = []
-
-    @property
-    def shift(self) -> int:
-        """Answers inserted so far: what every later packet's sequence number is advanced by."""
-        return self._shift
-
-    def answer(self, packet: bytes) -> None:
-        """Insert ``packet`` (a framed ACK) at the next packet boundary."""
-        self._answers.append(packet)
 
     def _note(self, packet: bytes) -> None:
         seq = serial_packet_seq(packet)
@@ -115,23 +125,9 @@ class SerialReplayStream:
         return sends
 
 
-class CanReplayStream:
+class CanReplayStream(ReplayStream[CanFrame]):
     """Recorded CAN frames, with answer frames inserted between them and the frames after
     them renumbered."""
-
-    def __init__(self) -> None:
-        self._shift = 0
-        self._last_seq: int | None = None
-        self._answers: list[CanFrame] = []
-
-    @property
-    def shift(self) -> int:
-        """Answers inserted so far."""
-        return self._shift
-
-    def answer(self, frame: CanFrame) -> None:
-        """Insert ``frame`` (an ACK) before the next recorded frame."""
-        self._answers.append(frame)
 
     def out(self, frame: Any) -> list[CanFrame]:
         """The frames to send for the recorded ``frame``: answers first, then it."""
