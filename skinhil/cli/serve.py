@@ -202,6 +202,8 @@ def run_replay(args: argparse.Namespace) -> int:
 def run(args: argparse.Namespace) -> int:
     if args.replay is not None:
         return run_replay(args)
+    if args.speed != 1.0:
+        raise ConfigError("--speed sets the pace of --replay: add --replay FILE or drop it")
     if args.record is None:
         return run_board(args, open_link=lambda: open_transport(args))
     n_channels = spring_count(args.size)
