@@ -229,7 +229,8 @@ def part_session(n_events: int, tmp: Path) -> None:
     out.unlink()
 
 
-def part_listen(n_events: int, tmp: Path, record: bool = True) -> None:
+def part_listen(n_events: int, tmp: Path, record: bool = True,
+                arena_max: int | None = None) -> None:
     model = tmp / "decoder.npz"
     subprocess.run([sys.executable, "-m", "skinhil", "train", "--out", str(model), "--reps",
                     "8", "--snr-db", "inf", "--no-progress"], cwd=RUN_DIR, env=serve_env(),
@@ -239,8 +240,10 @@ def part_listen(n_events: int, tmp: Path, record: bool = True) -> None:
     proc = subprocess.Popen([sys.executable, "-m", "skinhil", "listen", "--port", pair.path,
                              "--model", str(model), "--json"]
                             + (["--record", str(out)] if record else []),
-                            cwd=RUN_DIR, env=serve_env(), stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, text=True)
+                            cwd=RUN_DIR, env={**serve_env(), **(
+                                {} if arena_max is None
+                                else {"MALLOC_ARENA_MAX": str(arena_max)})},
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     samples: list[tuple[float, float]] = []
     anon: list[float] = []
     done = threading.Event()
@@ -291,7 +294,8 @@ def part_listen(n_events: int, tmp: Path, record: bool = True) -> None:
     warm = [m for t, m in samples if t >= t0 + 0.01 * fed][0]
     print("  VmRSS (RssAnon) after the stream (s after, MB):", ", ".join(after))
     print(f"\n[listen] {n_events:,} events fed in {fed:.1f} s to listen "
-          f"{'--record .npz' if record else '(no --record: the control)'} "
+          f"{'--record .npz' if record else '(no --record: the control)'}"
+          f"{'' if arena_max is None else f' with MALLOC_ARENA_MAX={arena_max}'} "
           f"(exit {proc.returncode}); {n_saved:,} events in the file "
           f"({out.stat().st_size / 1e6 if record else 0:.1f} MB); listen VmRSS {base:.1f} MB "
           "before the "
@@ -309,6 +313,9 @@ def main() -> None:
     ap.add_argument("--parts", default="pace,record,session,listen,listen-control")
     ap.add_argument("--duration", type=float, default=20.0)
     ap.add_argument("--events", type=int, default=10_000_000)
+    ap.add_argument("--malloc-arena-max", type=int, default=None, metavar="N",
+                    help="listen: run it with MALLOC_ARENA_MAX=N (glibc's per-thread heaps "
+                         "otherwise make its resident memory vary by ~100 MB from run to run)")
     ap.add_argument("--realtime", action="store_true",
                     help="pace: the board and the replay with real-time scheduling (root)")
     args = ap.parse_args()
@@ -324,9 +331,9 @@ def main() -> None:
         if "session" in parts:
             part_session(args.events, tmp)
         if "listen" in parts:
-            part_listen(args.events, tmp)
+            part_listen(args.events, tmp, arena_max=args.malloc_arena_max)
         if "listen-control" in parts:
-            part_listen(args.events, tmp, record=False)
+            part_listen(args.events, tmp, record=False, arena_max=args.malloc_arena_max)
 
 
 if __name__ == "__main__":

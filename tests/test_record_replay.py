@@ -340,6 +340,8 @@ def test_bad_recordings_give_one_error_line(tmp_path, pty_pair) -> None:
         "missing": (port + ["--replay", str(tmp_path / "nope.skcap")], "does not exist"),
         "extension": (port + ["--replay", str(tmp_path / "x.wav")], "unknown extension"),
         "record extension": (port + ["--record", str(tmp_path / "x.blf")], "CAN log"),
+        "record FD to csv": (["--can", "vcan0", "--fd", "--record", str(tmp_path / "x.csv")],
+                             "does not keep CAN FD"),
         "speed": (port + ["--replay", str(tmp_path / "good.skcap"), "--speed", "0"],
                   "--speed"),
         "both": (port + ["--replay", str(tmp_path / "good.skcap"), "--record",

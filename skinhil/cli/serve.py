@@ -208,7 +208,7 @@ def run(args: argparse.Namespace) -> int:
         return run_board(args, open_link=lambda: open_transport(args))
     n_channels = spring_count(args.size)
     with link_recorder(args.record, _link_kind(args), wire_version(n_channels),
-                       int(round(args.dt_s * 1e6))) as recorder:
+                       int(round(args.dt_s * 1e6)), fd=args.fd) as recorder:
         boards: list[Board] = []
 
         def board_time_us() -> int:

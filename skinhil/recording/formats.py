@@ -18,6 +18,10 @@ CAPTURE_SUFFIX = ".skcap"
 
 Format = Literal["capture", "can"]
 
+CAN_FD_LOG_SUFFIXES = (".asc", ".blf", ".log", ".mf4")
+"""The CAN log formats that keep CAN FD frames as they are (python-can 4.6: .csv and .db
+drop the FD flag, .trc writes no FD frame)."""
+
 
 def can_log_suffixes() -> tuple[str, ...]:
     """The extensions python-can both writes and reads (lower case, with the dot)."""
@@ -39,10 +43,13 @@ def recording_format(path: Path) -> Format:
                       f"({', '.join(can_log_suffixes())})")
 
 
-def check_link_fits(path: Path, link: str) -> Format:
-    """The format of ``path`` if it records a ``link`` ("serial", "udp" or "can") stream;
-    ConfigError naming what to do otherwise."""
+def check_link_fits(path: Path, link: str, fd: bool = False) -> Format:
+    """The format of ``path`` if it records a ``link`` ("serial", "udp" or "can"; ``fd``:
+    CAN FD) stream; ConfigError naming what to do otherwise."""
     fmt = recording_format(path)
+    if fmt == "can" and fd and Path(path).suffix.lower() not in CAN_FD_LOG_SUFFIXES:
+        raise ConfigError(f"'{path}': python-can's {Path(path).suffix} log does not keep CAN "
+                          f"FD frames; use {', '.join(CAN_FD_LOG_SUFFIXES)}")
     if (fmt == "can") != (link == "can"):
         what = "a CAN log" if fmt == "can" else f"a {CAPTURE_SUFFIX} capture"
         use = ("--can CHANNEL" if fmt == "can" else "--port PORT or --udp HOST:PORT")

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 from protocols.capture import CaptureHeader, CaptureWriter
+from skinhil.errors import ConfigError
 from skinhil.output_files import atomic_path
 from skinhil.recording.formats import check_link_fits
 from skinhil.transports import Transport
@@ -59,7 +60,10 @@ class CanLogRecorder(LinkRecorder):
         import can
 
         self._can = can
-        self._logger = can.Logger(str(path))
+        try:
+            self._logger = can.Logger(str(path))
+        except (NotImplementedError, ImportError, ValueError, OSError) as exc:
+            raise ConfigError(f"cannot write a {path.suffix} CAN log: {exc}") from None
 
     def write(self, payload: Any, board_us: int) -> None:
         now = time.time()
@@ -75,15 +79,15 @@ class CanLogRecorder(LinkRecorder):
 
 
 @contextlib.contextmanager
-def link_recorder(path: Path, link: str, wire_version: int, step_us: int
+def link_recorder(path: Path, link: str, wire_version: int, step_us: int, fd: bool = False
                   ) -> Iterator[LinkRecorder]:
-    """A recorder of a ``link`` ("serial", "udp" or "can") stream into ``path``, renamed
-    into place when the block ends without an exception.
+    """A recorder of a ``link`` ("serial", "udp" or "can"; ``fd``: CAN FD) stream into
+    ``path``, renamed into place when the block ends without an exception.
 
     ``wire_version`` (3 or 4) and ``step_us`` (µs) go into a capture's header. Raises
     ConfigError before anything is written when the extension does not fit the link.
     """
-    fmt = check_link_fits(path, link)
+    fmt = check_link_fits(path, link, fd)
     with atomic_path(Path(path)) as tmp:
         if fmt == "can":
             can_rec = CanLogRecorder(tmp)
