@@ -46,6 +46,8 @@ class NackReason(enum.IntEnum):
     BUSY = 5
     NOT_RUNNING = 6
     INTERNAL_ERROR = 7
+    REPLAYING = 8
+    """The link is playing a recording (``serve --replay``): no command is executed."""
 
 
 class MarkerPhase(enum.IntEnum):

@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 import protocols
-from skinhil.receiver import Receiver, SessionRecorder, WindowDecoder
+from skinhil.receiver import Receiver, WindowDecoder
 from skinhil.receiver.session import run_against_board, serve_command
 from skinhil.receiver.training import (
     TrainingReport,
@@ -32,6 +32,7 @@ from skinhil.receiver.training import (
     stream_windows,
     train_decoder,
 )
+from skinhil.recording import SessionRecorder
 from skinhil.transports import CanTransport, FaultParams, FaultyTransport, PtyMasterTransport
 
 N_STIMULI = 100
@@ -117,11 +118,11 @@ def test_online_accuracy_through_a_pty_matches_offline_at_10_db(decoder_10db):
     check_online_matches_offline("pty", receiver, decoder, trained)
 
 
-def test_fault_injection_is_survived_and_accounted(decoder_inf):
+def test_fault_injection_is_survived_and_accounted(decoder_inf, tmp_path):
     decoder, _ = decoder_inf
     n = 30
     clean, _ = run_pty(decoder, math.inf, n)
-    recorder = SessionRecorder()
+    recorder = SessionRecorder(tmp_path)  # its spool file goes with tmp_path
     receiver, faulty = run_pty(decoder, math.inf, n,
                                FaultParams(drop_p=0.01, corrupt_byte_p=2e-3, seed=11),
                                recorder)

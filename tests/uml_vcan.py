@@ -4,9 +4,9 @@ This host's kernel may lack CAN (``socket.AF_CAN`` fails). Debian's ``user-mode-
 package ships a kernel that runs as a normal process and has the CAN modules; booted with
 ``rootfstype=hostfs`` it sees this machine's files, so the same Python, the same repository
 and the same installed packages run inside it. The init script written here mounts /proc
-and /sys, loads can.ko, can-raw.ko, can-dev.ko and vcan.ko, creates ``vcan0``, runs the
-command in the given directory, writes its exit status and output to files on the host and
-powers the UML machine off.
+and /sys, loads can.ko, can-raw.ko, can-dev.ko and vcan.ko, creates ``vcan0`` and
+``vcan1``, runs the command in the given directory, writes its exit status and output to
+files on the host and powers the UML machine off.
 
 Needs (Debian): ``apt-get install -y user-mode-linux kmod iproute2``.
 
@@ -105,7 +105,7 @@ def host_max_map_count() -> int | None:
 
 WARM_CACHE_CODE = """
 import protocols
-from firmware_sim.link import exercise_codecs
+from protocols.warm_up import exercise_codecs
 status = protocols.Status(t_us=0, events_generated=0, events_sent=0, events_dropped=0,
                           events_queued=0, late_ticks=0, rx_errors=0, running=True)
 for fd in (False, True):
@@ -200,6 +200,9 @@ def _init_script(workdir: Path, modules: list[Path], command: list[str], cwd: Pa
     lines += [
         "ip link add dev vcan0 type vcan 1>&3 2>&3",
         "ip link set up vcan0 1>&3 2>&3",
+        # a second bus: a recording made on vcan0 is replayed onto vcan1
+        "ip link add dev vcan1 type vcan 1>&3 2>&3",
+        "ip link set up vcan1 1>&3 2>&3",
         "ip link set up lo 1>&3 2>&3",
     ]
     for key, value in env.items():

@@ -30,10 +30,10 @@ from skinhil.receiver import (
     Receiver,
     ReceiverListener,
     ScoredDecision,
-    SessionRecorder,
 )
 from skinhil.receiver.bus import MAX_UDP_SOURCES, BoardKey
 from skinhil.receiver.model_file import load_window_decoder
+from skinhil.recording import SessionRecorder
 
 STATUS_PERIOD_S = 1.0
 """Seconds between link-counter lines."""
@@ -263,32 +263,17 @@ def run(args: argparse.Namespace) -> int:
         return run_bus(args, bus, names)
     receiver = Receiver(transport, decoder, board_id=args.board_ids[0],
                         reopen=lambda: open_transport(args))
-    recorder = SessionRecorder() if record is not None else None
     receiver.add_listener(LivePrinter(receiver, args.json, names))
     answerer = DecisionAnswerer(receiver) if args.answer else None
     if answerer is not None:
         receiver.add_listener(answerer)
-    if recorder is not None:
-        receiver.add_listener(recorder)
-    if not args.json:
-        print(f"skinhil listen: {describe_transport(args)}, model {args.model}; Ctrl-C stops",
-              file=sys.stderr, flush=True)
-    t0 = time.monotonic()
-    listen_until_stopped(args, receiver, lambda: receiver.link_report().as_dict(),
-                         lambda: False)
-    info = summary(receiver, time.monotonic() - t0)
-    if answerer is not None:
-        info["answers"] = answerer.as_dict()
-    if recorder is not None and record is not None and record.suffix == ".nwb":
-        p = SkinParams(size=args.size)
-        write_session(record, mesh=build_mesh(p.spacing_m, p.layer_gap_m, p.size),
-                      events=recorder.events, markers=recorder.markers,
-                      decisions=recorder.decisions, names=names,
-                      description=f"skinhil listen: {describe_transport(args)}, "
-                                  f"model {args.model}")
-    elif recorder is not None and record is not None:
-        recorder.save(record, {"model": str(args.model), "link": describe_transport(args),
-                               "summary": info})
+    if record is None:
+        info = listen_one(args, receiver, answerer)
+    else:
+        with SessionRecorder(record.parent) as recorder:
+            receiver.add_listener(recorder)
+            info = listen_one(args, receiver, answerer)
+            save_session(args, recorder, names, info)
     if args.json:
         print(json.dumps(info), flush=True)
     else:
@@ -298,6 +283,37 @@ def run(args: argparse.Namespace) -> int:
             print(f"answers: {a['sent']} DECISIONs sent to the board ({a['acked']} ACK, "
                   f"{a['nacked']} NACK, {a['unsent']} not sent)")
     return 0
+
+
+def listen_one(args: argparse.Namespace, receiver: Receiver,
+               answerer: DecisionAnswerer | None = None) -> dict[str, Any]:
+    """Receive until Ctrl-C or --duration; the summary (with ``answerer``'s DECISION counts
+    when the receiver answers the board)."""
+    if not args.json:
+        print(f"skinhil listen: {describe_transport(args)}, model {args.model}; Ctrl-C stops",
+              file=sys.stderr, flush=True)
+    t0 = time.monotonic()
+    listen_until_stopped(args, receiver, lambda: receiver.link_report().as_dict(),
+                         lambda: False)
+    info = summary(receiver, time.monotonic() - t0)
+    if answerer is not None:
+        info["answers"] = answerer.as_dict()
+    return info
+
+
+def save_session(args: argparse.Namespace, recorder: SessionRecorder, names: dict[int, str],
+                 info: dict[str, Any]) -> None:
+    """Write the recorded session to --record: NWB for .nwb, else .npz."""
+    if args.record.suffix == ".nwb":
+        p = SkinParams(size=args.size)
+        write_session(args.record, mesh=build_mesh(p.spacing_m, p.layer_gap_m, p.size),
+                      events=recorder.events, markers=recorder.markers,
+                      decisions=recorder.decisions, names=names,
+                      description=f"skinhil listen: {describe_transport(args)}, "
+                                  f"model {args.model}")
+    else:
+        recorder.save(args.record, {"model": str(args.model), "link": describe_transport(args),
+                                    "summary": info})
 
 
 def class_names() -> dict[int, str]:

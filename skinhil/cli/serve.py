@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 from typing import Any
@@ -16,15 +17,25 @@ from firmware_sim.board import (
     BoardSummary,
 )
 from firmware_sim.clock import request_realtime
+from protocols.versions import wire_version
 from skinhil.cli import signals
 from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.options import SCHEDULE_HELP, add_model_options, noise_from_args, read_schedule
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.cli.values import MAX_DURATION_S, MAX_REST_S, integer, real
 from skinhil.errors import ConfigError
-from skinhil.model.geometry import format_size
+from skinhil.model.geometry import format_size, spring_count
 from skinhil.model.timeline import Timeline
 from skinhil.output_files import atomic_path, check_output_path
+from skinhil.recording import (
+    CAPTURE_SUFFIX,
+    RecordingTransport,
+    Replayer,
+    ReplaySummary,
+    check_link_fits,
+    link_recorder,
+    open_recording,
+)
 from skinhil.scoring import scoreboard_text
 
 LIVE_WINDOW_TICKS = 1000
@@ -53,6 +64,19 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                      help=f"play this {SCHEDULE_HELP}")
     src.add_argument("--host-driven", action="store_true",
                      help="no schedule: stimuli only on host commands")
+    src.add_argument("--replay", type=Path, metavar="FILE",
+                     help="play this recording (serve --record) onto the link instead of "
+                          "running the board: byte for byte (serial, UDP), frame for frame "
+                          "(CAN), at its recorded pace; host commands get a NACK (REPLAYING), "
+                          "DECISIONs are scored against the recorded markers")
+    p.add_argument("--speed", type=speed_value, default=1.0, metavar="X",
+                   help="--replay at X times the recorded pace (default: 1; inf: as fast "
+                        "as the link takes)")
+    p.add_argument("--record", type=Path, metavar="FILE",
+                   help="record what the board puts on the link, as it goes: CAN to a "
+                        f"python-can log chosen by the extension (.blf, .asc, .log, .csv, "
+                        f".trc, ...), serial and UDP to a {CAPTURE_SUFFIX} capture (SPEC.md "
+                        "\"Capture files\")")
     p.add_argument("--rest", dest="rest_s", type=real(0, MAX_REST_S, "seconds"), default=0.25,
                    metavar="SECONDS", help="rest after each stimulus of the random schedule, "
                                            f"0..{MAX_REST_S:g} (default: 0.25)")
@@ -80,8 +104,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="when the link goes away, keep running and reopen it when it returns")
     p.add_argument("--realtime", action="store_true",
                    help="run with real-time (FIFO) scheduling so other programs cannot delay "
-                        "ticks, and spin the last 0.3 ms before each tick instead of sleeping "
-                        "(needs root or CAP_SYS_NICE)")
+                        "ticks (or replayed units), and spin the last 0.3 ms before each tick "
+                        "instead of sleeping (needs root or CAP_SYS_NICE)")
     p.add_argument("--response-window", dest="response_window_s", type=float,
                    default=DEFAULT_RESPONSE_WINDOW_S, metavar="SECONDS",
                    help="score the decoder under test: a DECISION answers the latest stimulus "
@@ -179,7 +203,81 @@ def _summary_text(s: BoardSummary) -> str:
             "link down)")
 
 
+def speed_value(text: str) -> float:
+    """argparse type of --speed: a pace factor above 0, ``inf`` for as fast as the link
+    takes."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"invalid value {text!r}: give a factor above 0 "
+                                         "(1 = the recorded pace, inf = as fast as possible)")
+    return value
+
+
+def _link_kind(args: argparse.Namespace) -> str:
+    """"serial", "udp" or "can": the kind of link the options select."""
+    return "can" if args.can is not None else "udp" if args.udp is not None else "serial"
+
+
+def _replay_text(s: ReplaySummary, path: Path, link: str) -> str:
+    return (f"replayed {s.units} units of {path} ({s.recorded_s:.3f} s recorded) in "
+            f"{s.wall_s:.3f} s at speed {s.speed:g}{'' if s.complete else ' (stopped early)'}"
+            f": {s.wire_units} {'frames' if link == 'can' else 'bytes'} sent, "
+            f"{s.events} events, {s.markers} markers; pace error p50 "
+            f"{s.lateness_ms['p50']:.3f} ms p99 {s.lateness_ms['p99']:.3f} ms max "
+            f"{s.lateness_ms['max']:.3f} ms; {s.commands} host commands (NACK, REPLAYING)")
+
+
+def run_replay(args: argparse.Namespace) -> int:
+    """``serve --replay FILE``: the recording checked whole, then played onto the link."""
+    if args.record is not None:
+        raise ConfigError("--record and --replay do not go together: a replay is already "
+                          "a recording; copy the file instead")
+    check_link_fits(args.replay, _link_kind(args))
+    recording = open_recording(args.replay)
+    if args.realtime:
+        why = request_realtime()
+        if why is not None:
+            raise ConfigError(f"--realtime: {why}")
+    with open_transport(args) as transport:
+        replayer = Replayer(recording, transport, args.speed)
+        if not args.quiet and not args.json:
+            print(f"skinhil serve: replaying {args.replay} ({recording.units} units, "
+                  f"{recording.duration_s:.3f} s) onto {describe_transport(args)} at speed "
+                  f"{args.speed:g}; Ctrl-C stops", file=sys.stderr, flush=True)
+        with signals.stop_event() as stop:
+            summary = replayer.run(stop)
+    if args.json:
+        print(json.dumps({"type": "replay", **summary.as_dict()}), flush=True)
+    elif not args.quiet:
+        print(_replay_text(summary, args.replay, recording.link), flush=True)
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
+    if args.replay is not None:
+        return run_replay(args)
+    if args.speed != 1.0:
+        raise ConfigError("--speed sets the pace of --replay: add --replay FILE or drop it")
+    if args.record is None:
+        return run_board(args, open_link=lambda: open_transport(args))
+    n_channels = spring_count(args.size)
+    with link_recorder(args.record, _link_kind(args), wire_version(n_channels),
+                       int(round(args.dt_s * 1e6)), fd=args.fd) as recorder:
+        boards: list[Board] = []
+
+        def board_time_us() -> int:
+            return boards[0].board_time_us() if boards else 0
+
+        return run_board(args, lambda: RecordingTransport(open_transport(args), recorder,
+                                                          board_time_us), boards)
+
+
+def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None = None
+              ) -> int:
+    """Run the board over the links ``open_link()`` opens; ``made`` receives the board."""
     config = _config(args)
     schedule = (read_schedule(args.schedule, args.size) if args.schedule is not None
                 else None)
@@ -193,7 +291,9 @@ def run(args: argparse.Namespace) -> int:
             print(("\n" if tty else "") + f"skinhil serve: {msg}", file=sys.stderr, flush=True)
 
     score_path = check_output_path(args.score) if args.score is not None else None
-    board = Board(config, lambda: open_transport(args), schedule, on_link)  # opens the link
+    board = Board(config, open_link, schedule, on_link)
+    if made is not None:
+        made.append(board)
     if args.realtime:
         why = request_realtime()
         if why is not None:

@@ -58,7 +58,7 @@ def write_session(path: Path, *, mesh: Mesh, events: np.ndarray, markers: np.nda
     """Write a recorded session to ``path`` (.nwb, atomically); return the path written.
 
     ``events``: EVENT_DTYPE (``t`` µs board time); ``markers`` and ``decisions`` as
-    :class:`skinhil.receiver.record.SessionRecorder` keeps them; ``names``: stimulus id →
+    :class:`skinhil.recording.SessionRecorder` keeps them; ``names``: stimulus id →
     name.
     """
     require_pynwb()

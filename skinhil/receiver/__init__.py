@@ -11,7 +11,6 @@ from skinhil.receiver.online import OnlineClassifier, Prediction
 from skinhil.receiver.onset import OnsetDetector
 from skinhil.receiver.params import OnsetParams, ReceiverParams
 from skinhil.receiver.receiver import LinkReport, Receiver, ReceiverListener
-from skinhil.receiver.record import SessionRecorder
 from skinhil.receiver.scoring import Scoreboard, ScoredDecision
 
 __all__ = [
@@ -28,6 +27,5 @@ __all__ = [
     "ReceiverParams",
     "Scoreboard",
     "ScoredDecision",
-    "SessionRecorder",
     "WindowDecoder",
 ]

@@ -74,6 +74,39 @@ class Transport(abc.ABC, Generic[P]):
         self.shutdown()
 
 
+class WrappedTransport(Transport[P]):
+    """A transport around another (``inner``): everything goes to ``inner`` unless a
+    subclass changes it (faults injected, units recorded)."""
+
+    def __init__(self, inner: Transport[P]) -> None:
+        self.inner = inner
+        self.kind = inner.kind
+
+    @property
+    def name(self) -> str:
+        return self.inner.name
+
+    @property
+    def fd(self) -> bool:
+        """CAN FD on the inner link (False for a link that is not CAN)."""
+        return bool(getattr(self.inner, "fd", False))
+
+    def send(self, payload: P, timeout: float | None = None) -> int:
+        return self.inner.send(payload, timeout)
+
+    def recv(self, timeout: float | None = None) -> P:
+        return self.inner.recv(timeout)
+
+    def wire_seconds(self, payload: P) -> float:
+        return self.inner.wire_seconds(payload)
+
+    def empty(self) -> P:
+        return self.inner.empty()
+
+    def shutdown(self) -> None:
+        self.inner.shutdown()
+
+
 class Deadline:
     """A timeout in seconds turned into a monotonic deadline (None: no deadline)."""
 

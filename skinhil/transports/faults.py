@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.transports.base import Transport
+from skinhil.transports.base import Transport, WrappedTransport
 
 
 @dataclass(frozen=True)
@@ -80,7 +80,7 @@ class InjectedFaults:
     """CAN only: the frames dropped (so a test can count what they carried)."""
 
 
-class FaultyTransport(Transport[Any]):
+class FaultyTransport(WrappedTransport[Any]):
     """``inner`` with seeded faults injected on :meth:`recv` (and :meth:`send` if asked).
 
     ``keep_clean``: keep every payload as it was before the faults in :attr:`clean` (bytes
@@ -89,9 +89,8 @@ class FaultyTransport(Transport[Any]):
 
     def __init__(self, inner: Transport[Any], params: FaultParams,
                  on_send: bool = False, on_recv: bool = True, keep_clean: bool = False) -> None:
-        self.inner = inner
+        super().__init__(inner)
         self.params = params
-        self.kind = inner.kind
         self.on_send = on_send
         self.on_recv = on_recv
         self.injected = InjectedFaults()
@@ -105,10 +104,6 @@ class FaultyTransport(Transport[Any]):
     @property
     def name(self) -> str:
         return f"faulty({self.inner.name})"
-
-    @property
-    def fd(self) -> bool:
-        return bool(getattr(self.inner, "fd", False))
 
     # -- faults -------------------------------------------------------------------------
     def _corrupt(self, data: bytes, keep_last: bool = False) -> bytes:
@@ -192,11 +187,3 @@ class FaultyTransport(Transport[Any]):
             self.clean.append(list(payload) if self.kind == "can" else bytes(payload))
         return self._apply(payload)
 
-    def wire_seconds(self, payload: Any) -> float:
-        return self.inner.wire_seconds(payload)
-
-    def empty(self) -> Any:
-        return self.inner.empty()
-
-    def shutdown(self) -> None:
-        self.inner.shutdown()

@@ -1,0 +1,231 @@
+"""Playing a recording onto a link (``serve --replay FILE``), at its recorded pace.
+
+:class:`Replayer` sends each recorded unit at its host time's offset from the first
+(divided by ``speed``): the bytes of each serial write as they were, the same datagrams on
+UDP, frame for frame on CAN. It decodes what it plays with the protocol decoders (the
+ground-truth markers reach :meth:`Replayer.on_marker`) and every host command it receives
+goes to the one handler :meth:`Replayer.handle`, whose answer (a NACK, REPLAYING) is
+inserted into the stream (:mod:`skinhil.recording.replay_stream`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+import protocols
+from protocols.constants import DEFAULT_STEP_US
+from protocols.resequence import can_frame_with_seq, serial_packet_with_seq
+from protocols.warm_up import exercise_codecs
+from skinhil.errors import ConfigError
+from skinhil.recording.recordings import Recording
+from skinhil.recording.replay_stream import CanReplayStream, SerialReplayStream
+from skinhil.transports import Transport
+
+log = logging.getLogger(__name__)
+
+SPIN_S = 2e-4
+"""The last part (s) of each wait for a unit spent polling the clock, not asleep."""
+POLL_S = 0.01
+"""Longest sleep (s) between two looks for host commands while waiting."""
+LATENESS_WINDOW = 100_000
+"""Units whose lateness the percentiles are taken over (the most recent: bounded memory)."""
+SEND_TIMEOUT_S = 0.1
+"""A send waits this long (s) at a time for a full link, then looks at the stop flag."""
+
+
+_IDLE_STATUS = protocols.Status(t_us=0, events_generated=0, events_sent=0, events_dropped=0,
+                                events_queued=0, late_ticks=0, rx_errors=0, running=True)
+
+
+@dataclass(frozen=True)
+class ReplaySummary:
+    """What a replay did: units, time, pace error (ms, send start minus due time, over the
+    last :data:`LATENESS_WINDOW` units; the max over all) and host commands."""
+
+    units: int
+    wire_units: int
+    """Bytes (serial, UDP) or frames (CAN) sent, answers included."""
+    recorded_s: float
+    wall_s: float
+    speed: float
+    lateness_ms: dict[str, float]
+    commands: int
+    """Host commands received (each answered with a NACK, REPLAYING)."""
+    markers: int
+    """Ground-truth markers played."""
+    events: int
+    """Events played (decoded from the replayed stream)."""
+    complete: bool
+    """Every unit of the recording was played (False: stopped early)."""
+
+    def as_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+class Replayer:
+    """Plays ``recording`` onto ``transport`` (a link of the kind it was recorded on).
+
+    ``speed``: 1 plays at the recorded pace, 2 twice as fast, ``inf`` as fast as the link
+    takes. Raises ConfigError when the link does not fit the recording.
+    """
+
+    def __init__(self, recording: Recording, transport: Transport[Any],
+                 speed: float = 1.0) -> None:
+        if not (speed > 0 and not math.isnan(speed)):
+            raise ConfigError(f"--speed must be a positive number, got {speed!r}")
+        if transport.kind != recording.link:
+            raise ConfigError(f"'{recording.path}' was recorded on a {recording.link} link, "
+                              f"this one is {transport.kind}: replay it onto a "
+                              f"{recording.link} link")
+        if recording.fd and not getattr(transport, "fd", False):
+            raise ConfigError(f"'{recording.path}' holds CAN FD frames: add --fd")
+        self.recording = recording
+        self.transport = transport
+        self.speed = float(speed)
+        self.is_can = recording.link == "can"
+        if self.is_can:
+            args: dict[str, Any] = {"board_id": recording.board_id, "fd": recording.fd}
+            self._stream: Any = CanReplayStream()
+            self._commands: Any = protocols.CanDecoder(**args)
+            self._played: Any = protocols.CanDecoder(**args)
+            self._answers: Any = protocols.CanEncoder(**args)
+        else:
+            self._stream = SerialReplayStream()
+            self._commands = protocols.SerialDecoder()
+            self._played = protocols.SerialDecoder()
+            self._answers = protocols.SerialEncoder()
+        self.commands = 0
+        self.markers = 0
+        self.board_time_us = 0
+        """The latest board time (µs) the played stream carried (events, statuses, markers):
+        what a host command received now is stamped with."""
+        self._lateness = np.zeros(LATENESS_WINDOW)
+        self._late_max = 0.0
+        self._units = 0
+        self._wire_units = 0
+
+    # -- the one handler of host commands and of the markers played -------------------
+    def handle(self, command: Any) -> Any:
+        """Answer a host command received during the replay: a NACK, REPLAYING (no command
+        is executed; the board that made the recording is not here)."""
+        self.commands += 1
+        return protocols.Ack(token=command.token, opcode=command.opcode, ok=False,
+                             reason=protocols.NackReason.REPLAYING)
+
+    def on_marker(self, marker: Any) -> None:
+        """A ground-truth marker was played (board time ``marker.t_us`` µs)."""
+        self.markers += 1
+
+    def warm_up(self) -> None:
+        """Run every encode, decode and renumbering path once on throwaway codecs, off the
+        clock (a kernel compiled inside the loop would stall the replay for up to a
+        second)."""
+        wide: dict[str, Any] = ({"n_channels": protocols.N_CHANNELS + 1}
+                                if self.recording.wire_version == 4 else {})
+        if self.is_can:
+            args: dict[str, Any] = {"board_id": self.recording.board_id,
+                                    "fd": self.recording.fd}
+            payloads = exercise_codecs(protocols.CanEncoder(**args, **wide),
+                                       protocols.CanDecoder(**args), DEFAULT_STEP_US,
+                                       _IDLE_STATUS)
+            can_frame_with_seq(payloads[0][0], 1)
+        else:
+            payloads = exercise_codecs(protocols.SerialEncoder(**wide), protocols.SerialDecoder(),
+                                       DEFAULT_STEP_US, _IDLE_STATUS)
+            serial_packet_with_seq(payloads[0], 1)
+
+    # -- the loop ------------------------------------------------------------------------
+    def _poll_commands(self) -> None:
+        data = self.transport.recv(timeout=0)
+        if not data:
+            return
+        for record in self._commands.feed(data).records:
+            if isinstance(record, protocols.Command):
+                answer = self._answers.ack(self.handle(record))
+                for unit in (answer if self.is_can else [answer]):
+                    self._stream.answer(unit)
+
+    def _wait(self, due: float, stop: threading.Event) -> None:
+        while not stop.is_set():
+            left = due - time.monotonic()
+            if left <= SPIN_S:
+                break
+            self._poll_commands()
+            time.sleep(min(left - SPIN_S, POLL_S))
+        while time.monotonic() < due and not stop.is_set():
+            pass
+
+    def _send(self, payload: Any, stop: threading.Event) -> None:
+        """Send all of ``payload`` (waiting for a full link), unless stopped."""
+        while payload and not stop.is_set():
+            n = self.transport.send(payload, timeout=SEND_TIMEOUT_S)
+            self._wire_units += n
+            payload = payload[n:]
+
+    def _play(self, sends: list[Any], stop: threading.Event) -> None:
+        """Send ``sends`` (a CAN stream's frames together; a byte stream's payloads one by
+        one: each answer apart from the recorded datagrams) and decode what was played."""
+        for payload in ([sends] if self.is_can else sends):
+            if not payload:
+                continue
+            self._send(payload, stop)
+            res = self._played.feed(payload)
+            if len(res.events):
+                self.board_time_us = max(self.board_time_us, int(res.events["t"][-1]))
+            for record in res.records:
+                if isinstance(record, protocols.Status | protocols.Marker):
+                    self.board_time_us = max(self.board_time_us, int(record.t_us))
+                if isinstance(record, protocols.Marker):
+                    self.on_marker(record)
+
+    def lateness_s(self) -> np.ndarray:
+        """Each unit's send start minus its due time (s), in play order, for the last
+        :data:`LATENESS_WINDOW` units."""
+        n = min(self._units, LATENESS_WINDOW)
+        start = self._units % LATENESS_WINDOW if self._units > LATENESS_WINDOW else 0
+        return np.roll(self._lateness, -start)[:n]
+
+    def run(self, stop: threading.Event | None = None) -> ReplaySummary:
+        """Play the whole recording (or until ``stop`` is set); return what was done.
+        Raises :class:`skinhil.errors.TransportError` when the link goes away."""
+        stop = stop or threading.Event()
+        self.warm_up()
+        wall0 = time.monotonic()
+        first_ts: float | None = None
+        last_ts = 0.0
+        complete = True
+        for ts, unit in self.recording.read():
+            if stop.is_set():
+                complete = False
+                break
+            first_ts = ts if first_ts is None else first_ts
+            last_ts = ts
+            due = wall0 + (ts - first_ts) / self.speed
+            self._wait(due, stop)
+            late = time.monotonic() - due
+            self._lateness[self._units % LATENESS_WINDOW] = late
+            self._late_max = max(self._late_max, late)
+            self._units += 1
+            self._poll_commands()
+            self._play(self._stream.out(unit), stop)
+        self._poll_commands()
+        self._play(self._stream.flush(), stop)
+        window = self.lateness_s() * 1e3
+        pct = ({"p50": float(np.percentile(window, 50)), "p99": float(np.percentile(window, 99)),
+                "max": self._late_max * 1e3} if window.size else
+               {"p50": 0.0, "p99": 0.0, "max": 0.0})
+        return ReplaySummary(
+            units=self._units, wire_units=self._wire_units,
+            recorded_s=(last_ts - first_ts) if first_ts is not None else 0.0,
+            wall_s=time.monotonic() - wall0, speed=self.speed, lateness_ms=pct,
+            commands=self.commands, markers=self.markers,
+            events=int(self._played.counters.events_decoded), complete=complete and
+            self._units == self.recording.units)
