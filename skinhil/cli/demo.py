@@ -22,10 +22,12 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from protocols.kernel_cache import source_hash
+from skinhil.cli.lab_outputs import add_lab_output_args, check_lab_outputs, lab_outputs
 from skinhil.cli.listen import LivePrinter, class_names, print_summary, summary
 from skinhil.cli.options import DECODE_SNR_DB, snr_value
 from skinhil.cli.train import print_report
 from skinhil.errors import ConfigError
+from skinhil.model.geometry import PAPER_SIZE
 from skinhil.model.timeline import DEFAULT_REST_S
 from skinhil.output_files import atomic_path
 from skinhil.receiver import Receiver
@@ -66,6 +68,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--baud", type=int, default=921600, help="emulated serial baud rate "
                                                            "(default: 921600)")
     p.add_argument("--quiet", action="store_true", help="only the final figures")
+    add_lab_output_args(p)
 
 
 def cache_dir() -> Path:
@@ -121,6 +124,7 @@ def cached_model(snr_db: float, quiet: bool, baud: int, seed: int) -> Path:
 def run(args: argparse.Namespace) -> int:
     if not (math.isfinite(args.duration_s) and 0 < args.duration_s <= 3600):
         raise ConfigError(f"--duration must be 0..3600 seconds, got {args.duration_s!r}")
+    check_lab_outputs(args)
     t_start = time.monotonic()
     model_path = (args.model if args.model is not None
                   else cached_model(args.snr_db, args.quiet, args.baud, args.seed))
@@ -135,7 +139,8 @@ def run(args: argparse.Namespace) -> int:
     print(f"board: {' '.join(cmd[1:])}\nreceiver: {link.name}, model {model_path}", flush=True)
     t_link = time.monotonic()
     try:
-        status, out, err = run_against_board(receiver, cmd)
+        with lab_outputs(args, receiver, names, PAPER_SIZE, "demo"):
+            status, out, err = run_against_board(receiver, cmd)
     finally:
         link.shutdown()
         os.close(slave_fd)

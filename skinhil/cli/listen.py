@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from skinhil.cli.lab_outputs import add_lab_output_args, check_lab_outputs, lab_outputs
 from skinhil.cli.options import add_size_option
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.errors import ConfigError
@@ -65,6 +66,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="with --udp: decode only these senders (an address, or address:port); "
                         "datagrams of others are refused and counted")
     add_size_option(p)
+    add_lab_output_args(p)
 
 
 def _board_ids(text: str) -> list[int]:
@@ -243,8 +245,12 @@ def run(args: argparse.Namespace) -> int:
     if several and args.record is not None:
         raise ConfigError("--record saves one board's session: use it with one board on "
                           "--port or --can")
+    if several and (args.view is not None or args.lsl is not None):
+        raise ConfigError("--view and --lsl show one board's stream: use them with one "
+                          "board on --port or --can")
     if args.record is not None and args.record.suffix == ".nwb":
         require_pynwb()
+    check_lab_outputs(args)
     decoder = load_window_decoder(args.model, n_channels=spring_count(args.size))
     transport = open_transport(args)
     names = class_names()
@@ -265,8 +271,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"skinhil listen: {describe_transport(args)}, model {args.model}; Ctrl-C stops",
               file=sys.stderr, flush=True)
     t0 = time.monotonic()
-    listen_until_stopped(args, receiver, lambda: receiver.link_report().as_dict(),
-                         lambda: False)
+    with lab_outputs(args, receiver, names, args.size, "listen"):
+        listen_until_stopped(args, receiver, lambda: receiver.link_report().as_dict(),
+                             lambda: False)
     info = summary(receiver, time.monotonic() - t0)
     if recorder is not None and args.record.suffix == ".nwb":
         p = SkinParams(size=args.size)
