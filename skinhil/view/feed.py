@@ -28,6 +28,7 @@ import dataclasses
 import logging
 import math
 import threading
+from collections import deque
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -41,6 +42,9 @@ log = logging.getLogger(__name__)
 
 MAX_SPIKES_PER_UPDATE = 200_000
 """Most spikes one update carries (2 Mspikes/s at 10 updates/s); the rest are counted."""
+
+RECENT_DECISIONS = 18
+"""Decisions a page that connects is shown first (the newest, in the ``config`` event)."""
 
 DEFAULT_TRACES = 8
 """PSP traces shown when none are chosen: this many sensors spread over the addresses."""
@@ -79,6 +83,7 @@ class ViewFeed(ReceiverListener):
         self._psp: list[np.ndarray] = []
         self._psp_first = -1
         self._decisions: list[dict[str, Any]] = []
+        self._recent: deque[dict[str, Any]] = deque(maxlen=RECENT_DECISIONS)
         self._markers: list[dict[str, Any]] = []
         self._link_errors: list[str] = []
         self._t_board_us = 0
@@ -113,12 +118,20 @@ class ViewFeed(ReceiverListener):
     def on_decision(self, decision: ScoredDecision) -> None:
         p = decision.prediction
         lat = decision.latency_board_s
-        with self._lock:
-            self._decisions.append({
-                "t_us": int(p.decided_t_us), "detect_t_us": int(p.detect_t_us),
+        item = {"t_us": int(p.decided_t_us), "detect_t_us": int(p.detect_t_us),
                 "label": int(p.label), "true_label": decision.true_label,
                 "correct": decision.correct,
-                "latency_ms": None if lat is None or math.isnan(lat) else round(1e3 * lat, 2)})
+                "latency_ms": None if lat is None or math.isnan(lat) else round(1e3 * lat, 2)}
+        with self._lock:
+            self._decisions.append(item)
+            self._recent.append(item)
+
+    def hello(self) -> dict[str, Any]:
+        """The ``config`` message a page gets first: channels, names, PSP sensors and the
+        newest decisions (oldest first)."""
+        with self._lock:
+            recent = list(self._recent)
+        return {**self.config, "recent_decisions": recent}
 
     def on_link_error(self, message: str) -> None:
         with self._lock:

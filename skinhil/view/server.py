@@ -134,7 +134,7 @@ class ViewServer:
         with self._clients_lock:
             self._clients.append(q)
         try:
-            config = json.dumps(self.feed.config, separators=(",", ":"))
+            config = json.dumps(self.feed.hello(), separators=(",", ":"))
             handler.wfile.write(f"event: config\ndata: {config}\n\n".encode())
             handler.wfile.flush()
             while not self._stop.is_set():

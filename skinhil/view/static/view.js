@@ -229,6 +229,7 @@ const status = document.getElementById("status");
 source.addEventListener("config", (e) => {
   view.config = JSON.parse(e.data);
   setupRaster(view.config.n_channels);
+  view.decisions = view.config.recent_decisions.slice().reverse();
   status.textContent = "live";
   status.className = "live";
 });
