@@ -124,7 +124,7 @@ def cached_model(snr_db: float, quiet: bool, baud: int, seed: int) -> Path:
 def run(args: argparse.Namespace) -> int:
     if not (math.isfinite(args.duration_s) and 0 < args.duration_s <= 3600):
         raise ConfigError(f"--duration must be 0..3600 seconds, got {args.duration_s!r}")
-    check_lab_outputs(args)
+    check_lab_outputs(args, PAPER_SIZE)
     t_start = time.monotonic()
     model_path = (args.model if args.model is not None
                   else cached_model(args.snr_db, args.quiet, args.baud, args.seed))

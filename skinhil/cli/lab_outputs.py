@@ -10,7 +10,7 @@ from collections.abc import Iterator
 
 from skinhil.errors import ConfigError
 from skinhil.lsl import LslOutlets, require_pylsl
-from skinhil.model.geometry import MeshSize, build_mesh
+from skinhil.model.geometry import MeshSize, build_mesh, format_size, spring_count
 from skinhil.model.skin import SkinParams
 from skinhil.receiver import Receiver
 from skinhil.view import ViewFeed, ViewServer, parse_address
@@ -41,14 +41,20 @@ def add_lab_output_args(parser: argparse.ArgumentParser, lsl: bool = True) -> No
                                  "pip install \"skinhil[lsl]\")")
 
 
-def check_lab_outputs(args: argparse.Namespace) -> None:
-    """Refuse what cannot run before anything starts (a missing pylsl, a bad address)."""
+def check_lab_outputs(args: argparse.Namespace, size: MeshSize) -> None:
+    """Refuse what cannot run before anything starts (a missing pylsl, a bad address, PSP
+    sensors that a skin of ``size`` does not have)."""
     if getattr(args, "lsl", None) is not None:
         require_pylsl()
         if not args.lsl.strip():
             raise ConfigError("--lsl NAME is empty — give a stream name such as skinhil")
     if args.view is not None:
         parse_address(args.view)
+    n = spring_count(size)
+    if args.psp_sensors is not None and not all(0 <= a < n for a in args.psp_sensors):
+        raise ConfigError(f"--psp-sensors {','.join(map(str, args.psp_sensors))}: a skin of "
+                          f"{format_size(size)} has sensors 0..{n - 1} — give addresses "
+                          "in that range")
 
 
 @contextlib.contextmanager

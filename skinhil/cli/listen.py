@@ -250,7 +250,7 @@ def run(args: argparse.Namespace) -> int:
                           "board on --port or --can")
     if args.record is not None and args.record.suffix == ".nwb":
         require_pynwb()
-    check_lab_outputs(args)
+    check_lab_outputs(args, args.size)
     decoder = load_window_decoder(args.model, n_channels=spring_count(args.size))
     transport = open_transport(args)
     names = class_names()

@@ -15,7 +15,8 @@ Four streams, named ``NAME-spikes``, ``NAME-psp``, ``NAME-markers``, ``NAME-deci
 Every stream's ``desc`` holds the channel labels and units LSL tools read: for the psp
 stream one ``channel`` per sensor (``label`` ``S12 M8-M9``, ``unit`` ``a.u.``, ``type``
 ``PSP``, the spring and its two masses), for the spikes stream the sensor table
-(``sensors/sensor``: address and the spring's two masses) and the ``unit`` of the value (``address``).
+(``sensors/sensor``: address and the spring's two masses) and the ``unit`` of the value
+(``address``).
 
 Time: a sample of board time ``t`` (µs) is stamped ``clock.host_time_s(t)`` (the
 receiver's board clock model, host monotonic seconds) plus the offset of LSL's

@@ -86,7 +86,8 @@ class ViewServer:
     def url(self) -> str:
         """The page's address."""
         host, port = self.httpd.server_address[:2]
-        return f"http://{host}:{port}/"
+        name = host.decode() if isinstance(host, bytes) else str(host)
+        return f"http://{name}:{port}/"
 
     def start(self) -> ViewServer:
         for t in self._threads:
