@@ -18,6 +18,9 @@ stream one ``channel`` per sensor (``label`` ``S12 M8-M9``, ``unit`` ``a.u.``, `
 (``sensors/sensor``: address and the spring's two masses) and the ``unit`` of the value
 (``address``).
 
+Spikes and PSP samples are pushed in chunks of :data:`PUSH_PERIOD_US` of board time (and
+whatever is left when the outlets close), markers and decisions at once.
+
 Time: a sample of board time ``t`` (µs) is stamped ``clock.host_time_s(t)`` (the
 receiver's board clock model, host monotonic seconds) plus the offset of LSL's
 ``local_clock()`` from the host monotonic clock, measured when the outlets open (liblsl's
@@ -39,6 +42,13 @@ from skinhil.receiver import Receiver, ReceiverListener, ScoredDecision
 from skinhil.receiver.traces import PspTraces
 
 log = logging.getLogger(__name__)
+
+PUSH_PERIOD_US = 20_000
+"""Board time (µs) between pushes: spikes and PSP samples go out in chunks of 20 ms (LSL
+consumers see them that much later, stamped at their board time all the same)."""
+
+MAX_SPIKES_PER_PUSH = 50_000
+"""Spikes kept before a push whatever the board time."""
 
 def require_pylsl() -> None:
     """Raise :class:`ConfigError` (one line, the pip command) when pylsl is not installed."""
@@ -80,6 +90,10 @@ class LslOutlets(ReceiverListener):
         self.lsl_offset_s = pylsl.local_clock() - time.monotonic()
         """LSL clock minus host monotonic clock (s)."""
         self.spikes_pushed = 0
+        self._spikes: list[tuple[np.ndarray, np.ndarray]] = []
+        self._spikes_n = 0
+        self._last_event_us = -1
+        self._pushed_us = -1
 
         spikes = _stream(f"{name}-spikes", "Spikes", 1, pylsl.IRREGULAR_RATE, "int32",
                          f"skinhil:{name}:spikes")
@@ -124,15 +138,24 @@ class LslOutlets(ReceiverListener):
     def on_events(self, events: np.ndarray, host_time_s: float) -> None:
         if events.shape[0] == 0:
             return
-        stamps = self.lsl_time_s(events["t"])
-        self.outlets["spikes"].push_chunk(
-            events["addr"].astype(np.int32).reshape(-1, 1), stamps.tolist())
-        self.spikes_pushed += int(events.shape[0])
+        self._spikes.append((events["addr"].astype(np.int32), self.lsl_time_s(events["t"])))
+        self._spikes_n += int(events.shape[0])
         self.traces.add(events)
-        self._push_traces(int(events["t"][-1]))
+        self._last_event_us = int(events["t"][-1])
+        if self._spikes_n >= MAX_SPIKES_PER_PUSH or \
+                self._last_event_us - self._pushed_us >= PUSH_PERIOD_US:
+            self._push(self._last_event_us)
 
-    def _push_traces(self, board_t_us: int) -> None:
-        first, values = self.traces.advance(board_t_us)
+    def _push(self, board_t_us: int, final: bool = False) -> None:
+        """Push the spikes kept so far and the PSP samples up to ``board_t_us`` (µs)."""
+        if self._spikes:
+            addr = np.concatenate([a for a, _ in self._spikes]).reshape(-1, 1)
+            stamps = np.concatenate([s for _, s in self._spikes])
+            self.outlets["spikes"].push_chunk(addr, stamps.tolist())
+            self.spikes_pushed += int(addr.shape[0])
+            self._spikes, self._spikes_n = [], 0
+        self._pushed_us = board_t_us
+        first, values = self.traces.advance(board_t_us, final)
         if values.shape[0]:
             last_us = (first + values.shape[0] - 1) * self.traces.sample_us
             self.outlets["psp"].push_chunk(values, float(self.lsl_time_s(last_us)))
@@ -143,7 +166,6 @@ class LslOutlets(ReceiverListener):
         text = (f"{phase} {sid} {self.names.get(sid, str(sid))} "
                 f"t_board_s={int(marker.t_us) * 1e-6:.4f}")
         self.outlets["markers"].push_sample([text], float(self.lsl_time_s(int(marker.t_us))))
-        self._push_traces(int(marker.t_us))
 
     def on_decision(self, decision: ScoredDecision) -> None:
         p = decision.prediction
@@ -154,5 +176,7 @@ class LslOutlets(ReceiverListener):
         self.outlets["decisions"].push_sample([text], float(self.lsl_time_s(p.decided_t_us)))
 
     def close(self) -> None:
-        """Close the outlets (LSL consumers see the streams end)."""
+        """Push what is kept, then close the outlets (LSL consumers see the streams end)."""
+        if self._last_event_us >= 0:
+            self._push(self._last_event_us + self.traces.sample_us, final=True)
         self.outlets.clear()

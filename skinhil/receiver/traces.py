@@ -9,7 +9,10 @@ It is not the classifier's filter (that one runs at the simulation step): it is 
 and export signal.
 
 Samples are handed out only for bins board time has passed (``advance``): the stream is
-in time order, so a bin before the newest event's time is complete.
+in time order, so a bin before the newest event's time is complete. They are handed out in
+chunks of at least ``chunk_samples`` (20 ms of board time by default, unless ``final``):
+a listener called for every small read of the link then filters and publishes 50 times a
+second, not a thousand.
 """
 
 from __future__ import annotations
@@ -24,6 +27,9 @@ from skinhil.model.psp import PSPFilterBank
 TRACE_RATE_HZ = 1000.0
 """Samples per second of board time of the PSP traces."""
 
+CHUNK_SAMPLES = 20
+"""Fewest samples :meth:`PspTraces.advance` hands out at once (20 ms at 1 kHz)."""
+
 MAX_SAMPLES_PER_ADVANCE = 10_000
 """Most samples one :meth:`PspTraces.advance` returns (10 s at 1 kHz); a longer jump (a
 stream that resumes after a long pause) restarts the traces at the new time."""
@@ -34,7 +40,7 @@ class PspTraces:
     ``rate_hz`` samples per second of board time."""
 
     def __init__(self, channels: Sequence[int], n_channels: int,
-                 rate_hz: float = TRACE_RATE_HZ) -> None:
+                 rate_hz: float = TRACE_RATE_HZ, chunk_samples: int = CHUNK_SAMPLES) -> None:
         chans = np.asarray(list(channels), dtype=np.int64)
         if chans.size == 0 or chans.min() < 0 or chans.max() >= n_channels:
             raise ConfigError(f"PSP sensors must be addresses 0..{n_channels - 1}, got "
@@ -43,6 +49,7 @@ class PspTraces:
             raise ConfigError("PSP sensors repeat an address — give each sensor once")
         self.channels = chans
         self.rate_hz = float(rate_hz)
+        self.chunk_samples = int(chunk_samples)
         self.sample_us = int(round(1e6 / self.rate_hz))
         self.bank = PSPFilterBank(int(chans.size), self.sample_us * 1e-6)
         self._column = np.full(int(n_channels), -1, dtype=np.int64)
@@ -66,13 +73,14 @@ class PspTraces:
             pending[:, 1] = col[keep]
             self._pending.append(pending)
 
-    def advance(self, board_t_us: int) -> tuple[int, np.ndarray]:
-        """Samples of every bin that ends by board time ``board_t_us`` (µs): (index of the
-        first sample, values of shape (n_samples, n_chosen), float32)."""
+    def advance(self, board_t_us: int, final: bool = False) -> tuple[int, np.ndarray]:
+        """Samples of every bin that ends by board time ``board_t_us`` (µs), once there are
+        ``chunk_samples`` of them or ``final``: (index of the first sample, values of shape
+        (n_samples, n_chosen), float32)."""
         first = self.next_sample
-        if first < 0:
-            return 0, np.zeros((0, self.channels.size), dtype=np.float32)
         end = int(board_t_us) // self.sample_us
+        if first < 0 or (end - first < self.chunk_samples and not final):
+            return max(first, 0), np.zeros((0, self.channels.size), dtype=np.float32)
         if end - first > MAX_SAMPLES_PER_ADVANCE:
             self.bank.reset()
             first = end - MAX_SAMPLES_PER_ADVANCE

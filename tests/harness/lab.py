@@ -58,12 +58,19 @@ def wait_for_stderr(proc: ServeProcess, text: str, timeout_s: float = 60.0) -> s
     raise AssertionError(f"no {text!r} on stderr:\n{proc.stderr}")
 
 
+def stop(listen: ServeProcess) -> None:
+    """Interrupt ``listen`` (Ctrl-C) if it runs; it must end with status 0."""
+    if not listen.exited:
+        listen.interrupt()
+    assert listen.wait(60) == 0, listen.stderr
+
+
 @contextmanager
 def listening(tmp_path: Path, *listen_args: str, ready: str) -> Iterator[
         tuple[ServeProcess, Path]]:
     """``skinhil listen --json`` on a pty with ``listen_args``, once its stderr says
     ``ready``: (the listener, the board's end of the pty). The listener is interrupted (and
-    its summary collected) when the body ends."""
+    its summary collected) when the body ends, unless the body stopped it."""
     model = quick_model(tmp_path)
     with pty_pair(tmp_path) as (board_end, host_end):
         listen = ServeProcess("--port", str(host_end), "--model", str(model), "--json",
@@ -71,7 +78,6 @@ def listening(tmp_path: Path, *listen_args: str, ready: str) -> Iterator[
         try:
             wait_for_stderr(listen, ready)
             yield listen, board_end
-            listen.interrupt()
-            assert listen.wait(60) == 0, listen.stderr
+            stop(listen)
         finally:
             listen.kill()
