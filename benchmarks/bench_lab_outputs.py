@@ -103,7 +103,7 @@ class LslReaders:
         self._threads = []
         for kind in ("spikes", "psp", "markers", "decisions"):
             info = pylsl.resolve_byprop("name", f"{name}-{kind}", timeout=10)[0]
-            inlet = pylsl.StreamInlet(info, max_buflen=30)
+            inlet = pylsl.StreamInlet(info, max_buflen=360)
             inlet.open_stream(10)
             self.counts[kind] = 0
             t = threading.Thread(target=self._pull, args=(kind, inlet), daemon=True)
@@ -200,8 +200,9 @@ def main() -> None:
     cfg = tmp / "lsl_api.cfg"
     cfg.write_text(LOOPBACK_CFG)
     os.environ["LSLAPICFG"] = str(cfg)
-    model = quick_model(tmp)
     for size in args.sizes.split(","):
+        rows, cols = (int(v) for v in size.split("x"))
+        model = quick_model(tmp, (rows, cols))
         for config in args.configs.split(","):
             print(load_average(), flush=True)
             res = run(size, args.duration, config, model, tmp, args.psp_sensors)

@@ -16,13 +16,15 @@ import pytest
 from harness.serve import ServeProcess
 
 
-def quick_model(tmp_path: Path) -> Path:
-    """A decoder trained in a few seconds (noise-free, one stimulus per condition)."""
+def quick_model(tmp_path: Path, size: tuple[int, int] = (6, 6)) -> Path:
+    """A decoder for a skin of ``size`` trained in seconds (noise-free, one stimulus per
+    condition)."""
     from skinhil.decoding.model_file import save_decoder
     from skinhil.receiver.training import train_decoder
 
-    decoder, _ = train_decoder(math.inf, reps=1, seed=0, rest_s=0.05, cross_validation=False)
-    path = tmp_path / "model.npz"
+    decoder, _ = train_decoder(math.inf, reps=1, seed=0, rest_s=0.05, cross_validation=False,
+                               size=size)
+    path = tmp_path / f"model-{size[0]}x{size[1]}.npz"
     save_decoder(decoder, path)
     return path
 
