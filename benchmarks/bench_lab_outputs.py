@@ -174,6 +174,9 @@ def run(size: str, duration: float, config: str, model: Path, tmp: Path,
     out = {"size": size, "outputs": config, "wall_s": round(t1 - t0, 2),
            "listen_cpu_share": round((c1 - c0) / (t1 - t0), 4),
            "board_generated": board.summary().get("generated"),
+           "board_wall_s": round(board.summary().get("wall_s", 0.0), 2),
+           "board_dropped_by": {k: v for k, v in board.summary().get("dropped_by", {}).items()
+                                if v},
            "events_decoded": link["events_decoded"], "lost_on_link": link["lost_on_link"],
            "late_events": link["late_events"], "board_dropped": link["board_dropped"]}
     if page is not None and page.first is not None and page.last is not None:

@@ -26,7 +26,8 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from importlib import resources
 from typing import Any
 
-from skinhil.errors import ConfigError
+from skinhil.errors import ConfigError, TransportError
+from skinhil.transports.udp import parse_address as socket_address
 from skinhil.view.feed import ViewFeed
 
 log = logging.getLogger(__name__)
@@ -44,16 +45,13 @@ ASSETS = {"/": ("index.html", "text/html; charset=utf-8"),
 
 
 def parse_address(text: str) -> tuple[str, int]:
-    """``[HOST:]PORT`` → (host, port); the host is 127.0.0.1 unless given."""
-    host, _, port = text.rpartition(":")
+    """``[HOST:]PORT`` → (host, port); the host is 127.0.0.1 unless given (the UDP link's
+    address rule)."""
     try:
-        number = int(port)
-    except ValueError:
-        number = -1
-    if not 0 <= number <= 65535:
+        return socket_address(text, "127.0.0.1")
+    except TransportError:
         raise ConfigError(f"--view {text!r}: give [HOST:]PORT, e.g. 8050 or 0.0.0.0:8050 "
-                          "(port 0: any free port)")
-    return (host.strip("[]") or "127.0.0.1"), number
+                          "(port 0: any free port)") from None
 
 
 def _asset(name: str) -> bytes:
