@@ -13,7 +13,8 @@ samples every LSL inlet read.
 Usage::
 
     python benchmarks/bench_lab_outputs.py [--sizes 6x6,26x26] [--duration 30]
-                                           [--psp-sensors LIST]
+                                           [--psp-sensors LIST] [--baud N]
+                                           [--configs none,view,lsl,view+lsl]
 """
 
 from __future__ import annotations
@@ -111,8 +112,15 @@ class LslReaders:
             self._threads.append(t)
 
     def _pull(self, kind: str, inlet: Any) -> None:
+        import numpy as np
+
+        n = inlet.channel_count
+        numeric = kind in ("spikes", "psp")  # into a numpy buffer, as a lab's consumer would
+        rows = max(1, min(200_000, 4_000_000 // n))
+        dest = np.empty((rows, n), np.float32 if kind == "psp" else np.int32) \
+            if numeric else None
         while not self._stop.is_set():
-            _, stamps = inlet.pull_chunk(timeout=0.05, max_samples=200_000)
+            _, stamps = inlet.pull_chunk(timeout=0.05, max_samples=rows, dest_obj=dest)
             self.counts[kind] += len(stamps)
 
     def close(self) -> None:
@@ -138,14 +146,14 @@ def first_events(listen: ServeProcess, timeout_s: float = 600.0) -> None:
 
 
 def run(size: str, duration: float, config: str, model: Path, tmp: Path,
-        psp_sensors: str | None) -> dict[str, Any]:
+        psp_sensors: str | None, baud: int) -> dict[str, Any]:
     extra = list(CONFIGS[config])
     outputs = bool(extra)
     if outputs and psp_sensors:
         extra += ["--psp-sensors", psp_sensors]
     with pty_pair(tmp) as (board_end, host_end):
-        listen = ServeProcess("--port", str(host_end), "--model", str(model), "--json",
-                              "--size", size, *extra, command="listen")
+        listen = ServeProcess("--port", str(host_end), "--baud", str(baud), "--model",
+                              str(model), "--json", "--size", size, *extra, command="listen")
         page = lsl = None
         try:
             if "--view" in extra:
@@ -154,7 +162,8 @@ def run(size: str, duration: float, config: str, model: Path, tmp: Path,
                 wait_for_stderr(listen, "LSL outlets")
                 lsl = LslReaders("bench")
             settle(listen.proc.pid)
-            board = ServeProcess("--port", str(board_end), "--duration", str(duration),
+            board = ServeProcess("--port", str(board_end), "--baud", str(baud),
+                                 "--duration", str(duration),
                                  "--size", size, "--snr-db", "10", "--seed", "1", "--json")
             first_events(listen)
             c0, t0 = cpu_s(listen.proc.pid), time.monotonic()
@@ -193,6 +202,8 @@ def main() -> None:
     ap.add_argument("--sizes", default="6x6,26x26")
     ap.add_argument("--duration", type=float, default=30.0)
     ap.add_argument("--psp-sensors", help="passed to listen with the outputs")
+    ap.add_argument("--baud", type=int, default=921600,
+                    help="the board's serial budget, bits/s (a pty carries any)")
     ap.add_argument("--configs", default="none,view+lsl",
                     help=f"listen runs to compare, of {', '.join(CONFIGS)}")
     args = ap.parse_args()
@@ -208,7 +219,7 @@ def main() -> None:
         model = quick_model(tmp, (rows, cols))
         for config in args.configs.split(","):
             print(load_average(), flush=True)
-            res = run(size, args.duration, config, model, tmp, args.psp_sensors)
+            res = run(size, args.duration, config, model, tmp, args.psp_sensors, args.baud)
             print(json.dumps(res), flush=True)
     print(load_average())
 
