@@ -24,11 +24,15 @@ whatever is left when the outlets close), markers and decisions at once.
 Time: a sample of board time ``t`` (µs) is stamped ``clock.host_time_s(t)`` (the
 receiver's board clock model, host monotonic seconds) plus the offset of LSL's
 ``local_clock()`` from the host monotonic clock, measured when the outlets open (liblsl's
-clock is the same steady clock on Linux: the offset is about 0).
+clock is the same steady clock on Linux: the offset is about 0). Spikes, PSP samples and
+markers are stamped by the model as their events arrive; a decision by the model as it was
+when the events of its board time arrived, so it lands in the spike stream where its board
+time lies.
 """
 
 from __future__ import annotations
 
+import bisect
 import logging
 import time
 from collections.abc import Sequence
@@ -46,6 +50,9 @@ log = logging.getLogger(__name__)
 PUSH_PERIOD_US = 20_000
 """Board time (µs) between pushes: spikes and PSP samples go out in chunks of 20 ms (LSL
 consumers see them that much later, stamped at their board time all the same)."""
+
+READS_KEPT = 4096
+"""Recent reads whose clock offsets decisions are stamped by (a few seconds of reads)."""
 
 MAX_SPIKES_PER_PUSH = 50_000
 """Spikes kept before a push whatever the board time."""
@@ -94,6 +101,10 @@ class LslOutlets(ReceiverListener):
         self._spikes_n = 0
         self._last_event_us = -1
         self._pushed_us = -1
+        self._read_ends_us: list[int] = []
+        """Board time (µs) of the newest event of each recent read, increasing."""
+        self._read_offsets_s: list[float] = []
+        """The clock model's offset (s) when each of those reads arrived."""
 
         spikes = _stream(f"{name}-spikes", "Spikes", 1, pylsl.IRREGULAR_RATE, "int32",
                          f"skinhil:{name}:spikes")
@@ -131,14 +142,28 @@ class LslOutlets(ReceiverListener):
             ("spikes", spikes), ("psp", psp), ("markers", markers), ("decisions", decisions))}
 
     def lsl_time_s(self, board_t_us: int | np.ndarray) -> Any:
-        """LSL clock time (s) of board time ``board_t_us`` (µs) by the receiver's clock model."""
+        """LSL clock time (s) of board time ``board_t_us`` (µs) by the receiver's clock model
+        now."""
         offset = self.receiver.clock.offset_s
         return np.asarray(board_t_us) * 1e-6 + offset + self.lsl_offset_s
+
+    def _stamp_as_received(self, board_t_us: int) -> float:
+        """LSL time of ``board_t_us`` by the clock model as it was when the events of that
+        board time arrived (the spikes' stamps): a decision, made a window later, lands
+        where its board time lies in the spike stream even if the model moved since."""
+        i = bisect.bisect_left(self._read_ends_us, board_t_us)
+        if i == len(self._read_ends_us):
+            return float(self.lsl_time_s(board_t_us))
+        return board_t_us * 1e-6 + self._read_offsets_s[i] + self.lsl_offset_s
 
     def on_events(self, events: np.ndarray, host_time_s: float) -> None:
         if events.shape[0] == 0:
             return
         self._spikes.append((events["addr"].astype(np.int32), self.lsl_time_s(events["t"])))
+        self._read_ends_us.append(int(events["t"][-1]))
+        self._read_offsets_s.append(self.receiver.clock.offset_s)
+        if len(self._read_ends_us) > 2 * READS_KEPT:
+            del self._read_ends_us[:READS_KEPT], self._read_offsets_s[:READS_KEPT]
         self._spikes_n += int(events.shape[0])
         self.traces.add(events)
         self._last_event_us = int(events["t"][-1])
@@ -173,7 +198,7 @@ class LslOutlets(ReceiverListener):
         truth = "-" if decision.true_label is None else str(decision.true_label)
         text = (f"decision {p.label} {self.names.get(p.label, str(p.label))} true={truth} "
                 f"{verdict} t_board_s={p.decided_t_us * 1e-6:.4f}")
-        self.outlets["decisions"].push_sample([text], float(self.lsl_time_s(p.decided_t_us)))
+        self.outlets["decisions"].push_sample([text], self._stamp_as_received(p.decided_t_us))
 
     def close(self) -> None:
         """Push what is kept, then close the outlets (LSL consumers see the streams end)."""
