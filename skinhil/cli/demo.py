@@ -27,6 +27,7 @@ from typing import Any
 
 from protocols.kernel_cache import source_hash
 from skinhil.cli.kernel_notice import announce_cold_cache
+from skinhil.cli.lab_outputs import add_lab_output_args, check_lab_outputs, lab_outputs
 from skinhil.cli.listen import LivePrinter, class_names, print_summary, summary
 from skinhil.cli.options import DECODE_SNR_DB
 from skinhil.cli.train import print_report
@@ -78,6 +79,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--baud", type=baud_value, default=921600,
                    help="emulated serial baud rate (default: 921600)")
     p.add_argument("--quiet", action="store_true", help="only the final figures")
+    add_lab_output_args(p)
 
 
 def cache_dir() -> Path:
@@ -153,6 +155,7 @@ def print_beside(own: dict[str, Any], board: dict[str, Any]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_lab_outputs(args, PAPER_SIZE)
     t_start = time.monotonic()
     announce_cold_cache("demo")
     model_path = (args.model if args.model is not None
@@ -172,7 +175,8 @@ def run(args: argparse.Namespace) -> int:
           f"receiver: {link.name}, model {model_path}", flush=True)
     t_link = time.monotonic()
     try:
-        status, out, err = run_against_board(receiver, cmd)
+        with lab_outputs(args, receiver, names, PAPER_SIZE, "demo"):
+            status, out, err = run_against_board(receiver, cmd)
     except KeyboardInterrupt:  # stopped: the figures so far
         print()
         print_summary(summary(receiver, time.monotonic() - t_link), names)

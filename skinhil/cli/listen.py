@@ -16,6 +16,7 @@ import numpy as np
 
 from skinhil.cli import signals
 from skinhil.cli.kernel_notice import announce_cold_cache
+from skinhil.cli.lab_outputs import add_lab_output_args, check_lab_outputs, lab_outputs
 from skinhil.cli.options import add_size_option
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.cli.values import MAX_DURATION_S, integer, real
@@ -73,6 +74,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="with --udp: decode only these senders (an address, or address:port); "
                         "datagrams of others are refused and counted")
     add_size_option(p)
+    add_lab_output_args(p)
 
 
 def _board_ids(text: str) -> list[int]:
@@ -249,9 +251,13 @@ def run(args: argparse.Namespace) -> int:
     if several and args.answer:
         raise ConfigError("--answer sends one board its decisions: use it with one board on "
                           "--port or --can")
+    if several and (args.view is not None or args.lsl is not None):
+        raise ConfigError("--view and --lsl show one board's stream: use them with one "
+                          "board on --port or --can")
     record = None if args.record is None else check_output_path(args.record, (".npz", ".nwb"))
     if record is not None and record.suffix == ".nwb":
         require_pynwb()
+    check_lab_outputs(args, args.size)
     decoder = load_window_decoder(args.model, n_channels=spring_count(args.size))
     transport = open_transport(args)
     announce_cold_cache("listen")
@@ -268,11 +274,11 @@ def run(args: argparse.Namespace) -> int:
     if answerer is not None:
         receiver.add_listener(answerer)
     if record is None:
-        info = listen_one(args, receiver, answerer)
+        info = listen_one(args, receiver, names, answerer)
     else:
         with SessionRecorder(record.parent) as recorder:
             receiver.add_listener(recorder)
-            info = listen_one(args, receiver, answerer)
+            info = listen_one(args, receiver, names, answerer)
             save_session(args, recorder, names, info)
     if args.json:
         print(json.dumps(info), flush=True)
@@ -285,7 +291,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def listen_one(args: argparse.Namespace, receiver: Receiver,
+def listen_one(args: argparse.Namespace, receiver: Receiver, names: dict[int, str],
                answerer: DecisionAnswerer | None = None) -> dict[str, Any]:
     """Receive until Ctrl-C or --duration; the summary (with ``answerer``'s DECISION counts
     when the receiver answers the board)."""
@@ -293,8 +299,9 @@ def listen_one(args: argparse.Namespace, receiver: Receiver,
         print(f"skinhil listen: {describe_transport(args)}, model {args.model}; Ctrl-C stops",
               file=sys.stderr, flush=True)
     t0 = time.monotonic()
-    listen_until_stopped(args, receiver, lambda: receiver.link_report().as_dict(),
-                         lambda: False)
+    with lab_outputs(args, receiver, names, args.size, "listen"):
+        listen_until_stopped(args, receiver, lambda: receiver.link_report().as_dict(),
+                             lambda: False)
     info = summary(receiver, time.monotonic() - t0)
     if answerer is not None:
         info["answers"] = answerer.as_dict()

@@ -50,10 +50,12 @@ def run_serve(*args: str, timeout_s: float = 60.0) -> subprocess.CompletedProces
 
 
 class ServeProcess:
-    """A running ``skinhil serve --json ...``; its JSON lines and stderr are collected."""
+    """A running ``skinhil serve --json ...`` (or another ``command``: ``listen``); its JSON
+    lines and stderr are collected."""
 
-    def __init__(self, *args: str) -> None:
-        self.proc = subprocess.Popen(serve_argv(*args), cwd=RUN_DIR, stdout=subprocess.PIPE,
+    def __init__(self, *args: str, command: str = "serve") -> None:
+        self.proc = subprocess.Popen([sys.executable, "-m", "skinhil", command, *args],
+                                     cwd=RUN_DIR, stdout=subprocess.PIPE,
                                      stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
                                      text=True, env=serve_env())
         self.lines: list[dict[str, Any]] = []

@@ -1,0 +1,183 @@
+"""The live view's feed: a receiver listener that turns the stream into update messages.
+
+:class:`ViewFeed` hears the receiver's callbacks (on the receiving thread) and keeps what
+arrived since the last update; :meth:`ViewFeed.update` (on the view's publishing thread,
+every 0.1 s) drains it into one JSON-ready message:
+
+- ``t_board_us``: the newest board time seen (µs);
+- ``spikes``: the new events as base64 of little-endian arrays, ``t`` (uint32, µs after
+  ``t0_us``) and ``addr`` (uint16), at most :data:`MAX_SPIKES_PER_UPDATE` (the rest are
+  counted in ``spikes_not_drawn``, never silently left out);
+- ``psp``: the new PSP samples of the chosen sensors (base64 float32, row-major, samples ×
+  sensors, from sample index ``first`` at ``rate_hz``);
+- ``decisions``: the new decisions, each with its ground truth; ``markers``: the new
+  ground-truth markers;
+- ``score``: the running confusion matrix (rows true, columns decided), accuracy, misses,
+  false alarms; ``link``: the receiver's link and loss counters; ``board``: the board's
+  last status (late ticks, drops by reason);
+- ``dut``: present when a DUT scoreboard source is given (a decoder under test scored by
+  the board): its figures as given, shown in their own panel.
+
+Nothing here copies the session: each message holds only what arrived since the last one.
+"""
+
+from __future__ import annotations
+
+import base64
+import dataclasses
+import logging
+import math
+import threading
+from collections import deque
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from skinhil.model.geometry import Mesh
+from skinhil.receiver import Receiver, ReceiverListener, ScoredDecision
+from skinhil.receiver.traces import PspTraces
+
+log = logging.getLogger(__name__)
+
+MAX_SPIKES_PER_UPDATE = 200_000
+"""Most spikes one update carries (2 Mspikes/s at 10 updates/s); the rest are counted."""
+
+RECENT_DECISIONS = 18
+"""Decisions a page that connects is shown first (the newest, in the ``config`` event)."""
+
+DEFAULT_TRACES = 8
+"""PSP traces shown when none are chosen: this many sensors spread over the addresses."""
+
+
+def _b64(array: np.ndarray) -> str:
+    return base64.b64encode(np.ascontiguousarray(array).tobytes()).decode("ascii")
+
+
+def default_trace_sensors(n_channels: int, count: int = DEFAULT_TRACES) -> list[int]:
+    """``count`` sensor addresses spread evenly over ``0..n_channels-1``."""
+    return sorted({int(a) for a in np.linspace(0, n_channels - 1, min(count, n_channels))})
+
+
+class ViewFeed(ReceiverListener):
+    """Receiver listener → update messages of the live view (see the module)."""
+
+    def __init__(self, receiver: Receiver, mesh: Mesh, names: dict[int, str],
+                 psp_sensors: Sequence[int] | None = None,
+                 dut_source: Callable[[], dict[str, Any] | None] | None = None) -> None:
+        self.receiver = receiver
+        self.names = names
+        self.n_channels = int(mesh.springs.shape[0])
+        sensors = (default_trace_sensors(self.n_channels) if psp_sensors is None
+                   else [int(s) for s in psp_sensors])
+        self.traces = PspTraces(sensors, self.n_channels)
+        self.dut_source = dut_source
+        self.config = {
+            "type": "config", "n_channels": self.n_channels,
+            "names": {str(k): v for k, v in names.items()},
+            "psp_sensors": sensors, "psp_rate_hz": self.traces.rate_hz,
+            "psp_labels": [f"S{a} M{int(mesh.springs[a][0]) + 1}-M{int(mesh.springs[a][1]) + 1}"
+                           for a in sensors]}
+        self._lock = threading.Lock()
+        self._events: list[np.ndarray] = []
+        self._psp: list[np.ndarray] = []
+        self._psp_first = -1
+        self._decisions: list[dict[str, Any]] = []
+        self._recent: deque[dict[str, Any]] = deque(maxlen=RECENT_DECISIONS)
+        self._markers: list[dict[str, Any]] = []
+        self._link_errors: list[str] = []
+        self._t_board_us = 0
+        self.updates = 0
+
+    # -- receiver callbacks (receiving thread) --------------------------------------------
+    def on_events(self, events: np.ndarray, host_time_s: float) -> None:
+        if events.shape[0] == 0:
+            return
+        self.traces.add(events)
+        with self._lock:
+            self._events.append(events[["t", "addr"]].copy())
+            self._t_board_us = max(self._t_board_us, int(events["t"][-1]))
+        self._advance_traces(int(events["t"][-1]))
+
+    def _advance_traces(self, board_t_us: int) -> None:
+        first, values = self.traces.advance(board_t_us)
+        if values.shape[0]:
+            with self._lock:
+                if not self._psp:
+                    self._psp_first = first
+                self._psp.append(values)
+
+    def on_marker(self, marker: Any) -> None:
+        sid = int(marker.stimulus_id)
+        with self._lock:
+            self._markers.append({"t_us": int(marker.t_us), "stimulus_id": sid,
+                                  "phase": getattr(marker.phase, "name",
+                                                   str(marker.phase)).lower()})
+            self._t_board_us = max(self._t_board_us, int(marker.t_us))
+
+    def on_decision(self, decision: ScoredDecision) -> None:
+        p = decision.prediction
+        lat = decision.latency_board_s
+        item = {"t_us": int(p.decided_t_us), "detect_t_us": int(p.detect_t_us),
+                "label": int(p.label), "true_label": decision.true_label,
+                "correct": decision.correct,
+                "latency_ms": None if lat is None or math.isnan(lat) else round(1e3 * lat, 2)}
+        with self._lock:
+            self._decisions.append(item)
+            self._recent.append(item)
+
+    def hello(self) -> dict[str, Any]:
+        """The ``config`` message a page gets first: channels, names, PSP sensors and the
+        newest decisions (oldest first)."""
+        with self._lock:
+            recent = list(self._recent)
+        return {**self.config, "recent_decisions": recent}
+
+    def on_link_error(self, message: str) -> None:
+        with self._lock:
+            self._link_errors.append(message)
+
+    # -- updates (publishing thread) ------------------------------------------------------
+    def update(self) -> dict[str, Any]:
+        """The message of everything received since the previous call (see the module)."""
+        with self._lock:
+            events, self._events = self._events, []
+            psp, self._psp = self._psp, []
+            psp_first = self._psp_first
+            decisions, self._decisions = self._decisions, []
+            markers, self._markers = self._markers, []
+            errors, self._link_errors = self._link_errors, []
+            t_board = self._t_board_us
+        self.updates += 1
+        msg: dict[str, Any] = {"type": "update", "t_board_us": t_board,
+                               "decisions": decisions, "markers": markers,
+                               "link_errors": errors}
+        ev = np.concatenate(events) if events else np.zeros(0, [("t", "<i8"), ("addr", "<u2")])
+        not_drawn = max(0, ev.shape[0] - MAX_SPIKES_PER_UPDATE)
+        ev = ev[not_drawn:]
+        t0 = int(ev["t"][0]) if ev.shape[0] else t_board
+        msg["spikes"] = {"n": int(ev.shape[0]), "t0_us": t0,
+                         "t": _b64((ev["t"] - t0).astype("<u4")),
+                         "addr": _b64(ev["addr"].astype("<u2")),
+                         "not_drawn": not_drawn}
+        values = np.concatenate(psp) if psp else np.zeros((0, self.traces.channels.size),
+                                                          dtype=np.float32)
+        msg["psp"] = {"first": psp_first, "n": int(values.shape[0]),
+                      "values": _b64(values.astype("<f4"))}
+        msg["score"] = self._score()
+        msg["link"] = self.receiver.link_report().as_dict()
+        st = self.receiver.last_status
+        msg["board"] = None if st is None else {
+            k: v for k, v in dataclasses.asdict(st).items() if isinstance(v, int | bool)}
+        if self.dut_source is not None:
+            dut = self.dut_source()
+            if dut is not None:
+                msg["dut"] = dut
+        return msg
+
+    def _score(self) -> dict[str, Any]:
+        sb = self.receiver.scoreboard
+        return {"classes": list(sb.classes), "confusion": sb.confusion.tolist(),
+                "scored": sb.scored, "correct": sb.correct, "misses": sb.misses,
+                "false_alarms": sb.false_alarms,
+                "accuracy": None if sb.scored == 0 else sb.accuracy}

@@ -1,0 +1,85 @@
+"""A board on a pty and ``skinhil listen`` with lab outputs (``--view``, ``--lsl``) on the
+other end, both as subprocesses, as a user runs them."""
+
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import pytest
+
+from harness.serve import ServeProcess
+
+
+def quick_model(tmp_path: Path, size: tuple[int, int] = (6, 6)) -> Path:
+    """A decoder for a skin of ``size`` trained in seconds (noise-free, one stimulus per
+    condition)."""
+    from skinhil.decoding.model_file import save_decoder
+    from skinhil.receiver.training import train_decoder
+
+    decoder, _ = train_decoder(math.inf, reps=1, seed=0, rest_s=0.05, cross_validation=False,
+                               size=size)
+    path = tmp_path / f"model-{size[0]}x{size[1]}.npz"
+    save_decoder(decoder, path)
+    return path
+
+
+@contextmanager
+def pty_pair(tmp_path: Path) -> Iterator[tuple[Path, Path]]:
+    """A socat pty pair: (board end, host end)."""
+    if shutil.which("socat") is None:
+        pytest.skip("socat is not installed (apt-get install socat)")
+    board_end, host_end = tmp_path / "ttyBOARD", tmp_path / "ttyHOST"
+    socat = subprocess.Popen(["socat", f"pty,raw,echo=0,link={board_end}",
+                              f"pty,raw,echo=0,link={host_end}"])
+    try:
+        end = time.monotonic() + 10
+        while not (board_end.exists() and host_end.exists()):
+            assert time.monotonic() < end, "socat made no pty pair"
+            time.sleep(0.05)
+        yield board_end, host_end
+    finally:
+        socat.kill()
+        socat.wait()
+
+
+def wait_for_stderr(proc: ServeProcess, text: str, timeout_s: float = 60.0) -> str:
+    """The first stderr line of ``proc`` that holds ``text``."""
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        for line in list(proc.stderr_lines):
+            if text in line:
+                return line
+        assert not proc.exited, proc.stderr
+        time.sleep(0.05)
+    raise AssertionError(f"no {text!r} on stderr:\n{proc.stderr}")
+
+
+def stop(listen: ServeProcess) -> None:
+    """Interrupt ``listen`` (Ctrl-C) if it runs; it must end with status 0."""
+    if not listen.exited:
+        listen.interrupt()
+    assert listen.wait(60) == 0, listen.stderr
+
+
+@contextmanager
+def listening(tmp_path: Path, *listen_args: str, ready: str) -> Iterator[
+        tuple[ServeProcess, Path]]:
+    """``skinhil listen --json`` on a pty with ``listen_args``, once its stderr says
+    ``ready``: (the listener, the board's end of the pty). The listener is interrupted (and
+    its summary collected) when the body ends, unless the body stopped it."""
+    model = quick_model(tmp_path)
+    with pty_pair(tmp_path) as (board_end, host_end):
+        listen = ServeProcess("--port", str(host_end), "--model", str(model), "--json",
+                              *listen_args, command="listen")
+        try:
+            wait_for_stderr(listen, ready)
+            yield listen, board_end
+            stop(listen)
+        finally:
+            listen.kill()
