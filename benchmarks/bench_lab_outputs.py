@@ -6,7 +6,8 @@ s on a socat pty pair to ``skinhil listen --json`` twice: once alone, once with 
 --lsl`` while this process consumes both outputs as a lab would (one page's update stream
 over HTTP, read and parsed; a pylsl inlet on every outlet, loopback only). Reported per run:
 the CPU time of the listen process over the board's run (``/proc/PID/stat``, user + system)
-as a share of one core, the events the board generated against those the receiver decoded
+as a share of one core and per second of board time (the same when the board keeps real
+time), the events the board generated against those the receiver decoded
 (and lost, late), the view's updates per second and spikes it could not carry, and the
 samples every LSL inlet read.
 
@@ -182,6 +183,7 @@ def run(size: str, duration: float, config: str, model: Path, tmp: Path,
     link = listen.summary()["link"]
     out = {"size": size, "outputs": config, "wall_s": round(t1 - t0, 2),
            "listen_cpu_share": round((c1 - c0) / (t1 - t0), 4),
+           "listen_cpu_s_per_board_s": round((c1 - c0) / duration, 4),
            "board_generated": board.summary().get("generated"),
            "board_wall_s": round(board.summary().get("wall_s", 0.0), 2),
            "board_dropped_by": {k: v for k, v in board.summary().get("dropped_by", {}).items()

@@ -28,6 +28,11 @@ def _state(browser: Chromium) -> dict[str, Any]:
     return dict(json.loads(browser.evaluate(PAGE_STATE)))
 
 
+def _client(url: str) -> dict[str, Any]:
+    """What the page reported to the server (its errors, what it drew)."""
+    return dict(json.loads(urllib.request.urlopen(url + "client", timeout=10).read()))
+
+
 def _png(path: Path) -> np.ndarray:
     from matplotlib.image import imread
 
@@ -52,12 +57,18 @@ def test_chromium_shows_the_live_view_of_a_board_on_a_pty(tmp_path: Path) -> Non
                 elapsed = time.monotonic() - t0
                 shot = browser.screenshot(tmp_path / "view.png")
                 errors = list(browser.console_errors)
-            reported = json.loads(urllib.request.urlopen(url + "client", timeout=10).read())
+                reported = _client(url)
+                # both error channels work: a console error is seen over DevTools and the
+                # page posts it to the server
+                browser.evaluate("console.error('probe ' + 6 * 7)")
+                time.sleep(1.0)
+                probe = (list(browser.console_errors), _client(url)["errors"])
             assert board.wait(120) == 0, board.stderr
         finally:
             board.kill()
     assert errors == [], errors
     assert reported["errors"] == [], reported
+    assert probe == (["probe 42"], ["probe 42"]), probe
     # updates at 10 Hz or faster (a loaded 2-core machine may delay a few)
     assert (second["updates"] - first["updates"]) / elapsed >= 8, (first, second)
     # counters and decisions advance
