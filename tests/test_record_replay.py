@@ -444,3 +444,28 @@ def test_serial_replay_stream_inserts_answers_between_packets_of_any_chunking() 
     assert c.seq_gaps == 0 and c.duplicates == 0 and c.crc_errors == 0 and c.malformed == 0
     assert np.array_equal(got.events, want.events)
     assert [r for r in got.records if not isinstance(r, protocols.Ack)] == want.records
+
+
+def test_a_killed_recording_leaves_the_previous_file_intact(tmp_path, pty_pair) -> None:
+    rec = tmp_path / "kept.skcap"
+    rec.write_bytes(b"the previous recording")
+    reader = PtyReader(pty_pair.master)
+    serve = ServeProcess("--port", pty_pair.path, "--record", str(rec), "--json")
+    try:
+        deadline = time.monotonic() + 120
+        while not any(x.get("type") == "status" for x in serve.lines):
+            assert time.monotonic() < deadline and not serve.exited, serve.stderr
+            time.sleep(0.05)
+        partial = list(tmp_path.glob(".kept.*.partial.skcap"))
+        assert len(partial) == 1
+        while partial[0].stat().st_size == 0:  # written as it goes (flushed every 0.5 s)
+            assert time.monotonic() < deadline, serve.stderr
+            time.sleep(0.05)
+        serve.kill()  # SIGKILL: no chance to finish
+    finally:
+        serve.kill()
+        reader.stop()
+    assert rec.read_bytes() == b"the previous recording"
+    with open(partial[0], "rb") as f, pytest.raises(ProtocolError, match="truncated"):
+        read_header(f)
+        list(read_units(f))  # the partial file is never taken for a whole recording
