@@ -28,6 +28,7 @@ from protocols.capture import (
 )
 from protocols.events import make_events
 from skinhil.errors import ProtocolError
+from skinhil.transports.udp import MAX_DATAGRAM_BYTES, split_packets
 
 SERVE_ARGS = ("--duration", "1.5", "--rest", "0.05", "--seed", "3", "--json")
 """A short board run with several stimuli (markers) and a steady event stream."""
@@ -174,10 +175,14 @@ def test_commands_during_a_replay_are_nacked_and_the_stream_stays_whole(tmp_path
 
 
 # -- UDP ------------------------------------------------------------------------------------
-def _closed(peer: Any, units: str) -> list[Any]:
-    """The raw units (``datagrams`` or ``frames``) ``peer`` received, once the link is
-    quiet."""
-    time.sleep(0.3)
+def _closed(peer: Any, units: str, expected: int) -> list[Any]:
+    """The raw units (``datagrams`` or ``frames``) ``peer`` received, once it holds
+    ``expected`` of them or 30 s passed (its thread may still be compiling a decoder
+    kernel: inside user-mode Linux that takes seconds)."""
+    deadline = time.monotonic() + 30
+    while len(getattr(peer, units)) < expected and time.monotonic() < deadline:
+        time.sleep(0.1)
+    time.sleep(0.3)  # and nothing more comes
     peer.close()
     return list(getattr(peer, units))
 
@@ -187,15 +192,16 @@ def test_record_over_udp_then_replay_datagram_for_datagram(tmp_path) -> None:
     sink = UdpPeer()
     serve = run_serve("--udp", f"127.0.0.1:{sink.port}", "--record", str(rec), *SERVE_ARGS,
                       timeout_s=120)
-    sent = _closed(sink, "datagrams")
     assert serve.returncode == 0, serve.stderr
     header, units = capture_units(rec)
+    sent = _closed(sink, "datagrams",
+                   sum(len(split_packets(u, MAX_DATAGRAM_BYTES)) for u in units))
     assert header.link == "udp"
     assert b"".join(units) == b"".join(sent)
     again = UdpPeer()
     info = replay_json(run_serve("--udp", f"127.0.0.1:{again.port}", "--replay", str(rec),
                                  "--json", timeout_s=60))
-    assert _closed(again, "datagrams") == sent  # the same datagrams, in order
+    assert _closed(again, "datagrams", len(sent)) == sent  # the same datagrams, in order
     assert info["complete"] and len(decoded(b"".join(sent)).events) == info["events"] > 0
 
 
@@ -218,8 +224,8 @@ def test_record_on_vcan0_then_replay_onto_vcan1_frame_for_frame(tmp_path, fd: bo
     sink = CanPeer("vcan0", fd=fd)
     serve = ServeProcess("--can", "vcan0", "--record", str(rec), *extra, *SERVE_ARGS)
     assert serve.wait(180) == 0, serve.stderr
-    sent = _closed(sink, "frames")
     logged = _log_frames(rec)  # python-can reads it back
+    sent = _closed(sink, "frames", len(logged))
     assert logged == sent and len(sent) > 50
     db = cantools.database.load_file(str(protocols.DBC_FD_PATH if fd else protocols.DBC_PATH))
     names = {db.get_message_by_frame_id(f.arbitration_id).name for f in logged}
@@ -235,7 +241,7 @@ def test_record_on_vcan0_then_replay_onto_vcan1_frame_for_frame(tmp_path, fd: bo
                                        *extra), cwd=RUN_DIR, env=serve_env(), text=True,
                             capture_output=True, timeout=120)
     info = replay_json(replay)
-    assert _closed(again, "frames") == logged  # frame for frame
+    assert _closed(again, "frames", len(logged)) == logged  # frame for frame
     assert info["complete"] and info["markers"] == len(markers)
 
 
