@@ -8,9 +8,7 @@ from __future__ import annotations
 
 import io
 import json
-import socket
 import subprocess
-import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -18,6 +16,7 @@ from typing import Any
 import numpy as np
 import pytest
 from conftest import PtyPair, PtyReader
+from harness.peers import CanPeer, UdpPeer
 from harness.serve import RUN_DIR, ServeProcess, run_serve, serve_argv, serve_env
 
 import protocols
@@ -29,7 +28,7 @@ from protocols.capture import (
 )
 from protocols.events import make_events
 from skinhil.errors import ProtocolError
-from skinhil.transports import CanTransport
+from skinhil.transports.udp import MAX_DATAGRAM_BYTES, split_packets
 
 SERVE_ARGS = ("--duration", "1.5", "--rest", "0.05", "--seed", "3", "--json")
 """A short board run with several stimuli (markers) and a steady event stream."""
@@ -176,74 +175,37 @@ def test_commands_during_a_replay_are_nacked_and_the_stream_stays_whole(tmp_path
 
 
 # -- UDP ------------------------------------------------------------------------------------
-class DatagramSink:
-    """A UDP port on loopback keeping every datagram it receives, in order."""
-
-    def __init__(self) -> None:
-        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sock.bind(("127.0.0.1", 0))
-        self.sock.settimeout(0.05)
-        self.port = self.sock.getsockname()[1]
-        self.datagrams: list[bytes] = []
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-        self._thread.start()
-
-    def _run(self) -> None:
-        while not self._stop.is_set():
-            try:
-                self.datagrams.append(self.sock.recv(65536))
-            except TimeoutError:
-                pass
-
-    def close(self) -> list[bytes]:
-        time.sleep(0.2)
-        self._stop.set()
-        self._thread.join(timeout=1.0)
-        self.sock.close()
-        return self.datagrams
+def _closed(peer: Any, units: str, expected: int) -> list[Any]:
+    """The raw units (``datagrams`` or ``frames``) ``peer`` received, once it holds
+    ``expected`` of them or 30 s passed (its thread may still be compiling a decoder
+    kernel: inside user-mode Linux that takes seconds)."""
+    deadline = time.monotonic() + 30
+    while len(getattr(peer, units)) < expected and time.monotonic() < deadline:
+        time.sleep(0.1)
+    time.sleep(0.3)  # and nothing more comes
+    peer.close()
+    return list(getattr(peer, units))
 
 
 def test_record_over_udp_then_replay_datagram_for_datagram(tmp_path) -> None:
     rec = tmp_path / "udp.skcap"
-    sink = DatagramSink()
+    sink = UdpPeer()
     serve = run_serve("--udp", f"127.0.0.1:{sink.port}", "--record", str(rec), *SERVE_ARGS,
                       timeout_s=120)
-    sent = sink.close()
     assert serve.returncode == 0, serve.stderr
     header, units = capture_units(rec)
+    sent = _closed(sink, "datagrams",
+                   sum(len(split_packets(u, MAX_DATAGRAM_BYTES)) for u in units))
     assert header.link == "udp"
     assert b"".join(units) == b"".join(sent)
-    again = DatagramSink()
+    again = UdpPeer()
     info = replay_json(run_serve("--udp", f"127.0.0.1:{again.port}", "--replay", str(rec),
                                  "--json", timeout_s=60))
-    assert again.close() == sent  # the same datagrams, in order
+    assert _closed(again, "datagrams", len(sent)) == sent  # the same datagrams, in order
     assert info["complete"] and len(decoded(b"".join(sent)).events) == info["events"] > 0
 
 
 # -- CAN: vcan0 -> vcan1 (inside user-mode Linux) -------------------------------------------
-class FrameSink:
-    """Every frame seen on a CAN channel, in order."""
-
-    def __init__(self, channel: str, fd: bool) -> None:
-        self.bus = CanTransport(channel, fd=fd)
-        self.frames: list[protocols.CanFrame] = []
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-        self._thread.start()
-
-    def _run(self) -> None:
-        while not self._stop.is_set():
-            self.frames.extend(self.bus.recv(timeout=0.05))
-
-    def close(self) -> list[protocols.CanFrame]:
-        time.sleep(0.3)
-        self._stop.set()
-        self._thread.join(timeout=1.0)
-        self.bus.shutdown()
-        return self.frames
-
-
 def _log_frames(path: Path) -> list[protocols.CanFrame]:
     import can
 
@@ -259,11 +221,11 @@ def test_record_on_vcan0_then_replay_onto_vcan1_frame_for_frame(tmp_path, fd: bo
 
     rec = tmp_path / f"session{suffix}"
     extra = ["--fd"] if fd else []
-    sink = FrameSink("vcan0", fd)
+    sink = CanPeer("vcan0", fd=fd)
     serve = ServeProcess("--can", "vcan0", "--record", str(rec), *extra, *SERVE_ARGS)
     assert serve.wait(180) == 0, serve.stderr
-    sent = sink.close()
     logged = _log_frames(rec)  # python-can reads it back
+    sent = _closed(sink, "frames", len(logged))
     assert logged == sent and len(sent) > 50
     db = cantools.database.load_file(str(protocols.DBC_FD_PATH if fd else protocols.DBC_PATH))
     names = {db.get_message_by_frame_id(f.arbitration_id).name for f in logged}
@@ -274,12 +236,12 @@ def test_record_on_vcan0_then_replay_onto_vcan1_frame_for_frame(tmp_path, fd: bo
                if isinstance(r, protocols.Marker)]
     assert len(markers) >= 4
 
-    again = FrameSink("vcan1", fd)
+    again = CanPeer("vcan1", fd=fd)
     replay = subprocess.run(serve_argv("--can", "vcan1", "--replay", str(rec), "--json",
                                        *extra), cwd=RUN_DIR, env=serve_env(), text=True,
                             capture_output=True, timeout=120)
     info = replay_json(replay)
-    assert again.close() == logged  # frame for frame
+    assert _closed(again, "frames", len(logged)) == logged  # frame for frame
     assert info["complete"] and info["markers"] == len(markers)
 
 
@@ -444,3 +406,28 @@ def test_serial_replay_stream_inserts_answers_between_packets_of_any_chunking() 
     assert c.seq_gaps == 0 and c.duplicates == 0 and c.crc_errors == 0 and c.malformed == 0
     assert np.array_equal(got.events, want.events)
     assert [r for r in got.records if not isinstance(r, protocols.Ack)] == want.records
+
+
+def test_a_killed_recording_leaves_the_previous_file_intact(tmp_path, pty_pair) -> None:
+    rec = tmp_path / "kept.skcap"
+    rec.write_bytes(b"the previous recording")
+    reader = PtyReader(pty_pair.master)
+    serve = ServeProcess("--port", pty_pair.path, "--record", str(rec), "--json")
+    try:
+        deadline = time.monotonic() + 120
+        while not any(x.get("type") == "status" for x in serve.lines):
+            assert time.monotonic() < deadline and not serve.exited, serve.stderr
+            time.sleep(0.05)
+        partial = list(tmp_path.glob(".kept.*.partial.skcap"))
+        assert len(partial) == 1
+        while partial[0].stat().st_size == 0:  # written as it goes (flushed every 0.5 s)
+            assert time.monotonic() < deadline, serve.stderr
+            time.sleep(0.05)
+        serve.kill()  # SIGKILL: no chance to finish
+    finally:
+        serve.kill()
+        reader.stop()
+    assert rec.read_bytes() == b"the previous recording"
+    with open(partial[0], "rb") as f, pytest.raises(ProtocolError, match="truncated"):
+        read_header(f)
+        list(read_units(f))  # the partial file is never taken for a whole recording

@@ -24,6 +24,10 @@ from skinhil.recording.formats import check_link_fits
 from skinhil.transports import Transport
 from skinhil.transports.base import WrappedTransport
 
+FLUSH_PERIOD_NS = 500_000_000
+"""A capture's buffered units go to the file at least this often (ns of host time, while
+units arrive): a killed run's partial file holds all but the last moments."""
+
 
 class LinkRecorder(abc.ABC):
     """Where recorded units go: :meth:`write` each as it is accepted by the link."""
@@ -41,12 +45,18 @@ class CaptureRecorder(LinkRecorder):
     """Serial and UDP units into a capture file (:mod:`protocols.capture`)."""
 
     def __init__(self, f: BinaryIO, header: CaptureHeader) -> None:
+        self._f = f
         self._writer = CaptureWriter(f, header)
+        self._flushed_ns = header.start_ns
 
     def write(self, payload: Any, board_us: int) -> None:
         if payload:
-            self._writer.write(time.time_ns(), board_us, bytes(payload))
+            now = time.time_ns()
+            self._writer.write(now, board_us, bytes(payload))
             self.units += 1
+            if now - self._flushed_ns > FLUSH_PERIOD_NS:  # on disk within about this much
+                self._f.flush()
+                self._flushed_ns = now
 
     def close(self) -> None:
         self._writer.close(time.time_ns())

@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+import sys
 import threading
 import time
 from dataclasses import dataclass
@@ -37,6 +38,9 @@ POLL_S = 0.01
 """Longest sleep (s) between two looks for host commands while waiting."""
 LATENESS_WINDOW = 100_000
 """Units whose lateness the percentiles are taken over (the most recent: bounded memory)."""
+SWITCH_INTERVAL_S = 2e-4
+"""Python's thread switch interval (s) while a replay runs (default 5 ms): a link's reader
+thread (CAN) never holds the interpreter lock for longer than this against the next unit."""
 SEND_TIMEOUT_S = 0.1
 """A send waits this long (s) at a time for a full link, then looks at the stop flag."""
 
@@ -198,6 +202,14 @@ class Replayer:
         Raises :class:`skinhil.errors.TransportError` when the link goes away."""
         stop = stop or threading.Event()
         self.warm_up()
+        switch_interval = sys.getswitchinterval()
+        sys.setswitchinterval(SWITCH_INTERVAL_S)
+        try:
+            return self._run(stop)
+        finally:
+            sys.setswitchinterval(switch_interval)
+
+    def _run(self, stop: threading.Event) -> ReplaySummary:
         wall0 = time.monotonic()
         first_ts: float | None = None
         last_ts = 0.0

@@ -138,6 +138,8 @@ class CanPeer(Peer):
         self.bus = CanTransport(channel, interface, fd=fd, bitrate=bitrate)
         self.decoder = protocols.CanDecoder(board_id=board_id, fd=fd)
         self.encoder = protocols.CanEncoder(board_id=board_id, fd=fd)
+        self.frames: list[protocols.CanFrame] = []
+        """Every frame received, as it came."""
         self._thread = threading.Thread(target=self._run, daemon=True)
         self._thread.start()
 
@@ -145,6 +147,7 @@ class CanPeer(Peer):
         while not self._stop.is_set():
             frames = self.bus.recv(timeout=0.05)
             if frames:
+                self.frames.extend(frames)
                 self._take(self.decoder.feed(frames), len(frames))
 
     def _send_command(self, cmd: Any) -> None:
@@ -168,6 +171,8 @@ class UdpPeer(Peer):
         self.decoder = protocols.SerialDecoder(versions)
         self.encoder = protocols.SerialEncoder()
         self.datagram_ends: list[int] = []
+        self.datagrams: list[bytes] = []
+        """Every datagram received, as it came."""
         self._thread = threading.Thread(target=self._run, daemon=True)
         self._thread.start()
 
@@ -175,6 +180,7 @@ class UdpPeer(Peer):
         while not self._stop.is_set():
             for _, data in self.link.recv_from(timeout=0.05):
                 self.datagram_ends.append(data[-1])
+                self.datagrams.append(data)
                 self._take(self.decoder.feed(data), len(data))
 
     def _send_command(self, cmd: Any) -> None:
