@@ -42,7 +42,9 @@ class DecisionAnswerer(ReceiverListener):
         self.unsent = 0
         """DECISIONs the link refused (gone, or no room within :data:`SEND_TIMEOUT_S`)."""
         self.acked = 0
+        """DECISIONs the board ACKed (scored)."""
         self.nacked = 0
+        """DECISIONs the board NACKed (counted while stopped, or for an unknown id)."""
         self.tokens: list[int | None] = []
         """The DECISION token of each decision, in order (None: not sent); the board's
         scoreboard log names the same tokens."""
