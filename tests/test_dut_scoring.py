@@ -77,7 +77,7 @@ def test_scoreboard_counts_every_decision_once() -> None:
     assert s["confusion"] == [[1, 1, 1]]
     assert [d["outcome"] for d in s["log"]] == [o.value for o in outcomes]
     assert s["log"][0] == {"t_us": 40 * MS, "stimulus_id": 1, "confidence": 0.9,
-                           "outcome": "right", "onset_us": 0, "true_id": 1}
+                           "token": None, "outcome": "right", "onset_us": 0, "true_id": 1}
     json.dumps(s)  # JSON-ready
     text = scoreboard_text(s)
     assert "6 decisions for 3 stimuli: 1 right, 0 wrong, 2 missed (accuracy 33.3 %)" in text
@@ -142,7 +142,7 @@ def test_scripted_dut_lands_in_every_counter(pty_pair, tmp_path: Path) -> None:
     board = serve.summary()["scoreboard"]
     assert {k: v for k, v in written.items() if k != "log"} == board
     live = [x["scoreboard"] for x in serve.lines if x.get("type") == "status"]
-    assert live[0]["decisions"] == 0 and 1 <= live[-1]["decisions"] <= board["decisions"]
+    assert live and 1 <= live[-1]["decisions"] <= board["decisions"]
     counts = {k: board[k] for k in ("right", "wrong", "duplicates", "late", "false_alarms",
                                     "unknown_id", "while_stopped")}
     assert counts == {"right": 1, "wrong": 1, "duplicates": 1, "late": 1, "false_alarms": 1,
@@ -153,6 +153,9 @@ def test_scripted_dut_lands_in_every_counter(pty_pair, tmp_path: Path) -> None:
     assert board["confusion"] == [[0, 0, 1], [1, 2, 1]]
     assert 0 < board["latency_ms"]["p50"] <= window_s * 1000
     log = {d["outcome"]: d for d in written["log"]}
+    assert {name: log[o]["token"] for name, o in (("right", "right"), ("twice", "duplicates"),
+                                                  ("stopped", "while_stopped"))} == {
+        name: tokens[name] for name in ("right", "twice", "stopped")}
     assert log["right"]["confidence"] == pytest.approx(0.75, abs=0.5 / 254)
     assert log["late"]["t_us"] - log["late"]["onset_us"] > window_s * 1e6
 

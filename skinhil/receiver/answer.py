@@ -42,7 +42,12 @@ class DecisionAnswerer(ReceiverListener):
         self.unsent = 0
         """DECISIONs the link refused (gone, or no room within :data:`SEND_TIMEOUT_S`)."""
         self.acked = 0
+        """DECISIONs the board ACKed (scored)."""
         self.nacked = 0
+        """DECISIONs the board NACKed (counted while stopped, or for an unknown id)."""
+        self.tokens: list[int | None] = []
+        """The DECISION token of each decision, in order (None: not sent); the board's
+        scoreboard log names the same tokens."""
 
     def on_decision(self, decision: ScoredDecision) -> None:
         self._token = (self._token + 1) % 65536
@@ -57,7 +62,9 @@ class DecisionAnswerer(ReceiverListener):
             log.warning("DECISION for stimulus %d not sent: the link had no room for %g s",
                         decision.prediction.label, SEND_TIMEOUT_S)
             self.unsent += 1
+            self.tokens.append(None)
             return
+        self.tokens.append(self._token)
         self._tokens.add(self._token)
         self.sent += 1
 

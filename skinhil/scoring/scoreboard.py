@@ -74,17 +74,20 @@ class DecisionScoreboard:
         """(true stimulus id, decided stimulus id) → matched decisions."""
         self.latencies_us: list[int] = []
         """Onset → arrival (µs, board time) of every matched decision."""
-        self.log: list[tuple[int, int, float | None, str, int | None, int | None]] = []
-        """Per decision: (arrival µs, stimulus id, confidence, outcome, onset µs, true id)."""
+        self.log: list[tuple[int, int, float | None, int | None, str, int | None,
+                            int | None]] = []
+        """Per decision: (arrival µs, stimulus id, confidence, token, outcome, onset µs,
+        true id)."""
 
     def onset(self, stimulus_id: int, t_us: int) -> None:
         """Stimulus ``stimulus_id`` started at board time ``t_us`` (µs), in time order."""
         self._matcher.add_onset(t_us, stimulus_id)
 
     def decision(self, stimulus_id: int, t_us: int, confidence: float | None = None,
-                 running: bool = True) -> Outcome:
+                 running: bool = True, token: int | None = None) -> Outcome:
         """Score a DECISION naming ``stimulus_id`` that arrived at board time ``t_us`` (µs)
-        while the board was ``running``; return (and count) its outcome."""
+        while the board was ``running``; return (and count) its outcome. ``token`` (the
+        DECISION's, if any) goes to the log, so a decoder finds its own answers there."""
         onset_us: int | None = None
         true_id: int | None = None
         if not running:
@@ -103,7 +106,7 @@ class DecisionScoreboard:
             else:
                 outcome = _KIND_OUTCOME[m.kind]
         self.counts[outcome] += 1
-        self.log.append((int(t_us), int(stimulus_id), confidence, outcome.value, onset_us,
+        self.log.append((int(t_us), int(stimulus_id), confidence, token, outcome.value, onset_us,
                          true_id))
         return outcome
 
@@ -150,8 +153,9 @@ class DecisionScoreboard:
             "confusion": [[t, d, n] for (t, d), n in sorted(self.confusion.items())],
         }
         if with_log:
-            out["log"] = [dict(zip(("t_us", "stimulus_id", "confidence", "outcome", "onset_us",
-                                    "true_id"), row, strict=True)) for row in self.log]
+            out["log"] = [dict(zip(("t_us", "stimulus_id", "confidence", "token", "outcome",
+                                    "onset_us", "true_id"), row, strict=True))
+                          for row in self.log]
         return out
 
 
