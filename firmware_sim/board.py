@@ -57,7 +57,7 @@ from skinhil.model.sensor import SkinSensor
 from skinhil.model.skin import SkinModel, SkinParams
 from skinhil.model.stimuli import Schedule, ScheduledStimulus
 from skinhil.model.timeline import MarkerEvent, Timeline
-from skinhil.scoring import DecisionScoreboard, Outcome
+from skinhil.scoring import DecisionScoreboard, answer_reason
 from skinhil.transports import Transport
 
 log = logging.getLogger(__name__)
@@ -364,9 +364,7 @@ class Board:
         outcome = self.scoreboard.decision(decision.stimulus_id, self.board_time_us(),
                                            decision.confidence, self.running, decision.token)
         log.debug("decision %r: %s", decision, outcome.value)
-        return {Outcome.WHILE_STOPPED: protocols.NackReason.NOT_RUNNING,
-                Outcome.UNKNOWN_ID: protocols.NackReason.UNKNOWN_STIMULUS}.get(
-                    outcome, protocols.NackReason.NONE)
+        return answer_reason(outcome)
 
     # -- one tick -----------------------------------------------------------------------
     def tick(self) -> None:

@@ -174,6 +174,57 @@ def test_commands_during_a_replay_are_nacked_and_the_stream_stays_whole(tmp_path
     assert '"commands": 3' in out
 
 
+def test_decisions_during_a_replay_are_scored_against_the_recorded_markers(tmp_path) -> None:
+    """A decoder under test answers a replayed recording: its DECISIONs are stamped with the
+    board time played so far and scored against the MARKERs played (right, duplicate and
+    the unanswered onsets as misses, in the --score file); other commands are NACKed."""
+    enc = protocols.SerialEncoder()
+    units = []
+    for k in range(24):  # 1.2 s: a packet every 50 ms, an onset every 300 ms (ids 0..3)
+        t0 = k * 50_000
+        if k % 6 == 0:
+            units.append(enc.marker(protocols.Marker(t_us=t0, stimulus_id=k // 6,
+                                                     phase=protocols.MarkerPhase.ONSET)))
+        units.append(enc.events(make_events(np.array([t0 + 100]), np.array([k])), t0 + 50_000))
+    rec = tmp_path / "answered.skcap"
+    rec.write_bytes(_capture_bytes([u for u in units if u], spacing_ns=25_000_000))
+    score = tmp_path / "score.json"
+    pair = PtyPair()
+    reader = PtyReader(pair.master)
+    host = protocols.SerialEncoder()
+    stream = protocols.SerialDecoder()
+    try:
+        proc = subprocess.Popen(serve_argv("--port", pair.path, "--replay", str(rec),
+                                           "--response-window", "0.2", "--score", str(score),
+                                           "--json"), cwd=RUN_DIR, env=serve_env(),
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        seen: list[int] = []
+        deadline = time.monotonic() + 60
+        while 1 not in seen and time.monotonic() < deadline:
+            seen += [r.stimulus_id for r in stream.feed(reader.take()).records
+                     if isinstance(r, protocols.Marker)]
+            time.sleep(0.002)
+        assert 1 in seen, "the replay never played onset 1"
+        for token in (21, 22):  # right, then a duplicate of the same onset
+            pair.write(host.command(protocols.Decision(token=token, stimulus_id=1)))
+        pair.write(host.command(protocols.Command(token=23, opcode=protocols.CommandCode.PING)))
+        out, err = proc.communicate(timeout=60)
+        time.sleep(0.2)
+        acks = [r for r in stream.feed(reader.take()).records if isinstance(r, protocols.Ack)]
+    finally:
+        reader.stop()
+        pair.close()
+    assert proc.returncode == 0, err
+    assert [(a.token, a.ok, a.reason) for a in acks] == [
+        (21, True, protocols.NackReason.NONE), (22, True, protocols.NackReason.NONE),
+        (23, False, protocols.NackReason.REPLAYING)]
+    board = json.loads(score.read_text())
+    assert board["right"] == 1 and board["duplicates"] == 1 and board["wrong"] == 0
+    assert board["misses"] >= 2  # onsets 0 and 2 had no decision in their window
+    assert board["latency_ms"]["p50"] is not None and board["latency_ms"]["p50"] >= 0
+    assert json.loads(out.strip().splitlines()[-1])["scoreboard"]["right"] == 1
+
+
 # -- UDP ------------------------------------------------------------------------------------
 def _closed(peer: Any, units: str, expected: int) -> list[Any]:
     """The raw units (``datagrams`` or ``frames``) ``peer`` received, once it holds

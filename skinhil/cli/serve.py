@@ -36,7 +36,7 @@ from skinhil.recording import (
     link_recorder,
     open_recording,
 )
-from skinhil.scoring import scoreboard_text
+from skinhil.scoring import DecisionScoreboard, scoreboard_text
 
 LIVE_WINDOW_TICKS = 1000
 """The live status's lateness p99 is over this many most recent ticks (its max is over the
@@ -227,7 +227,8 @@ def _replay_text(s: ReplaySummary, path: Path, link: str) -> str:
             f": {s.wire_units} {'frames' if link == 'can' else 'bytes'} sent, "
             f"{s.events} events, {s.markers} markers; pace error p50 "
             f"{s.lateness_ms['p50']:.3f} ms p99 {s.lateness_ms['p99']:.3f} ms max "
-            f"{s.lateness_ms['max']:.3f} ms; {s.commands} host commands (NACK, REPLAYING)")
+            f"{s.lateness_ms['max']:.3f} ms; {s.commands} host commands (DECISIONs scored, "
+            "others NACK REPLAYING)")
 
 
 def run_replay(args: argparse.Namespace) -> int:
@@ -237,23 +238,36 @@ def run_replay(args: argparse.Namespace) -> int:
                           "a recording; copy the file instead")
     check_link_fits(args.replay, _link_kind(args))
     recording = open_recording(args.replay)
+    score_path = check_output_path(args.score) if args.score is not None else None
+    scoreboard = DecisionScoreboard(args.response_window_s)
     if args.realtime:
         why = request_realtime()
         if why is not None:
             raise ConfigError(f"--realtime: {why}")
     with open_transport(args) as transport:
-        replayer = Replayer(recording, transport, args.speed)
+        replayer = Replayer(recording, transport, args.speed, scoreboard)
         if not args.quiet and not args.json:
             print(f"skinhil serve: replaying {args.replay} ({recording.units} units, "
                   f"{recording.duration_s:.3f} s) onto {describe_transport(args)} at speed "
                   f"{args.speed:g}; Ctrl-C stops", file=sys.stderr, flush=True)
         with signals.stop_event() as stop:
             summary = replayer.run(stop)
+    if score_path is not None:
+        write_score(score_path, scoreboard)
     if args.json:
-        print(json.dumps({"type": "replay", **summary.as_dict()}), flush=True)
+        print(json.dumps({"type": "replay", **summary.as_dict(),
+                          "scoreboard": scoreboard.summary()}), flush=True)
     elif not args.quiet:
         print(_replay_text(summary, args.replay, recording.link), flush=True)
+        print(scoreboard_text(scoreboard.summary()), flush=True)
     return 0
+
+
+def write_score(path: Path, scoreboard: DecisionScoreboard) -> None:
+    """Write ``scoreboard`` with every decision to ``path`` (JSON), whole or not at all."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(scoreboard.summary(with_log=True), indent=1) + "\n",
+                       encoding="utf-8")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -330,9 +344,7 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
         if tty:
             sys.stderr.write("\n")
     if score_path is not None:
-        with atomic_path(score_path) as tmp:
-            tmp.write_text(json.dumps(board.scoreboard.summary(with_log=True), indent=1) + "\n",
-                           encoding="utf-8")
+        write_score(score_path, board.scoreboard)
     if args.json:
         print(json.dumps({"type": "summary", **summary.as_dict()}), flush=True)
     elif not args.quiet:

@@ -28,6 +28,7 @@ from protocols.warm_up import exercise_codecs
 from skinhil.errors import ConfigError
 from skinhil.recording.recordings import Recording
 from skinhil.recording.replay_stream import CanReplayStream, SerialReplayStream
+from skinhil.scoring import DecisionScoreboard, answer_reason
 from skinhil.transports import Transport
 
 log = logging.getLogger(__name__)
@@ -82,7 +83,7 @@ class Replayer:
     """
 
     def __init__(self, recording: Recording, transport: Transport[Any],
-                 speed: float = 1.0) -> None:
+                 speed: float = 1.0, scoreboard: DecisionScoreboard | None = None) -> None:
         if not (speed > 0 and not math.isnan(speed)):
             raise ConfigError(f"--speed must be a positive number, got {speed!r}")
         if transport.kind != recording.link:
@@ -93,6 +94,8 @@ class Replayer:
             raise ConfigError(f"'{recording.path}' holds CAN FD frames: add --fd")
         self.recording = recording
         self.transport = transport
+        self.scoreboard = scoreboard
+        """Scores the DECISIONs received against the markers played (None: NACK them)."""
         self.speed = float(speed)
         self.is_can = recording.link == "can"
         if self.is_can:
@@ -118,15 +121,26 @@ class Replayer:
 
     # -- the one handler of host commands and of the markers played -------------------
     def handle(self, command: Any) -> Any:
-        """Answer a host command received during the replay: a NACK, REPLAYING (no command
-        is executed; the board that made the recording is not here)."""
+        """Answer a host command received during the replay: a DECISION is stamped with the
+        board time played so far and scored against the markers played (its ACK as the
+        board's, SPEC §3.5.2); any other command gets a NACK, REPLAYING (no command is
+        executed; the board that made the recording is not here)."""
         self.commands += 1
+        if isinstance(command, protocols.Decision) and self.scoreboard is not None:
+            outcome = self.scoreboard.decision(command.stimulus_id, self.board_time_us,
+                                               command.confidence, True, command.token)
+            reason = answer_reason(outcome)
+            return protocols.Ack(token=command.token, opcode=command.opcode,
+                                 ok=reason == protocols.NackReason.NONE, reason=reason)
         return protocols.Ack(token=command.token, opcode=command.opcode, ok=False,
                              reason=protocols.NackReason.REPLAYING)
 
     def on_marker(self, marker: Any) -> None:
-        """A ground-truth marker was played (board time ``marker.t_us`` µs)."""
+        """A ground-truth marker was played (board time ``marker.t_us`` µs): an onset opens
+        a response window on the scoreboard."""
         self.markers += 1
+        if self.scoreboard is not None and marker.phase == protocols.MarkerPhase.ONSET:
+            self.scoreboard.onset(marker.stimulus_id, marker.t_us)
 
     def warm_up(self) -> None:
         """Run every encode, decode and renumbering path once on throwaway codecs, off the
@@ -152,7 +166,7 @@ class Replayer:
         if not data:
             return
         for record in self._commands.feed(data).records:
-            if isinstance(record, protocols.Command):
+            if isinstance(record, protocols.Command | protocols.Decision):
                 answer = self._answers.ack(self.handle(record))
                 for unit in (answer if self.is_can else [answer]):
                     self._stream.answer(unit)
@@ -189,6 +203,8 @@ class Replayer:
                     self.board_time_us = max(self.board_time_us, int(record.t_us))
                 if isinstance(record, protocols.Marker):
                     self.on_marker(record)
+            if self.scoreboard is not None:
+                self.scoreboard.advance(self.board_time_us)
 
     def lateness_s(self) -> np.ndarray:
         """Each unit's send start minus its due time (s), in play order, for the last

@@ -3,7 +3,12 @@
 (:mod:`skinhil.scoring.scoreboard`) and the reference receiver's own scoring."""
 
 from skinhil.scoring.matching import Match, MatchKind, Onset, OnsetMatcher
-from skinhil.scoring.scoreboard import DecisionScoreboard, Outcome, scoreboard_text
+from skinhil.scoring.scoreboard import (
+    DecisionScoreboard,
+    Outcome,
+    answer_reason,
+    scoreboard_text,
+)
 
 __all__ = ["DecisionScoreboard", "Match", "MatchKind", "Onset", "OnsetMatcher", "Outcome",
-           "scoreboard_text"]
+           "answer_reason", "scoreboard_text"]

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+import protocols
 from skinhil.errors import ConfigError
 from skinhil.scoring.matching import MatchKind, OnsetMatcher
 
@@ -45,6 +46,15 @@ class Outcome(enum.Enum):
     """Arrived while the board was stopped (not matched)."""
     UNKNOWN_ID = "unknown_id"
     """Names a stimulus id the board does not know (not matched)."""
+
+
+def answer_reason(outcome: Outcome) -> protocols.NackReason:
+    """The reason of the ACK that answers a DECISION with ``outcome``: NONE when it was
+    scored, NOT_RUNNING while stopped, UNKNOWN_STIMULUS for an id not known (SPEC §3.5.2;
+    counted all the same)."""
+    return {Outcome.WHILE_STOPPED: protocols.NackReason.NOT_RUNNING,
+            Outcome.UNKNOWN_ID: protocols.NackReason.UNKNOWN_STIMULUS}.get(
+                outcome, protocols.NackReason.NONE)
 
 
 _KIND_OUTCOME = {MatchKind.DUPLICATE: Outcome.DUPLICATE, MatchKind.LATE: Outcome.LATE,
