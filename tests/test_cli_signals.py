@@ -35,8 +35,10 @@ from harness.serve import RUN_DIR, serve_env
 from skinhil.decoding import DirectionDecoder
 
 TRIES = 20
-CLEAN_SIGINT = (0, 2, 130)
-"""Exit statuses after a SIGINT: finished, refused, stopped."""
+CLEAN_SIGINT = (0, 2, 130, -signal.SIGINT)
+"""Exit statuses after a SIGINT: finished, refused, stopped; or ended by its default action
+while the interpreter shut down after finishing (Python restores the default handlers then;
+before skinhil's first instruction :func:`_main_started` sends none)."""
 ORPHAN_GRACE_S = 2.0
 REPRODUCE = ("reproduce", "--quick", "--workers", "2", "--grid", "2", "--repeats", "1",
              "--no-progress")
