@@ -44,10 +44,26 @@ class Stopped(KeyboardInterrupt):
         return 128 + self.signum
 
 
+NATIVE_CALLBACKS: tuple[str, ...] = ("llvmlite",)
+"""Packages whose Python functions native code calls back (numba's compiler, through
+llvmlite): an exception raised there is printed as "Exception ignored" and lost."""
+RESEND_S = 0.02
+"""How soon (s) a signal that arrived inside such a callback is delivered again."""
+
+
+def _in_native_callback(frame: FrameType | None) -> bool:
+    name = frame.f_code.co_filename if frame is not None else ""
+    return any(f"{os.sep}{pkg}{os.sep}" in name for pkg in NATIVE_CALLBACKS)
+
+
 def _raise(signum: int, frame: FrameType | None) -> None:
     _received.append(signum)
-    if not _deferred[0]:
-        raise Stopped(signum)
+    if _deferred[0]:
+        return
+    if _in_native_callback(frame):  # raise it again once back in Python's own code
+        threading.Timer(RESEND_S, os.kill, (os.getpid(), signum)).start()
+        return
+    raise Stopped(signum)
 
 
 Handlers = dict[signal.Signals, object]
@@ -106,6 +122,9 @@ def stop_event(on_first: Callable[[], str | None] | None = None,
         if not stop.is_set():
             stop.set()
             line = on_first() if on_first is not None else None
+        elif _in_native_callback(frame):
+            threading.Timer(RESEND_S, os.kill, (os.getpid(), signum)).start()
+            return
         else:
             line = on_second() if on_second is not None else None
             if line:
