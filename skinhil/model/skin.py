@@ -30,8 +30,9 @@ Defaults and their reasoning (the paper gives the structure, not SI values):
   skipped: 6.8, 15.3, 27.8 and 48.2 µs per 0.1 ms step at 6x6, 8x8, 10x10 and 12x12, one
   core, this process's CPU time at load ~10), the linear one 4-7 ns; with the neurons
   (~3 ns per channel) the geometric skin takes about a third of a core at 10x10, so the
-  board keeps real time there with room for its encoder and link, and above it the linear mechanics (exact, then
-  leapfrog) carries the board to ~29x29 on one core (``benchmarks/bench_size.py``).
+  board keeps real time there with room for its encoder and link, and above it the linear
+  mechanics (exact, then leapfrog) carries the board to ~29x29 on one core
+  (``benchmarks/bench_size.py``).
   ``"linear"`` and ``"geometric"`` force one; the geometric one refuses steps above its
   stability limit (~0.14 ms at the defaults).
 - ``readout = "length"``: every spring reports ``k·(|L0·e + q_j − q_i| − L0)``, its length
