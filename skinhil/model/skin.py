@@ -20,16 +20,19 @@ Defaults and their reasoning (the paper gives the structure, not SI values):
   of ``serve`` and ``demo`` (``SkinParams.describe_mechanics``). Chosen from the
   reproduction and the board's real-time budget. Reproduction (``skinhil reproduce``,
   docs/figures/REPORT.md, both readouts of both mechanics): the geometric dynamics with the
-  length readout reproduces the most claims of the paper; what the linear dynamics misses
-  comes from its dynamics (1E-F fails with either readout), and at the paper's forces its
-  mesh moves 4-5 rest lengths, far outside the small displacements its stiffness matrix
-  assumes (REPORT.md, "Regime"). Budget: the geometric mechanics costs ~20-26 ns per spring
-  and step (RK4, spring by spring, the springs between fixed masses skipped: 6.8, 15.3, 27.8
-  and 48.2 µs per 0.1 ms step at 6x6, 8x8, 10x10 and 12x12, one core, this process's CPU
-  time at load ~10), the linear one 4-7 ns; with the neurons (~3 ns per channel) the
-  geometric skin takes about a third of a core at 10x10, so the board keeps real time there
-  with room for its encoder and link, and above it the linear mechanics (exact, then
-  leapfrog) carries the board to ~29x29 on one core (``benchmarks/bench_size.py``).
+  length readout reproduce 4 of the paper's 7 checked claims (1E-F, 2A, 3F, 4G), as many as
+  the linear dynamics with it (2A, 2C, 3F, 4G) and twice the old default's (linear, axial
+  readout: 2); the geometric is the one that stays a faithful model at the paper's forces:
+  1E-F, which only the dynamics change, fails on the linear dynamics with either readout,
+  and there the mesh moves 4-5 rest lengths, far outside the small displacements its
+  stiffness matrix assumes (REPORT.md, "Regime"). Budget: the geometric mechanics costs
+  ~20-26 ns per spring and step (RK4, spring by spring, the springs between fixed masses
+  skipped: 6.8, 15.3, 27.8 and 48.2 µs per 0.1 ms step at 6x6, 8x8, 10x10 and 12x12, one
+  core, this process's CPU time at load ~10), the linear one 4-7 ns; with the neurons
+  (~3 ns per channel) the geometric skin takes about a third of a core at 10x10, so the
+  board keeps real time there with room for its encoder and link, and above it the linear
+  mechanics (exact, then leapfrog) carries the board to ~29x29 on one core
+  (``benchmarks/bench_size.py``).
   ``"linear"`` and ``"geometric"`` force one; the geometric one refuses steps above its
   stability limit (~0.14 ms at the defaults).
 - ``readout = "length"``: every spring reports ``k·(|L0·e + q_j − q_i| − L0)``, its length
