@@ -163,8 +163,10 @@ def _one_blas_thread() -> None:
 
 def _local_worker() -> None:
     """Local worker set-up: one BLAS thread; Ctrl-C (sent to the whole terminal's process
-    group) is for the parent, which ends its workers itself."""
+    group) is for the parent, which ends its workers itself; SIGTERM ends a worker quietly
+    (a forked worker would otherwise keep its parent's handler)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     _one_blas_thread()
 
 

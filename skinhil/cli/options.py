@@ -15,9 +15,9 @@ from skinhil.model.schedule_file import MAX_FILE_BYTES, load_schedule
 from skinhil.model.skin import AUTO_GEOMETRIC_MAX_SPRINGS, SkinModel, SkinParams
 from skinhil.model.stimuli import Schedule
 
-DT_RANGE_S = (1e-6, 1e-3)
-"""Simulation steps (s) the model takes: a whole number of microseconds, at most the 1 ms
-publish tick (the skin's fastest modes need steps well below a millisecond)."""
+DT_RANGE_S = (1e-6, 1e-2)
+"""Simulation steps (s) the options take: from 1 µs to 10 ms (the geometric mechanics and the
+board, whose 1 ms tick is a whole number of steps, refuse the larger ones themselves)."""
 MAX_THREADS = 256
 """Most model threads."""
 DECODE_SNR_DB = 10.0

@@ -52,8 +52,15 @@ RESEND_S = 0.02
 
 
 def _in_native_callback(frame: FrameType | None) -> bool:
-    name = frame.f_code.co_filename if frame is not None else ""
-    return any(f"{os.sep}{pkg}{os.sep}" in name for pkg in NATIVE_CALLBACKS)
+    """Whether ``frame`` runs in code whose exceptions are lost: a callback from native code
+    (:data:`NATIVE_CALLBACKS`) or a finalizer (``__del__``) anywhere up its stack."""
+    while frame is not None:
+        code = frame.f_code
+        if code.co_name == "__del__" or any(f"{os.sep}{pkg}{os.sep}" in code.co_filename
+                                            for pkg in NATIVE_CALLBACKS):
+            return True
+        frame = frame.f_back
+    return False
 
 
 def _raise(signum: int, frame: FrameType | None) -> None:
@@ -142,7 +149,7 @@ def stop_event(on_first: Callable[[], str | None] | None = None,
 
 
 CHILD_GRACE_S = 1.0
-"""How long (s) child processes get to exit on SIGTERM before they are killed."""
+"""How long (s) :func:`end_children` waits for the killed processes to be gone."""
 
 
 def _descendants(pid: int) -> list[int]:
@@ -164,19 +171,18 @@ def _descendants(pid: int) -> list[int]:
 
 
 def end_children(grace_s: float = CHILD_GRACE_S) -> None:
-    """End every process this one started (worker pools, a board in a subprocess): SIGTERM,
-    then SIGKILL to those still alive after ``grace_s`` (s)."""
+    """End every process this one started (worker pools, a board in a subprocess) with
+    SIGKILL, at once: a forked worker still has this process's handlers and would print a
+    stop of its own; none holds anything worth saving (outputs are written by this process,
+    atomically). Waits at most ``grace_s`` (s) for them to be gone."""
     kids = _descendants(os.getpid())
     for pid in kids:
         with contextlib.suppress(OSError):
-            os.kill(pid, signal.SIGTERM)
+            os.kill(pid, signal.SIGKILL)
     end = time.monotonic() + grace_s
     while kids and time.monotonic() < end:
         kids = [pid for pid in kids if _alive(pid)]
         time.sleep(0.02)
-    for pid in kids:
-        with contextlib.suppress(OSError):
-            os.kill(pid, signal.SIGKILL)
 
 
 def _alive(pid: int) -> bool:
