@@ -4,15 +4,12 @@ other end, both as subprocesses, as a user runs them."""
 from __future__ import annotations
 
 import math
-import shutil
-import subprocess
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-import pytest
-
+from harness.host_link import linked_ptys
 from harness.serve import ServeProcess
 
 
@@ -27,25 +24,6 @@ def quick_model(tmp_path: Path, size: tuple[int, int] = (6, 6)) -> Path:
     path = tmp_path / f"model-{size[0]}x{size[1]}.npz"
     save_decoder(decoder, path)
     return path
-
-
-@contextmanager
-def pty_pair(tmp_path: Path) -> Iterator[tuple[Path, Path]]:
-    """A socat pty pair: (board end, host end)."""
-    if shutil.which("socat") is None:
-        pytest.skip("socat is not installed (apt-get install socat)")
-    board_end, host_end = tmp_path / "ttyBOARD", tmp_path / "ttyHOST"
-    socat = subprocess.Popen(["socat", f"pty,raw,echo=0,link={board_end}",
-                              f"pty,raw,echo=0,link={host_end}"])
-    try:
-        end = time.monotonic() + 10
-        while not (board_end.exists() and host_end.exists()):
-            assert time.monotonic() < end, "socat made no pty pair"
-            time.sleep(0.05)
-        yield board_end, host_end
-    finally:
-        socat.kill()
-        socat.wait()
 
 
 def wait_for_stderr(proc: ServeProcess, text: str, timeout_s: float = 60.0) -> str:
@@ -74,7 +52,7 @@ def listening(tmp_path: Path, *listen_args: str, ready: str) -> Iterator[
     ``ready``: (the listener, the board's end of the pty). The listener is interrupted (and
     its summary collected) when the body ends, unless the body stopped it."""
     model = quick_model(tmp_path)
-    with pty_pair(tmp_path) as (board_end, host_end):
+    with linked_ptys(tmp_path) as (board_end, host_end):
         listen = ServeProcess("--port", str(host_end), "--model", str(model), "--json",
                               *listen_args, command="listen")
         try:
