@@ -1,6 +1,7 @@
 """No compiled kernel runs stale code: numba's cache is keyed on all the package sources.
 
-A fused kernel of ``skinhil.model.sensor`` inlines ``skinhil.model.neurons._euler_step``.
+A fused kernel of ``skinhil.model.sensor`` (the linear mechanics' modal one) inlines
+``skinhil.model.neurons._euler_step``.
 numba alone keys the fused kernel's cache entry on ``sensor.py`` only, so after an edit of
 ``neurons.py`` it would load the old compiled code. Here a copy of the packages runs the
 kernel in one process, the callee's constant is changed, and a new process must see the change.
@@ -22,7 +23,8 @@ RUN_FUSED_KERNEL = """
 import numpy as np
 import numba
 from skinhil.model.sensor import SkinSensor
-sensor = SkinSensor(dt_s=1e-4)  # no noise: deterministic
+from skinhil.model.skin import SkinModel, SkinParams
+sensor = SkinSensor(SkinModel(SkinParams(mechanics="linear")), dt_s=1e-4)  # no noise
 springs, spikes = sensor.advance(np.zeros((20, 77, 3)))  # the one-call compiled block
 print(int(spikes.sum()), numba.config.CACHE_DIR)
 """

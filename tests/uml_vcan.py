@@ -189,8 +189,8 @@ def _init_script(workdir: Path, modules: list[Path], command: list[str], cwd: Pa
         f"date +%s.%N > {q(str(workdir / 'started'))}",
         "mount -t proc proc /proc",
         "mount -t sysfs sysfs /sys",
-        # UML's devtmpfs has no /dev/shm: without it every multiprocessing lock (joblib,
-        # scikit-learn) fails with ENOENT
+        # UML's devtmpfs has no /dev/shm: without it every multiprocessing lock (worker
+        # pools, scikit-learn) fails with ENOENT
         "mkdir -p /dev/shm && mount -t tmpfs -o size=256m tmpfs /dev/shm",
         "export PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin",
         f"exec 3> {q(str(workdir / 'setup.log'))}",

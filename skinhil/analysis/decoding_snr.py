@@ -23,7 +23,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from joblib import Parallel, delayed
 from tqdm.auto import tqdm
 
 from skinhil.decoding import CVResult, DirectionDecoder, FeatureSpec, cross_validate
@@ -31,6 +30,7 @@ from skinhil.errors import ConfigError
 from skinhil.model.skin import SkinModel
 from skinhil.model.stimuli import direction_conditions
 from skinhil.model.trials import simulate_trials
+from skinhil.workers import process_map
 
 PAPER_SNRS_DB: tuple[float, ...] = (0.0, 5.0, 10.0, 15.0, 20.0, 30.0, math.inf)
 """The SNRs (dB) of Figure 4G."""
@@ -89,8 +89,8 @@ def trial_features(snr_db: float, setup: DecodingSetup, model: SkinModel | None 
     return x, y
 
 
-def _decode(x: np.ndarray, y: np.ndarray, spec: FeatureSpec, setup: DecodingSetup
-            ) -> CVResult:
+def _decode(task: tuple[np.ndarray, np.ndarray, FeatureSpec, DecodingSetup]) -> CVResult:
+    x, y, spec, setup = task
     return cross_validate(DirectionDecoder(spec, C=setup.C), x, y, folds=setup.folds,
                           repeats=setup.repeats, seed=setup.seed)
 
@@ -98,24 +98,24 @@ def _decode(x: np.ndarray, y: np.ndarray, spec: FeatureSpec, setup: DecodingSetu
 def decode_feature_sets(feature_sets: Sequence[FeatureSet],
                         snrs_db: Sequence[float] = PAPER_SNRS_DB,
                         setup: DecodingSetup | None = None, model: SkinModel | None = None,
-                        n_jobs: int = 1, progress: bool = False) -> dict[str, list[CVResult]]:
+                        workers: int | None = 1, progress: bool = False
+                        ) -> dict[str, list[CVResult]]:
     """Cross-validated decoding of the 9 conditions for every feature set at every SNR:
     ``{set name: [CVResult per SNR]}``. The trials of an SNR (noise seed ``setup.seed +
-    index``) are simulated once and shared by the sets; ``n_jobs`` processes run the sets'
-    cross-validations in parallel (the result does not depend on it)."""
+    index``) are simulated once and shared by the sets; ``workers`` processes (None: every
+    core) run the sets' cross-validations in parallel (the result does not depend on it)."""
     s = setup or DecodingSetup()
     names = [f.name for f in feature_sets]
     if len(set(names)) != len(names):
         raise ConfigError(f"feature set names must be distinct, got {names}")
     out: dict[str, list[CVResult]] = {n: [] for n in names}
-    with Parallel(n_jobs=n_jobs) as parallel:
-        for i, snr in enumerate(tqdm(list(snrs_db), desc="decoding vs SNR", unit="SNR",
-                                     disable=not progress)):
-            x, y = trial_features(snr, s, model, seed=s.seed + i)
-            results = parallel(delayed(_decode)(x[:, f.columns(s.spec)], y, f.spec(s.spec), s)
-                               for f in feature_sets)
-            for name, res in zip(names, results, strict=True):
-                out[name].append(res)
+    for i, snr in enumerate(tqdm(list(snrs_db), desc="decoding vs SNR", unit="SNR",
+                                 disable=not progress)):
+        x, y = trial_features(snr, s, model, seed=s.seed + i)
+        results = process_map(_decode, [(x[:, f.columns(s.spec)], y, f.spec(s.spec), s)
+                                        for f in feature_sets], workers)
+        for name, res in zip(names, results, strict=True):
+            out[name].append(res)
     return out
 
 

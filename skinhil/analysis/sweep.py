@@ -32,11 +32,8 @@ from __future__ import annotations
 
 import logging
 import math
-import os
-import signal
 import time
 from collections.abc import Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -49,6 +46,7 @@ from skinhil.analysis.phases import PhaseWindows
 from skinhil.errors import ConfigError
 from skinhil.model.skin import Mechanics, SkinModel, SkinParams
 from skinhil.model.stimuli import at_size, paper_stimuli
+from skinhil.workers import one_blas_thread, process_map, worker_count
 
 logger = logging.getLogger(__name__)
 
@@ -155,40 +153,8 @@ def _evaluate(args: tuple[SkinParams, float]) -> InformationMeasures:
     return evaluate_point(*args)
 
 
-def _one_blas_thread() -> None:
-    """Worker set-up: one BLAS thread for the whole process, so that concurrent tasks in one
-    process cannot change each other's thread count (and with it the rounding)."""
-    threadpool_limits(1)
-
-
-def _local_worker() -> None:
-    """Local worker set-up: one BLAS thread; Ctrl-C (sent to the whole terminal's process
-    group) is for the parent, which ends its workers itself; SIGTERM ends a worker quietly
-    (a forked worker would otherwise keep its parent's handler)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    _one_blas_thread()
-
-
 def _local(tasks: list[tuple[SkinParams, float]], workers: int, bar: tqdm) -> list:
-    if workers == 1:
-        out = []
-        for t in tasks:
-            out.append(_evaluate(t))
-            bar.update()
-        return out
-    chunk = max(1, len(tasks) // (8 * workers))
-    pool = ProcessPoolExecutor(max_workers=workers, initializer=_local_worker)
-    try:
-        out = []
-        for res in pool.map(_evaluate, tasks, chunksize=chunk):
-            out.append(res)
-            bar.update()
-    except BaseException:  # stopped or failed: no waiting for the points still running
-        pool.shutdown(wait=False, cancel_futures=True)
-        raise
-    pool.shutdown()
-    return out
+    return process_map(_evaluate, tasks, workers, on_result=lambda _: bar.update())
 
 
 def _dask(tasks: list[tuple[SkinParams, float]], scheduler: str, bar: tqdm,
@@ -203,7 +169,7 @@ def _dask(tasks: list[tuple[SkinParams, float]], scheduler: str, bar: tqdm,
     except (OSError, TimeoutError) as exc:
         raise ConfigError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from None
     try:
-        client.run(_one_blas_thread)
+        client.run(one_blas_thread)
         futures = client.map(_evaluate, tasks, pure=False)
         for _ in as_completed(futures):
             bar.update()
@@ -219,9 +185,7 @@ def run_sweep(spec: SweepSpec, workers: int | None = None, scheduler: str | None
     cluster (reached within ``connect_timeout_s`` s). The result does not depend on where
     the points ran."""
     tasks = [(p, spec.dt_s) for p in spec.points()]
-    n_workers = (os.cpu_count() or 1) if workers is None else int(workers)
-    if n_workers < 1:
-        raise ConfigError(f"workers must be >= 1, got {workers}")
+    n_workers = worker_count(workers)
     start = time.perf_counter()
     with tqdm(total=len(tasks), desc=f"sweep {spec.mechanics}", unit="point",
               disable=not progress) as bar:

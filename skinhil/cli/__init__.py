@@ -32,7 +32,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return exc.exit_status
     finally:
         if argv is not None:  # called from Python: the caller's handlers back; as a
-            signals.restore(previous)  # program, they stay until the interpreter is gone
+            signals.restore(previous)  # program, they stay until the interpreter is gone,
+        else:  # recording only
+            signals.finish()
 
 
 def _run(argv: list[str]) -> int:

@@ -103,6 +103,12 @@ def resume() -> None:
         raise Stopped(_received[0])
 
 
+def finish() -> None:
+    """The command is done and its exit status decided: a stop signal from now on (while the
+    interpreter shuts down: joining threads, flushing) is only recorded, never a traceback."""
+    _deferred[0] = True
+
+
 def received() -> int | None:
     """The first stop signal received so far (None: none)."""
     return _received[0] if _received else None

@@ -17,7 +17,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from joblib import Parallel, delayed
 from sklearn.base import clone
 from sklearn.metrics import confusion_matrix
 from sklearn.model_selection import RepeatedStratifiedKFold
@@ -53,11 +52,10 @@ def _one_fold(estimator: Any, x: np.ndarray, y: np.ndarray, train: np.ndarray,
 
 
 def cross_validate(estimator: Any, x: Any, y: Any, folds: int = 5, repeats: int = 100,
-                   seed: int | None = 0, n_jobs: int = 1, progress: bool = False) -> CVResult:
+                   seed: int | None = 0, progress: bool = False) -> CVResult:
     """Repeated stratified ``folds``-fold cross-validation of ``estimator`` on ``(x, y)``.
 
-    ``n_jobs`` worker processes (joblib) fit folds in parallel; the result does not depend on
-    it. Raises ConfigError when a class has fewer trials than ``folds``.
+    Raises ConfigError when a class has fewer trials than ``folds``.
     """
     arr = np.asarray(x, dtype=np.float64)
     labels = np.asarray(y)
@@ -72,9 +70,9 @@ def cross_validate(estimator: Any, x: Any, y: Any, folds: int = 5, repeats: int 
                           f"fewer than the {folds} folds; simulate more repetitions")
     splitter = RepeatedStratifiedKFold(n_splits=folds, n_repeats=repeats, random_state=seed)
     splits = list(splitter.split(arr, labels))
-    jobs = (delayed(_one_fold)(estimator, arr, labels, tr, te, classes) for tr, te in splits)
-    results = Parallel(n_jobs=n_jobs)(tqdm(jobs, total=len(splits), desc="cross-validation",
-                                           unit="fold", disable=not progress))
+    results = [_one_fold(estimator, arr, labels, tr, te, classes)
+               for tr, te in tqdm(splits, desc="cross-validation", unit="fold",
+                                  disable=not progress)]
     accs = np.array([r[0] for r in results])
     conf = np.sum([r[1] for r in results], axis=0).astype(np.int64)
     return CVResult(float(accs.mean()), float(accs.std()), accs, conf, classes, folds, repeats)

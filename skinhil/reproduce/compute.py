@@ -308,7 +308,7 @@ def compute_mechanics(mechanics: Dynamics, readout: Readout,
     t0 = time.perf_counter()
     d = config.decoding
     sets = feature_sets(focus)
-    decoding = decode_feature_sets(sets, config.snrs_db, d, model, n_jobs=config.workers or -1,
+    decoding = decode_feature_sets(sets, config.snrs_db, d, model, workers=config.workers,
                                    progress=config.progress)
     seconds["decoding"] = time.perf_counter() - t0
 
