@@ -92,18 +92,22 @@ def describe(where: str, receiver: Receiver, offline: TrainingReport) -> str:
 
 
 def check_online_matches_offline(where: str, receiver: Receiver, decoder: WindowDecoder,
-                                  trained: TrainingReport) -> None:
-    """The issue's comparison at 10 dB over ``N_STIMULI`` stimuli (module docstring)."""
-    replay = stream_windows(N_STIMULI, SNR_DB, REST_S, seed=0, balanced=False,
+                                  trained: TrainingReport, snr_db: float = SNR_DB,
+                                  n_stimuli: int = N_STIMULI, against_cv: bool = True) -> None:
+    """The issue's comparison at ``snr_db`` over ``n_stimuli`` stimuli (module docstring);
+    ``against_cv``: also against the decoder's cross-validated accuracy."""
+    replay = stream_windows(n_stimuli, snr_db, REST_S, seed=0, balanced=False,
                             board_seed=BOARD_SEED)
     offline = stream_accuracy(decoder.decoder, replay)
     sb = receiver.scoreboard
     print(describe(where, receiver, trained)
           + f"; offline on the board's own stream {offline:.3f} ({replay.markers} stimuli, "
             f"{replay.misses} missed, {replay.false_alarms} false alarms)")
-    assert sb.scored >= N_STIMULI - 1
+    assert sb.scored >= n_stimuli - 1
     assert sb.accuracy > 3 / 9                        # well above chance (1/9): not vacuous
     assert abs(sb.accuracy - offline) <= TOLERANCE
+    if not against_cv:
+        return
     # two binomial estimates (100 online, 180 cross-validated stimuli at p ≈ 0.7) differ by
     # ~0.06 (one standard error) by chance alone: here the bound is the larger of the
     # issue's 5 points and two standard errors of the difference (docs/receiver.md)
@@ -141,9 +145,15 @@ def test_fault_injection_is_survived_and_accounted(decoder_inf, tmp_path):
     assert inj.corrupted_units > 0 and inj.units_dropped > 0
     assert link.link_errors == 0
     # exact by the protocol: every dropped or corrupted packet is one frame missing from
-    # the sequence numbers, and the events lost are those of the damaged packets
-    assert link.frames_lost == inj.units_dropped + inj.corrupted_units
-    assert sent.counters.frames_ok - link.frames_ok == link.frames_lost
+    # the sequence numbers once a later frame arrives (the damaged packets at the very end
+    # of the stream, if any, have none after them: they show as CRC errors only), and the
+    # events lost are those of the damaged packets
+    damaged = inj.units_dropped + inj.corrupted_units
+    last = inj.units_seen - 1
+    trailing = sum(1 for k, i in enumerate(reversed(inj.damaged_units)) if i == last - k)
+    assert len(inj.damaged_units) == damaged
+    assert link.frames_lost == damaged - trailing
+    assert sent.counters.frames_ok - link.frames_ok == damaged
     assert link.lost_on_link == sent.counters.events_decoded - link.events_decoded
     # graceful: errors only where data were lost — a stimulus is "hit" when its marker was
     # lost or an event of its scoring span (match window + decision window) was
@@ -181,17 +191,14 @@ def test_online_accuracy_through_vcan_matches_offline_at_10_db(decoder_10db):
 
 @pytest.mark.vcan
 def test_online_accuracy_through_vcan_matches_offline_without_noise():
-    """Without noise: 27 stimuli through vcan0 against the decoder's own
-    cross-validated accuracy, the same bound as at 10 dB."""
-    decoder, offline = train_decoder(math.inf, reps=5, seed=0, rest_s=REST_S)
-    n = 27
-    receiver = run_vcan(WindowDecoder(decoder), math.inf, n)
-    print(describe("vcan", receiver, offline))
-    sb = receiver.scoreboard
-    assert sb.scored >= n - 1
-    p = offline.accuracy
-    se = math.sqrt(p * (1 - p) * (1 / sb.scored + 1 / offline.markers))
-    assert abs(sb.accuracy - p) <= max(TOLERANCE, 2 * se)
+    """Without noise: 27 stimuli through vcan0 against the decoder on the board's own stream
+    simulated offline. Not against its cross-validated accuracy: that is 1.0 on its 45
+    training stimuli, a figure with no spread to bound by, while on the board's stream
+    (another sequence of the same stimuli) the same decoder errs now and then offline too."""
+    decoder, trained = train_decoder(math.inf, reps=5, seed=0, rest_s=REST_S)
+    receiver = run_vcan(WindowDecoder(decoder), math.inf, 27)
+    check_online_matches_offline("vcan", receiver, WindowDecoder(decoder), trained,
+                                 snr_db=math.inf, n_stimuli=27, against_cv=False)
 
 
 @pytest.mark.vcan

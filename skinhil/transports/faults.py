@@ -78,6 +78,8 @@ class InjectedFaults:
     """Frames (CAN) or chunks (serial) with at least one corrupted byte."""
     dropped_frames: list[Any] = field(default_factory=list)
     """CAN only: the frames dropped (so a test can count what they carried)."""
+    damaged_units: list[int] = field(default_factory=list)
+    """Indices (0-based, in the order seen) of the units dropped or corrupted."""
 
 
 class FaultyTransport(WrappedTransport[Any]):
@@ -147,16 +149,20 @@ class FaultyTransport(WrappedTransport[Any]):
             self.injected.units_seen += 1
             if self._rng.random() < p.drop_p:
                 self.injected.units_dropped += 1
+                self.injected.damaged_units.append(self.injected.units_seen - 1)
                 self.injected.bytes_dropped += len(unit.data if self.kind == "can" else unit)
                 if self.kind == "can":
                     self.injected.dropped_frames.append(unit)
                 continue
+            corrupted = self.injected.corrupted_units
             if self.kind == "can":
                 data = self._corrupt(bytes(unit.data))
                 if data != bytes(unit.data):
                     unit = replace(unit, data=data)
             else:
                 unit = self._corrupt(bytes(unit), keep_last=self._packets)
+            if self.injected.corrupted_units > corrupted:
+                self.injected.damaged_units.append(self.injected.units_seen - 1)
             copies = 1
             if self._rng.random() < p.duplicate_p:
                 self.injected.units_duplicated += 1
