@@ -35,7 +35,8 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "benchmarks")]
 
-from harness.lab import pty_pair, quick_model, wait_for_stderr  # noqa: E402
+from harness.host_link import linked_ptys  # noqa: E402
+from harness.lab import quick_model, wait_for_stderr  # noqa: E402
 from harness.serve import ServeProcess  # noqa: E402
 from machine import describe, load_average  # noqa: E402
 
@@ -152,7 +153,7 @@ def run(size: str, duration: float, config: str, model: Path, tmp: Path,
     outputs = bool(extra)
     if outputs and psp_sensors:
         extra += ["--psp-sensors", psp_sensors]
-    with pty_pair(tmp) as (board_end, host_end):
+    with linked_ptys(tmp) as (board_end, host_end):
         listen = ServeProcess("--port", str(host_end), "--baud", str(baud), "--model",
                               str(model), "--json", "--size", size, *extra, command="listen")
         page = lsl = None
