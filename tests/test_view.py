@@ -19,6 +19,8 @@ PAGE_STATE = """JSON.stringify({
   rows: document.querySelectorAll('#decisions tbody tr').length,
   events: view.lastLink && view.lastLink.events_decoded,
   counters: document.getElementById('counters').innerText,
+  answers: document.getElementById('answers-panel').hidden ? null
+           : document.getElementById('answers').innerText,
   confusion: document.getElementById('confusion').innerText,
   raster: (() => { const r = document.getElementById('raster').getBoundingClientRect();
                    return [r.left, r.top, r.width, r.height]; })()})"""
@@ -26,6 +28,20 @@ PAGE_STATE = """JSON.stringify({
 
 def _state(browser: Chromium) -> dict[str, Any]:
     return dict(json.loads(browser.evaluate(PAGE_STATE)))
+
+
+def _first_decisions(browser: Chromium, timeout_s: float = 60.0) -> dict[str, Any]:
+    """The page's state once it shows events and a decision (the page loads, the board
+    starts, its kernels load, it plays)."""
+    end = time.monotonic() + timeout_s
+    state: dict[str, Any] = {}
+    while time.monotonic() < end:
+        raw = browser.evaluate(PAGE_STATE)  # None until the page's script has run
+        state = json.loads(raw) if raw else {}
+        if state.get("events") and state.get("decisions"):
+            break
+        time.sleep(0.25)
+    return state
 
 
 def _client(url: str) -> dict[str, Any]:
@@ -40,7 +56,7 @@ def _png(path: Path) -> np.ndarray:
 
 
 def test_chromium_shows_the_live_view_of_a_board_on_a_pty(tmp_path: Path) -> None:
-    with listening(tmp_path, "--view", "0", "--psp-sensors", "0,60,120,200",
+    with listening(tmp_path, "--view", "0", "--psp-sensors", "0,60,120,200", "--answer",
                    ready="live view at") as (listen, board_end):
         url = wait_for_stderr(listen, "live view at").split()[-1]
         assert url.startswith("http://127.0.0.1:")
@@ -49,8 +65,7 @@ def test_chromium_shows_the_live_view_of_a_board_on_a_pty(tmp_path: Path) -> Non
         try:
             with Chromium() as browser:
                 browser.open(url)
-                time.sleep(2.5)
-                first = _state(browser)
+                first = _first_decisions(browser)
                 t0 = time.monotonic()
                 time.sleep(3.0)
                 second = _state(browser)
@@ -77,6 +92,10 @@ def test_chromium_shows_the_live_view_of_a_board_on_a_pty(tmp_path: Path) -> Non
     assert second["decisions"] > first["decisions"] or second["rows"] > first["rows"], second
     assert "events decoded" in second["counters"] and "FIFO full" in second["counters"]
     assert "120deg_0.5N" in second["confusion"]
+    # the receiver answers the board (--answer): its DECISIONs counted, ACKed by the board
+    answered = dict(line.split("\t") for line in second["answers"].splitlines())
+    assert int(answered["DECISIONs sent"]) > 0 and int(answered["ACKed"]) > 0, answered
+    assert int(answered["NACKed"]) == 0 and int(answered["not sent"]) == 0, answered
     assert reported["state"]["updates"] > 0
     # the raster draws: spike dots on its black canvas
     img = _png(shot)

@@ -168,14 +168,15 @@ def run(args: argparse.Namespace) -> int:
                          str(score)], args.duration_s, args.snr_db, args.seed, DEMO_REST_S)
     names = class_names()
     receiver = Receiver(link, decoder)
-    receiver.add_listener(DecisionAnswerer(receiver))
+    answerer = DecisionAnswerer(receiver)
+    receiver.add_listener(answerer)
     if not args.quiet:
         receiver.add_listener(LivePrinter(receiver, False, names))
     print(f"board: {' '.join(cmd[1:])}; mechanics {SkinParams().describe_mechanics()}\n"
           f"receiver: {link.name}, model {model_path}", flush=True)
     t_link = time.monotonic()
     try:
-        with lab_outputs(args, receiver, names, PAPER_SIZE, "demo"):
+        with lab_outputs(args, receiver, names, PAPER_SIZE, "demo", answerer.as_dict):
             status, out, err = run_against_board(receiver, cmd)
     except KeyboardInterrupt:  # stopped: the figures so far
         print()

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 from skinhil.errors import ConfigError
 from skinhil.lsl import LslOutlets, require_pylsl
@@ -59,16 +59,18 @@ def check_lab_outputs(args: argparse.Namespace, size: MeshSize) -> None:
 
 @contextlib.contextmanager
 def lab_outputs(args: argparse.Namespace, receiver: Receiver, names: dict[int, str],
-                size: MeshSize, command: str) -> Iterator[None]:
+                size: MeshSize, command: str,
+                answers: Callable[[], dict[str, int]] | None = None) -> Iterator[None]:
     """While the body runs, the view and the LSL outlets asked for by ``args`` hear
-    ``receiver``; the view's address goes to stderr."""
+    ``receiver`` (the view also shows ``answers()``, the receiver's DECISION counters, when
+    it answers the board); the view's address goes to stderr."""
     p = SkinParams(size=size)
     mesh = build_mesh(p.spacing_m, p.layer_gap_m, p.size)
     server = outlets = None
     try:
         if args.view is not None:
             host, port = parse_address(args.view)
-            feed = ViewFeed(receiver, mesh, names, args.psp_sensors)
+            feed = ViewFeed(receiver, mesh, names, args.psp_sensors, answers)
             server = ViewServer(feed, host, port).start()
             receiver.add_listener(feed)
             print(f"skinhil {command}: live view at {server.url}", file=sys.stderr, flush=True)

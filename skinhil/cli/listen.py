@@ -299,7 +299,8 @@ def listen_one(args: argparse.Namespace, receiver: Receiver, names: dict[int, st
         print(f"skinhil listen: {describe_transport(args)}, model {args.model}; Ctrl-C stops",
               file=sys.stderr, flush=True)
     t0 = time.monotonic()
-    with lab_outputs(args, receiver, names, args.size, "listen"):
+    with lab_outputs(args, receiver, names, args.size, "listen",
+                     answerer.as_dict if answerer is not None else None):
         listen_until_stopped(args, receiver, lambda: receiver.link_report().as_dict(),
                              lambda: False)
     info = summary(receiver, time.monotonic() - t0)

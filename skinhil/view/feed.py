@@ -15,8 +15,9 @@ every 0.1 s) drains it into one JSON-ready message:
 - ``score``: the running confusion matrix (rows true, columns decided), accuracy, misses,
   false alarms; ``link``: the receiver's link and loss counters; ``board``: the board's
   last status (late ticks, drops by reason);
-- ``dut``: present when a DUT scoreboard source is given (a decoder under test scored by
-  the board): its figures as given, shown in their own panel.
+- ``answers``: present when the receiver answers the board (``listen --answer``, ``demo``):
+  its DECISIONs sent, ACKed, NACKed and not sent, shown in their own panel (the board's
+  verdicts on them are its scoreboard: ``serve``'s status line and ``--score``).
 
 Nothing here copies the session: each message holds only what arrived since the last one.
 """
@@ -64,14 +65,15 @@ class ViewFeed(ReceiverListener):
 
     def __init__(self, receiver: Receiver, mesh: Mesh, names: dict[int, str],
                  psp_sensors: Sequence[int] | None = None,
-                 dut_source: Callable[[], dict[str, Any] | None] | None = None) -> None:
+                 answers: Callable[[], dict[str, int]] | None = None) -> None:
         self.receiver = receiver
         self.names = names
         self.n_channels = int(mesh.springs.shape[0])
         sensors = (default_trace_sensors(self.n_channels) if psp_sensors is None
                    else [int(s) for s in psp_sensors])
         self.traces = PspTraces(sensors, self.n_channels)
-        self.dut_source = dut_source
+        self.answers = answers
+        """The receiver's DECISION counters (``DecisionAnswerer.as_dict``), if it answers."""
         self.config = {
             "type": "config", "n_channels": self.n_channels,
             "names": {str(k): v for k, v in names.items()},
@@ -169,10 +171,8 @@ class ViewFeed(ReceiverListener):
         st = self.receiver.last_status
         msg["board"] = None if st is None else {
             k: v for k, v in dataclasses.asdict(st).items() if isinstance(v, int | bool)}
-        if self.dut_source is not None:
-            dut = self.dut_source()
-            if dut is not None:
-                msg["dut"] = dut
+        if self.answers is not None:
+            msg["answers"] = self.answers()
         return msg
 
     def _score(self) -> dict[str, Any]:

@@ -5,6 +5,9 @@
 const WINDOW_S = 10;          // board seconds across the raster
 const PSP_WINDOW_S = 5;       // board seconds across the PSP traces
 const MAX_DECISIONS = 18;     // rows of the decision table
+const ANSWERS = [
+  ["sent", "DECISIONs sent"], ["acked", "ACKed"], ["nacked", "NACKed"], ["unsent", "not sent"],
+];
 const COUNTERS = [
   ["events decoded", (m) => m.link.events_decoded],
   ["frames ok", (m) => m.link.frames_ok],
@@ -211,9 +214,8 @@ function onUpdate(m) {
   showDecisions(m);
   showConfusion(m.score);
   showTable("counters", COUNTERS.map(([k, f]) => [k, f(m)]));
-  const dutPanel = document.getElementById("dut-panel");
-  dutPanel.hidden = !m.dut;
-  if (m.dut) showTable("dut", Object.entries(m.dut));
+  document.getElementById("answers-panel").hidden = !m.answers;
+  if (m.answers) showTable("answers", ANSWERS.map(([k, label]) => [label, m.answers[k]]));
   for (const e of m.link_errors) document.getElementById("status").textContent = "link error: " + e;
   document.getElementById("clock").textContent = `board time ${(m.t_board_us * 1e-6).toFixed(2)} s`;
   view.lastLink = m.link;
