@@ -15,6 +15,7 @@ a second one raises :class:`Stopped` at once, after saying what was left undrain
 from __future__ import annotations
 
 import contextlib
+import logging  # noqa: F401 - imported before the fork hooks below, so its own run inside them
 import os
 import signal
 import sys
@@ -29,6 +30,24 @@ STOP_SIGNALS: tuple[signal.Signals, ...] = (signal.SIGINT, signal.SIGTERM)
 
 _received: list[int] = []
 _deferred: list[bool] = [False]
+_forking: list[bool] = [False]
+
+
+def _fork_begins() -> None:
+    _forking[0] = True
+
+
+def _fork_ends() -> None:
+    _forking[0] = False
+
+
+# A fork (a worker pool starting a process) runs Python callbacks registered with
+# os.register_at_fork (logging's lock handling) from C: an exception raised there is printed
+# as "Exception ignored" and lost. These hooks, registered after logging's, run first before
+# the fork and last after it, so a stop signal in between is delivered again once it is over.
+os.register_at_fork(before=_fork_begins, after_in_parent=_fork_ends,
+                    after_in_child=_fork_ends)
+_FORK_HOOKS = (_fork_begins.__code__, _fork_ends.__code__)
 
 
 class Stopped(KeyboardInterrupt):
@@ -53,7 +72,10 @@ RESEND_S = 0.02
 
 def _in_native_callback(frame: FrameType | None) -> bool:
     """Whether ``frame`` runs in code whose exceptions are lost: a callback from native code
-    (:data:`NATIVE_CALLBACKS`) or a finalizer (``__del__``) anywhere up its stack."""
+    (:data:`NATIVE_CALLBACKS`), a fork's callbacks, or a finalizer (``__del__``) anywhere up
+    its stack."""
+    if _forking[0] or (frame is not None and frame.f_code in _FORK_HOOKS):
+        return True
     while frame is not None:
         code = frame.f_code
         if code.co_name == "__del__" or any(f"{os.sep}{pkg}{os.sep}" in code.co_filename
