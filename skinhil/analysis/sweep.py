@@ -153,10 +153,6 @@ def _evaluate(args: tuple[SkinParams, float]) -> InformationMeasures:
     return evaluate_point(*args)
 
 
-def _local(tasks: list[tuple[SkinParams, float]], workers: int, bar: tqdm) -> list:
-    return process_map(_evaluate, tasks, workers, on_result=lambda _: bar.update())
-
-
 def _dask(tasks: list[tuple[SkinParams, float]], scheduler: str, bar: tqdm,
           timeout_s: float) -> list:
     try:
@@ -192,7 +188,7 @@ def run_sweep(spec: SweepSpec, workers: int | None = None, scheduler: str | None
         if scheduler:
             results = _dask(tasks, scheduler, bar, connect_timeout_s)
         else:
-            results = _local(tasks, min(n_workers, len(tasks)), bar)
+            results = process_map(_evaluate, tasks, n_workers, on_result=lambda _: bar.update())
     values = {name: np.array([getattr(r, name) for r in results]).reshape(spec.shape)
               for name in MEASURES}
     return SweepResult(spec, values, time.perf_counter() - start)

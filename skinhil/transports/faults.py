@@ -122,6 +122,7 @@ class FaultyTransport(WrappedTransport[Any]):
         arr[hit] ^= masks
         self.injected.bytes_corrupted += int(hit.sum())
         self.injected.corrupted_units += 1
+        self.injected.damaged_units.append(self.injected.units_seen - 1)
         return arr.tobytes()
 
     @property
@@ -154,15 +155,12 @@ class FaultyTransport(WrappedTransport[Any]):
                 if self.kind == "can":
                     self.injected.dropped_frames.append(unit)
                 continue
-            corrupted = self.injected.corrupted_units
             if self.kind == "can":
                 data = self._corrupt(bytes(unit.data))
                 if data != bytes(unit.data):
                     unit = replace(unit, data=data)
             else:
                 unit = self._corrupt(bytes(unit), keep_last=self._packets)
-            if self.injected.corrupted_units > corrupted:
-                self.injected.damaged_units.append(self.injected.units_seen - 1)
             copies = 1
             if self._rng.random() < p.duplicate_p:
                 self.injected.units_duplicated += 1
