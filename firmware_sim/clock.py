@@ -21,6 +21,8 @@ import time
 
 import numpy as np
 
+from skinhil.lateness import LatenessLog
+
 log = logging.getLogger(__name__)
 
 _PR_SET_TIMERSLACK = 29
@@ -73,9 +75,7 @@ class TickClock:
         self.index = 0
         """Index of the next tick to run."""
         self.deadline_misses = 0
-        self.max_lateness_s = 0.0
-        self._lateness = np.zeros(history)
-        self._n = 0
+        self._late = LatenessLog(history)
 
     def start(self, t0: float | None = None) -> None:
         """Start the clock: tick 0 is due ``tick_s`` after ``t0`` (default now)."""
@@ -97,11 +97,7 @@ class TickClock:
                 break
             if left > self.spin_s:
                 time.sleep(min(left - self.spin_s, stop_check_s))
-        late = now - due
-        self._lateness[self._n % len(self._lateness)] = late
-        self._n += 1
-        if late > self.max_lateness_s:
-            self.max_lateness_s = late
+        self._late.record(now - due)
         return self.index
 
     def done(self) -> None:
@@ -121,22 +117,17 @@ class TickClock:
     @property
     def ticks(self) -> int:
         """Ticks measured so far."""
-        return self._n
+        return self._late.count
+
+    @property
+    def max_lateness_s(self) -> float:
+        """The largest lateness (s) of any tick so far."""
+        return self._late.max_s
 
     def lateness_s(self, last: int | None = None) -> np.ndarray:
         """The recorded latenesses (s), oldest first: all kept (at most ``history``), or
         only the ``last`` ones."""
-        size = len(self._lateness)
-        n = min(self._n, size if last is None else min(int(last), size))
-        if n <= 0:
-            return self._lateness[:0].copy()
-        end = self._n % size
-        if end == 0 and self._n:
-            end = size
-        start = end - n
-        if start >= 0:
-            return self._lateness[start:end].copy()
-        return np.concatenate([self._lateness[start:], self._lateness[:end]])
+        return self._late.lateness_s(last)
 
     def lateness_percentiles_ms(self, qs: tuple[float, ...] = (50, 99),
                                 last: int | None = None) -> dict[str, float]:
@@ -145,7 +136,4 @@ class TickClock:
 
         Over all 60 000 ticks of a minute this takes about 8 ms: a live display inside the
         tick loop must use ``last`` (1000 ticks: tens of µs)."""
-        lat = self.lateness_s(last)
-        out = {f"p{q:g}": float(np.percentile(lat, q)) * 1e3 if lat.size else 0.0 for q in qs}
-        out["max"] = self.max_lateness_s * 1e3
-        return out
+        return self._late.percentiles_ms(qs, last)

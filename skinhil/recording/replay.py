@@ -26,6 +26,7 @@ from protocols.constants import DEFAULT_STEP_US
 from protocols.resequence import can_frame_with_seq, serial_packet_with_seq
 from protocols.warm_up import exercise_codecs
 from skinhil.errors import ConfigError
+from skinhil.lateness import LatenessLog
 from skinhil.recording.recordings import Recording
 from skinhil.recording.replay_stream import CanReplayStream, SerialReplayStream
 from skinhil.scoring import DecisionScoreboard, answer_reason
@@ -114,8 +115,7 @@ class Replayer:
         self.board_time_us = 0
         """The latest board time (µs) the played stream carried (events, statuses, markers):
         what a host command received now is stamped with."""
-        self._lateness = np.zeros(LATENESS_WINDOW)
-        self._late_max = 0.0
+        self._late = LatenessLog(LATENESS_WINDOW)
         self._units = 0
         self._wire_units = 0
 
@@ -209,9 +209,7 @@ class Replayer:
     def lateness_s(self) -> np.ndarray:
         """Each unit's send start minus its due time (s), in play order, for the last
         :data:`LATENESS_WINDOW` units."""
-        n = min(self._units, LATENESS_WINDOW)
-        start = self._units % LATENESS_WINDOW if self._units > LATENESS_WINDOW else 0
-        return np.roll(self._lateness, -start)[:n]
+        return self._late.lateness_s()
 
     def run(self, stop: threading.Event | None = None) -> ReplaySummary:
         """Play the whole recording (or until ``stop`` is set); return what was done.
@@ -238,18 +236,13 @@ class Replayer:
             last_ts = ts
             due = wall0 + (ts - first_ts) / self.speed
             self._wait(due, stop)
-            late = time.monotonic() - due
-            self._lateness[self._units % LATENESS_WINDOW] = late
-            self._late_max = max(self._late_max, late)
+            self._late.record(time.monotonic() - due)
             self._units += 1
             self._poll_commands()
             self._play(self._stream.out(unit), stop)
         self._poll_commands()
         self._play(self._stream.flush(), stop)
-        window = self.lateness_s() * 1e3
-        pct = ({"p50": float(np.percentile(window, 50)), "p99": float(np.percentile(window, 99)),
-                "max": self._late_max * 1e3} if window.size else
-               {"p50": 0.0, "p99": 0.0, "max": 0.0})
+        pct = self._late.percentiles_ms()
         return ReplaySummary(
             units=self._units, wire_units=self._wire_units,
             recorded_s=(last_ts - first_ts) if first_ts is not None else 0.0,
