@@ -116,18 +116,18 @@ def measure(size: tuple[int, int], threads: int, snr_db: float, seconds: float,
     encoder = protocols.SerialEncoder(step_us=int(round(DT_S * 1e6)), n_channels=model.n_springs)
     counts = {"events": 0}
 
-    def tick() -> tuple[np.ndarray, np.ndarray]:
+    def tick() -> np.ndarray:
         first = sensor.step_index
-        t_s = (first + np.arange(STEPS_PER_TICK)) * DT_S
-        forces = timeline.forces(t_s)
-        if pipeline is None:
-            _, spikes = sensor.advance(forces)
+        if pipeline is None:  # as Board.tick: the schedule's forces made in the kernel
+            schedule = timeline.schedule_for(first * DT_S, (first + STEPS_PER_TICK - 1) * DT_S)
+            _, spikes = sensor.advance_schedule(schedule, STEPS_PER_TICK)
         else:
-            spikes, first = pipeline.advance(forces)
+            spikes, first = pipeline.advance(
+                timeline.forces((first + np.arange(STEPS_PER_TICK)) * DT_S))
         events = sensor.events(spikes, first)
         encoder.events(events, int(round((first + len(spikes)) * DT_S * 1e6)))
         counts["events"] += len(events)
-        return forces, spikes
+        return spikes
 
     for _ in range(20):  # compile, and let the random schedule start
         tick()
@@ -143,9 +143,10 @@ def measure(size: tuple[int, int], threads: int, snr_db: float, seconds: float,
         pipeline.flush()
 
     # the parts, each alone on a block the loop produced while a stimulus pressed
-    forces, spikes = tick()
+    forces = np.zeros(1)
     while not forces.any():
-        forces, spikes = tick()
+        forces = timeline.forces((sensor.step_index + np.arange(STEPS_PER_TICK)) * DT_S)
+        spikes = tick()
     stepper = model.stepper(DT_S)
     springs = stepper.advance(forces)
     mech_us = _best_per_tick(lambda: stepper.advance(forces), seconds / 4, repeats)

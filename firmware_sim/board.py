@@ -371,11 +371,13 @@ class Board:
         """Run one publish tick (see module docstring for the order)."""
         cfg = self.config
         first = self.sensor.step_index
-        forces = self.timeline.forces((first + np.arange(cfg.steps_per_tick)) * cfg.dt_s)
-        if self.pipeline is None:
-            _, spikes = self.sensor.advance(forces)
+        n = cfg.steps_per_tick
+        if self.pipeline is None:  # the schedule's forces made inside the compiled step
+            schedule = self.timeline.schedule_for(first * cfg.dt_s, (first + n - 1) * cfg.dt_s)
+            _, spikes = self.sensor.advance_schedule(schedule, n)
         else:
-            spikes, first = self.pipeline.advance(forces)
+            spikes, first = self.pipeline.advance(
+                self.timeline.forces((first + np.arange(n)) * cfg.dt_s))
         if not self._publish(spikes, first):
             self._try_reconnect()
             return
@@ -524,7 +526,7 @@ class Board:
         n = self.config.steps_per_tick
         t_s = np.arange(n) * self.config.dt_s
         if self.pipeline is None:
-            self.sensor.advance(self.timeline.forces(t_s))
+            self.sensor.advance_schedule(self.timeline.schedule_for(t_s[0], t_s[-1]), n)
         else:
             for _ in range(2):  # the second call starts the neurons on the first block
                 self.pipeline.advance(self.timeline.forces(t_s))

@@ -96,6 +96,31 @@ def test_ziggurat_is_standard_normal() -> None:
         assert abs(tail - mean) < 4 * np.sqrt(mean)
 
 
+def test_fast_path_draws_the_normals_of_the_test_spelled_out() -> None:
+    # the pinned contract of the generator: fill_normal_pairs' one-compare fast path gives,
+    # bit for bit, the normals and the stream position of Marsaglia & Tsang's test per half
+    # (_finish_pair on every word), over 600,000 pairs (~5,400 through the slow path)
+    import numba
+
+    from skinhil.model.rng import _finish_pair, fill_normal_pairs, xoshiro_step
+
+    @numba.njit
+    def spelled_out(state: np.ndarray, first: np.ndarray, second: np.ndarray) -> None:
+        for i in range(first.shape[0]):
+            w, state[0], state[1], state[2], state[3] = xoshiro_step(
+                state[0], state[1], state[2], state[3])
+            first[i], second[i] = _finish_pair(state, w & np.uint64(0xFFFFFFFF),
+                                               w >> np.uint64(32))
+
+    fast, slow = seed_states(5, 1)[0], seed_states(5, 1)[0]
+    got, want = np.empty((2, 200_000)), np.empty((2, 200_000))
+    for _ in range(3):
+        fill_normal_pairs(fast, got[0], got[1])
+        spelled_out(slow, want[0], want[1])
+        assert np.array_equal(got, want)
+        assert np.array_equal(fast, slow)
+
+
 def test_snr_inf_is_deterministic_and_seed_reproducible() -> None:
     force = np.random.default_rng(1).uniform(-0.05, 0.1, (2000, 20))
     a = NeuronPopulation(20, seed=1).step_block(force, 1e-4)

@@ -13,7 +13,9 @@ real time, 1.5 G for the 450-trial benchmark), so the kernels draw their own:
   multiply); the rest go through the wedge or tail test (~40 ns). Marsaglia & Tsang's 128
   layers send 2.8 % there, which made a pair 1.5x dearer (3.55 against 2.32 ns);
 - :func:`fill_normal_pairs` draws a row of pairs with the state kept in registers
-  (:func:`xoshiro_step`), which a per-draw array state would chain through memory.
+  (:func:`xoshiro_step`), which a per-draw array state would chain through memory, and tests
+  both halves of a word with one unsigned compare each (:data:`ZIG_LOW`, :data:`ZIG_SPAN`):
+  1.78 ns per pair against 2.08 for the test spelled out (34x34 skin, 17,866 pairs a row).
 """
 
 from __future__ import annotations
@@ -184,27 +186,48 @@ def _finish_pair(spill: np.ndarray, lo: np.uint64,
     return z1, z2
 
 
+def _fast_windows(kn: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    # the fast path's test |value| < kn[layer] on the unsigned 22-bit field u = value + 2^21,
+    # as one unsigned compare: u − low[layer] < span[layer] with low = 2^21 − kn + 1 and
+    # span = 2·kn − 1 (0 for the top layer, kn = 0: never taken); a u below low wraps past
+    # every span (numba subtracts two uint32 as uint64)
+    low = (_VALUE_HALF - kn + 1).astype(np.uint32)
+    span = np.where(kn > 0, 2 * kn - 1, 0).astype(np.uint32)
+    return low, span
+
+
+ZIG_LOW, ZIG_SPAN = _fast_windows(ZIG_KN)
+"""Per layer, the fast path's window on the unsigned 22-bit field (uint32, :func:`_fast_windows`)."""
+
+
 @numba.njit(cache=True)
 def fill_normal_pairs(state: np.ndarray, first: np.ndarray,
                       second: np.ndarray) -> None:  # pragma: no cover - compiled
     """Fill ``first[i], second[i]`` with pair ``i`` of standard normals from the stream
     ``state`` (4 uint64, updated): one 64-bit word per pair, its low half for ``first``, its
     high half for ``second``, and, for the 0.9 % of pairs that miss the fast path, further
-    words out of line."""
+    words out of line.
+
+    The fast path is :func:`_layer_and_value`'s test ``|value| < ZIG_KN[layer]`` done on
+    32-bit halves as one unsigned compare per half (:data:`ZIG_LOW`, :data:`ZIG_SPAN`) and both
+    halves' results written before the test: the same normals as the test spelled out
+    (tests/test_core_neurons.py), in 15 % less time."""
     spill = np.empty(4, dtype=np.uint64)
+    low, span, wn = ZIG_LOW, ZIG_SPAN, ZIG_WN
+    mask = np.uint32(2 * _VALUE_HALF - 1)
+    shift = np.uint32(32 - LAYER_BITS)
     s0, s1, s2, s3 = state[0], state[1], state[2], state[3]
     for i in range(first.shape[0]):
         w, s0, s1, s2, s3 = xoshiro_step(s0, s1, s2, s3)
-        lo = w & np.uint64(0xFFFFFFFF)
-        hi = w >> np.uint64(32)
-        iz1, hz1 = _layer_and_value(lo)
-        iz2, hz2 = _layer_and_value(hi)
-        if abs(hz1) < ZIG_KN[iz1] and abs(hz2) < ZIG_KN[iz2]:
-            first[i] = hz1 * ZIG_WN[iz1]
-            second[i] = hz2 * ZIG_WN[iz2]
-        else:
+        lo = np.uint32(w & np.uint64(0xFFFFFFFF))
+        hi = np.uint32(w >> np.uint64(32))
+        iz1, u1 = lo >> shift, lo & mask
+        iz2, u2 = hi >> shift, hi & mask
+        first[i] = (np.int32(u1) - np.int32(_VALUE_HALF)) * wn[iz1]
+        second[i] = (np.int32(u2) - np.int32(_VALUE_HALF)) * wn[iz2]
+        if not (((u1 - low[iz1]) < span[iz1]) & ((u2 - low[iz2]) < span[iz2])):
             spill[0], spill[1], spill[2], spill[3] = s0, s1, s2, s3
-            first[i], second[i] = _finish_pair(spill, lo, hi)
+            first[i], second[i] = _finish_pair(spill, np.uint64(lo), np.uint64(hi))
             s0, s1, s2, s3 = spill[0], spill[1], spill[2], spill[3]
     state[0], state[1], state[2], state[3] = s0, s1, s2, s3
 

@@ -24,7 +24,12 @@ import numpy as np
 from skinhil.errors import ConfigError
 from skinhil.events import EVENT_DTYPE
 from skinhil.model.geometry import format_size
-from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, LeapfrogOperands, leapfrog_kernel
+from skinhil.model.mechanics.leapfrog import (
+    LeapfrogMechanics,
+    LeapfrogOperands,
+    by_component,
+    leapfrog_kernel,
+)
 from skinhil.model.mechanics.linear import LinearMechanics, ModalOperands, _advance_modal_kernel
 from skinhil.model.neurons import (
     IzhikevichParams,
@@ -68,8 +73,9 @@ def _scheduled_modal_sensor_kernel(
 def _leapfrog_sensor_kernel(forces: np.ndarray, springs: np.ndarray, spikes: np.ndarray,
                             dt_s: float, substeps: int, mechanics: LeapfrogOperands,
                             neurons: KernelOperands) -> None:  # pragma: no cover - compiled
-    # forces (n, n_masses, 3) N → springs (n, n_springs) N → spikes over steps of dt_s (s);
-    # mechanics is LeapfrogMechanics.operands, neurons NeuronPopulation.kernel_operands()
+    # forces (n, 3, n_masses) N by component → springs (n, n_springs) N → spikes over steps
+    # of dt_s (s); mechanics is LeapfrogMechanics.operands, neurons
+    # NeuronPopulation.kernel_operands()
     leapfrog_kernel(forces, springs, dt_s, substeps, *mechanics)
     n_steps, n = springs.shape
     _izhikevich_kernel(springs.reshape(n_steps, 1, n), dt_s * 1e3,
@@ -85,8 +91,8 @@ def _scheduled_leapfrog_sensor_kernel(
     # t_offset_s (s), then _leapfrog_sensor_kernel; schedule is Schedule.kernel_operands
     n_steps = springs.shape[0]
     t = (first_step + np.arange(n_steps)) * dt_s - t_offset_s
-    forces = np.zeros((n_steps, n_masses, 3))
-    add_schedule_forces(forces, t, *schedule)
+    forces = np.zeros((n_steps, 3, n_masses))
+    add_schedule_forces(forces.transpose(0, 2, 1), t, *schedule)
     _leapfrog_sensor_kernel(forces, springs, spikes, dt_s, substeps, mechanics, neurons)
 
 
@@ -142,7 +148,7 @@ class SkinSensor:
         if self._modal is not None:
             springs, spikes = self._advance_modal(forces_n)
         elif self._leapfrog is not None:
-            forces = np.ascontiguousarray(forces_n, dtype=np.float64)
+            forces = by_component(forces_n)
             springs, spikes = self._outputs(forces.shape[0])
             _leapfrog_sensor_kernel(forces, springs, spikes, self.dt_s,
                                     self._leapfrog.substeps, self._leapfrog.operands,

@@ -175,12 +175,20 @@ class Timeline:
             self._entries = keep
             self._schedule = Schedule(tuple(keep))
 
+    def schedule_for(self, first_s: float, last_s: float) -> Schedule:
+        """The schedule that holds every stimulus of board times ``first_s`` .. ``last_s``
+        (s): :attr:`schedule`, first extended when the default schedule gets close to its
+        end (forgetting what ended before ``first_s``). The board's tick passes it to the
+        model's compiled step (:meth:`skinhil.model.sensor.SkinSensor.advance_schedule`)."""
+        if self.mode == self.SCHEDULE_RANDOM and last_s > self._random_end_s - _EXTEND_LATE_S:
+            self._forget_before(first_s)
+            self._extend_random()
+        return self._schedule
+
     def forces(self, t_s: np.ndarray) -> np.ndarray:
         """External force on every mass at board times ``t_s`` (s): (len, n_masses, 3) N."""
-        if (self.mode == self.SCHEDULE_RANDOM and t_s.size
-                and t_s[-1] > self._random_end_s - _EXTEND_LATE_S):
-            self._forget_before(float(t_s[0]))
-            self._extend_random()
+        if t_s.size:
+            self.schedule_for(float(t_s[0]), float(t_s[-1]))
         return self._schedule.force_at(t_s, self.size)
 
     def markers_before(self, t_end_us: int) -> list[MarkerEvent]:

@@ -162,8 +162,8 @@ def board_stream(duration_s: float, snr_db: float, rest_s: float, seed: int,
     block = max(1, int(round(BLOCK_S / dt_s)))
     for first in range(0, n_total, block):
         n = min(block, n_total - first)
-        t_s = (first + np.arange(n)) * dt_s
-        _, spikes = sensor.advance(timeline.forces(t_s))
+        _, spikes = sensor.advance_schedule(
+            timeline.schedule_for(first * dt_s, (first + n - 1) * dt_s), n)
         end_us = (first + n) * dt_us
         yield sensor.events(spikes, first), timeline.markers_before(end_us), end_us
 

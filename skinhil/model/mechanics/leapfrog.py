@@ -142,24 +142,16 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
                     inv_m: float, q: np.ndarray, v: np.ndarray, w: np.ndarray,
                     f_prev: np.ndarray, acc: np.ndarray,
                     scratch: np.ndarray) -> None:  # pragma: no cover - compiled
-    """forces (n, n_masses, 3) N held per step of ``dt`` (s), each in ``substeps`` leapfrog
-    steps → out (n, n_springs) N; the operands after ``substeps`` are
+    """forces (n, 3, n_masses) N, by component, held per step of ``dt`` (s), each in
+    ``substeps`` leapfrog steps → out (n, n_springs) N; the operands after ``substeps`` are
     :attr:`LeapfrogMechanics.operands`."""
     h = dt / substeps
     qx, qy, qz = q[0], q[1], q[2]
     wx, wy, wz = w[0], w[1], w[2]
     gx, gy, gz = acc[0], acc[1], acc[2]
     sig_s, fx_s, fy_s, fz_s = scratch[0], scratch[1], scratch[2], scratch[3]
-    n_masses = q.shape[1]
-    # the input on the moving masses, contiguous per component (no other is read)
-    by_component = np.empty((forces.shape[0], 3, n_masses))
     for step in range(forces.shape[0]):
-        for mr in range(moving.shape[0]):
-            for m in range(moving[mr, 0], moving[mr, 0] + moving[mr, 1]):
-                for a in range(3):
-                    by_component[step, a, m] = forces[step, m, a]
-    for step in range(forces.shape[0]):
-        fs = by_component[step]
+        fs = forces[step]  # only the moving masses' input is read
         row = out[step]
         for s in still:  # between fixed masses: never stretched
             row[s] = 0.0
@@ -220,6 +212,12 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
                         va[m] = vm if abs(vm) > TINY else 0.0
                         qa[m] = qm if abs(qm) > TINY else 0.0
                         wa[m] = wm if abs(wm) > TINY else 0.0
+
+
+def by_component(forces_n: np.ndarray) -> np.ndarray:
+    """External forces (n, n_masses, 3) N as :func:`leapfrog_kernel` reads them: (n, 3,
+    n_masses), contiguous per component."""
+    return np.ascontiguousarray(np.asarray(forces_n, dtype=np.float64).transpose(0, 2, 1))
 
 
 def fastest_rates(mesh: Mesh, mass_kg: float, stiffness_n_per_m: float,
@@ -294,7 +292,7 @@ class LeapfrogMechanics:
     def advance(self, forces_n: np.ndarray) -> np.ndarray:
         """Step ``len(forces_n)`` steps; ``forces_n`` is (n, n_masses, 3) N; returns
         (n, n_springs) N, row ``j`` the spring forces at the start of step ``j``."""
-        forces = np.ascontiguousarray(forces_n, dtype=np.float64)
+        forces = by_component(forces_n)
         out = np.empty((forces.shape[0], self.n_springs))
         leapfrog_kernel(forces, out, self.dt_s, self.substeps, *self.operands)
         return out
