@@ -197,7 +197,7 @@ def _fast_windows(kn: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 ZIG_LOW, ZIG_SPAN = _fast_windows(ZIG_KN)
-"""Per layer, the fast path's window on the unsigned 22-bit field (uint32, :func:`_fast_windows`)."""
+"""Per layer, the fast path's window on the unsigned 22-bit field (:func:`_fast_windows`)."""
 
 
 @numba.njit(cache=True)
