@@ -189,6 +189,31 @@ def _noise_and_threshold(v: np.ndarray, u: np.ndarray, zv: np.ndarray, zu: np.nd
         u[i] = uu + d if fired else uu
 
 
+@numba.njit(inline="always")
+def _diffusion_block(v: np.ndarray, u: np.ndarray, current: np.ndarray, zv: np.ndarray,
+                     zu: np.ndarray, stream: np.ndarray, sigma: float, dt_ms: float,
+                     a: float, b: float, c: float, d: float, gain: float, v_peak: float,
+                     spikes: np.ndarray) -> None:  # pragma: no cover - compiled
+    # steps 1-3 for one channel block under the diffusion noise: its normals drawn from
+    # stream into zv, zu (sigma > 0), then one pass per channel with the arithmetic of
+    # _euler_step and _noise_and_threshold, in their order (so the same numbers), while the
+    # block's normals are still in the first-level cache
+    n = v.shape[0]
+    if sigma > 0.0:
+        fill_normal_pairs(stream, zv[:n], zu[:n])
+    for i in range(n):
+        vv = v[i]
+        uu = u[i]
+        vn = vv + dt_ms * (0.04 * vv * vv + 5.0 * vv + 140.0 - uu + gain * current[i])
+        un = uu + dt_ms * a * (b * vv - uu)
+        vn = vn + sigma * zv[i]
+        un = un + sigma * zu[i]
+        fired = vn >= v_peak
+        spikes[i] = fired
+        v[i] = c if fired else vn
+        u[i] = un + d if fired else un
+
+
 @numba.njit(cache=True, fastmath=False, nogil=True)
 def _izhikevich_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray, v: np.ndarray,
                        u: np.ndarray, a: float, b: float, c: float, d: float, gain: float,
@@ -198,27 +223,36 @@ def _izhikevich_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray, v:
     # n_batch, n); the rest are NeuronPopulation.kernel_operands()
     n_steps, n_batch, n = spikes.shape
     shared_input = current.shape[1] == 1
+    sigma_step = math.sqrt(noise_var * dt_ms / ref_step_ms)  # diffusion σ per step (mV)
+    if not measured:  # block by block: each block's normals used while in cache
+        zb = np.zeros((2, min(n, CHANNEL_BLOCK)))  # zero without noise
+        for k in range(n_steps):
+            for bb in range(n_batch):
+                cur = current[k, 0 if shared_input else bb]
+                for j in range(rng.shape[1]):
+                    lo = j * CHANNEL_BLOCK
+                    hi = min(n, lo + CHANNEL_BLOCK)
+                    _diffusion_block(v[bb, lo:hi], u[bb, lo:hi], cur[lo:hi], zb[0], zb[1],
+                                     rng[bb, j], sigma_step, dt_ms, a, b, c, d, gain, v_peak,
+                                     spikes[k, bb, lo:hi])
+        return
     zv = np.zeros(n)  # this step's normals, drawn before use; zero without noise
     zu = np.zeros(n)
-    sigma_step = math.sqrt(noise_var * dt_ms / ref_step_ms)  # diffusion σ per step (mV)
-    sv = sigma_step
-    su = sigma_step
     for k in range(n_steps):
         for bb in range(n_batch):
             vb = v[bb]
             ub = u[bb]
             _euler_step(vb, ub, current[k, 0 if shared_input else bb], dt_ms, a, b, gain)
-            if measured:
-                pv, pu = _power(vb, ub)
-                if not (pu <= n * BLOWUP_RMS_MV * BLOWUP_RMS_MV and pv < math.inf):
-                    # the measured-power noise has run away: this trial starts again at rest
-                    blowups[bb] += 1
-                    vb[:] = c
-                    ub[:] = b * c
-                    pv = n * c * c
-                    pu = n * (b * c) * (b * c)
-                sv = math.sqrt(pv / n * noise_var)
-                su = math.sqrt(pu / n * noise_var)
+            pv, pu = _power(vb, ub)
+            if not (pu <= n * BLOWUP_RMS_MV * BLOWUP_RMS_MV and pv < math.inf):
+                # the measured-power noise has run away: this trial starts again at rest
+                blowups[bb] += 1
+                vb[:] = c
+                ub[:] = b * c
+                pv = n * c * c
+                pu = n * (b * c) * (b * c)
+            sv = math.sqrt(pv / n * noise_var)
+            su = math.sqrt(pu / n * noise_var)
             if noise_var > 0.0:
                 for j in range(rng.shape[1]):  # each channel block from its own stream
                     lo = j * CHANNEL_BLOCK
@@ -245,17 +279,12 @@ def _izhikevich_parallel_kernel(current: np.ndarray, dt_ms: float, spikes: np.nd
         j = job % n_blocks
         lo = j * CHANNEL_BLOCK
         hi = min(n, lo + CHANNEL_BLOCK)
-        zv = np.zeros(hi - lo)
-        zu = np.zeros(hi - lo)
-        vb = v[bb, lo:hi]
-        ub = u[bb, lo:hi]
+        zb = np.zeros((2, hi - lo))
         for k in range(n_steps):
-            _euler_step(vb, ub, current[k, 0 if shared_input else bb, lo:hi], dt_ms, a, b,
-                        gain)
-            if noise_var > 0.0:
-                fill_normal_pairs(rng[bb, j], zv, zu)
-            _noise_and_threshold(vb, ub, zv, zu, sigma_step, sigma_step, c, d, v_peak,
-                                 spikes[k, bb, lo:hi])
+            _diffusion_block(v[bb, lo:hi], u[bb, lo:hi],
+                             current[k, 0 if shared_input else bb, lo:hi], zb[0], zb[1],
+                             rng[bb, j], sigma_step, dt_ms, a, b, c, d, gain, v_peak,
+                             spikes[k, bb, lo:hi])
 
 
 def check_threads(threads: int) -> int:
