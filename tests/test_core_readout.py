@@ -54,7 +54,9 @@ def test_every_kernel_reports_the_readout_of_its_displacements(extra: dict, kind
         ours.append(stepper.advance(row[None])[0])
     ours_a, ref_a = np.array(ours), np.array(ref)
     err = np.abs(ours_a - ref_a).max() / np.abs(ref_a).max()
-    assert err <= 1e-12, err
+    # double precision to 1e-12 of the peak; the leapfrog's single precision (rounding 6e-8)
+    # to 1e-6
+    assert err <= (1e-6 if ours_a.dtype == np.float32 else 1e-12), err
     assert np.abs(ref_a).max() > 0.01  # a real deformation (N)
 
 

@@ -91,7 +91,7 @@ def _scheduled_leapfrog_sensor_kernel(
     # t_offset_s (s), then _leapfrog_sensor_kernel; schedule is Schedule.kernel_operands
     n_steps = springs.shape[0]
     t = (first_step + np.arange(n_steps)) * dt_s - t_offset_s
-    forces = np.zeros((n_steps, 3, n_masses))
+    forces = np.zeros((n_steps, 3, n_masses), dtype=springs.dtype)  # the stepper's precision
     add_schedule_forces(forces.transpose(0, 2, 1), t, *schedule)
     _leapfrog_sensor_kernel(forces, springs, spikes, dt_s, substeps, mechanics, neurons)
 
@@ -148,7 +148,7 @@ class SkinSensor:
         if self._modal is not None:
             springs, spikes = self._advance_modal(forces_n)
         elif self._leapfrog is not None:
-            forces = by_component(forces_n)
+            forces = by_component(forces_n, self._leapfrog.dtype)
             springs, spikes = self._outputs(forces.shape[0])
             _leapfrog_sensor_kernel(forces, springs, spikes, self.dt_s,
                                     self._leapfrog.substeps, self._leapfrog.operands,
@@ -193,10 +193,11 @@ class SkinSensor:
         return springs, spikes
 
     def _outputs(self, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
-        """Fresh spring-force (N) and bool spike arrays for a block, each (n_steps,
-        n_springs)."""
+        """Fresh spring-force (N, in the stepper's precision) and bool spike arrays for a
+        block, each (n_steps, n_springs)."""
         shape = (n_steps, self.model.n_springs)
-        return np.empty(shape), np.empty(shape, dtype=np.bool_)
+        dtype = np.float64 if self._leapfrog is None else self._leapfrog.dtype
+        return np.empty(shape, dtype=dtype), np.empty(shape, dtype=np.bool_)
 
     def events(self, spikes: np.ndarray, first_step: int) -> np.ndarray:
         """Events (µs timestamps) of a spike block whose first row is step ``first_step``."""

@@ -24,20 +24,26 @@ import math
 from typing import Literal
 
 import numba
+import numpy as np
 
 Readout = Literal["length", "axial"]
+Real = float | np.floating
+"""A real of either precision: the kernels compute in their state's (float64 or float32)."""
 READOUTS: tuple[Readout, ...] = ("length", "axial")
 
 
 @numba.njit(inline="always", fastmath=True)
-def spring_signal(ke_x: float, ke_y: float, ke_z: float, dx: float, dy: float, dz: float,
-                  k: float, rest_m: float, length: bool) -> float:  # pragma: no cover
+def spring_signal(ke_x: Real, ke_y: Real, ke_z: Real, dx: Real, dy: Real, dz: Real, k: Real,
+                  rest_m: Real, length: bool) -> Real:  # pragma: no cover
     """A spring's sensor force (N) from ``k·e`` (N/m), its relative displacement ``d`` (m),
     ``k`` (N/m) and its rest length (m): the length change (``length``) or the axial
-    projection (module docstring)."""
+    projection (module docstring). Computed in the precision of its arguments (no float64
+    constant promotes single-precision ones): ``2·L0`` as ``L0 + L0``, the same number."""
     proj = ke_x * dx + ke_y * dy + ke_z * dz  # k eᵀd
     if not length:
         return proj
     d2 = dx * dx + dy * dy + dz * dz
-    now = math.sqrt(max(rest_m * rest_m + 2.0 * rest_m * proj / k + d2, 0.0))
-    return (2.0 * rest_m * proj + k * d2) / (now + rest_m)
+    twice = rest_m + rest_m
+    squared = rest_m * rest_m + twice * proj / k + d2  # |L0·e + d|², >= 0 but for rounding
+    now = math.sqrt(max(squared, d2 - d2))
+    return (twice * proj + k * d2) / (now + rest_m)
