@@ -50,7 +50,7 @@ def test_edit_of_an_inlined_callee_in_another_file_is_seen(tmp_path: Path) -> No
 
     neurons = tmp_path / "skinhil" / "model" / "neurons.py"
     text = neurons.read_text()
-    old = "v[i] = vv + dt_ms * (0.04 * vv * vv + 5.0 * vv + 140.0 - uu + gain * current[i])"
+    old = "return (vv + dt_ms * (0.04 * vv * vv + 5.0 * vv + 140.0 - uu + gain * current),"
     assert text.count(old) == 1
     neurons.write_text(text.replace(old, old.replace("140.0", "1.0e6")))  # fires every step
     assert source_hash(tmp_path) != cache_before.name

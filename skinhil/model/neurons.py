@@ -153,14 +153,31 @@ def noise_power_ratio(snr_db: float) -> float:
 
 
 @numba.njit(inline="always")
+def _euler(vv: float, uu: float, current: float, dt_ms: float, a: float, b: float,
+           gain: float) -> tuple[float, float]:  # pragma: no cover - compiled
+    # step 1 for one neuron: v (mV), u and its current (N) after dt_ms (ms)
+    return (vv + dt_ms * (0.04 * vv * vv + 5.0 * vv + 140.0 - uu + gain * current),
+            uu + dt_ms * a * (b * vv - uu))
+
+
+@numba.njit(inline="always")
+def _noise_then_threshold(vv: float, uu: float, zv: float, zu: float, sv: float, su: float,
+                          c: float, d: float,
+                          v_peak: float) -> tuple[bool, float, float]:  # pragma: no cover
+    # steps 2 and 3 for one neuron: add σ·N(0,1) (mV), then spike and reset where v ≥ v_peak
+    # (branch-free: a spike's branch would be mispredicted at noisy rates); (fired, v, u)
+    vv = vv + sv * zv
+    uu = uu + su * zu
+    fired = vv >= v_peak
+    return fired, c if fired else vv, uu + d if fired else uu
+
+
+@numba.njit(inline="always")
 def _euler_step(v: np.ndarray, u: np.ndarray, current: np.ndarray, dt_ms: float, a: float,
                 b: float, gain: float) -> None:  # pragma: no cover - compiled
     # step 1 for one trial's row: v (mV), u, current (N) over dt_ms (ms), in place
     for i in range(v.shape[0]):
-        vv = v[i]
-        uu = u[i]
-        v[i] = vv + dt_ms * (0.04 * vv * vv + 5.0 * vv + 140.0 - uu + gain * current[i])
-        u[i] = uu + dt_ms * a * (b * vv - uu)
+        v[i], u[i] = _euler(v[i], u[i], current[i], dt_ms, a, b, gain)
 
 
 @numba.njit(inline="always")
@@ -178,15 +195,10 @@ def _power(v: np.ndarray, u: np.ndarray) -> tuple[float, float]:  # pragma: no c
 def _noise_and_threshold(v: np.ndarray, u: np.ndarray, zv: np.ndarray, zu: np.ndarray,
                          sv: float, su: float, c: float, d: float, v_peak: float,
                          spikes: np.ndarray) -> None:  # pragma: no cover - compiled
-    # steps 2 and 3 for one row: add σ·N(0,1) (mV) from zv, zu, then spike and reset where
-    # v ≥ v_peak (branch-free: a spike's branch would be mispredicted at noisy rates)
+    # steps 2 and 3 for one row, the normals in zv, zu
     for i in range(v.shape[0]):
-        vv = v[i] + sv * zv[i]
-        uu = u[i] + su * zu[i]
-        fired = vv >= v_peak
-        spikes[i] = fired
-        v[i] = c if fired else vv
-        u[i] = uu + d if fired else uu
+        spikes[i], v[i], u[i] = _noise_then_threshold(v[i], u[i], zv[i], zu[i], sv, su, c, d,
+                                                      v_peak)
 
 
 @numba.njit(inline="always")
@@ -195,23 +207,16 @@ def _diffusion_block(v: np.ndarray, u: np.ndarray, current: np.ndarray, zv: np.n
                      a: float, b: float, c: float, d: float, gain: float, v_peak: float,
                      spikes: np.ndarray) -> None:  # pragma: no cover - compiled
     # steps 1-3 for one channel block under the diffusion noise: its normals drawn from
-    # stream into zv, zu (sigma > 0), then one pass per channel with the arithmetic of
-    # _euler_step and _noise_and_threshold, in their order (so the same numbers), while the
-    # block's normals are still in the first-level cache
+    # stream into zv, zu (sigma > 0), then one pass per channel (the same numbers as the
+    # three passes of the measured noise), while the block's normals are still in the
+    # first-level cache
     n = v.shape[0]
     if sigma > 0.0:
         fill_normal_pairs(stream, zv[:n], zu[:n])
     for i in range(n):
-        vv = v[i]
-        uu = u[i]
-        vn = vv + dt_ms * (0.04 * vv * vv + 5.0 * vv + 140.0 - uu + gain * current[i])
-        un = uu + dt_ms * a * (b * vv - uu)
-        vn = vn + sigma * zv[i]
-        un = un + sigma * zu[i]
-        fired = vn >= v_peak
-        spikes[i] = fired
-        v[i] = c if fired else vn
-        u[i] = un + d if fired else un
+        vv, uu = _euler(v[i], u[i], current[i], dt_ms, a, b, gain)
+        spikes[i], v[i], u[i] = _noise_then_threshold(vv, uu, zv[i], zu[i], sigma, sigma, c, d,
+                                                      v_peak)
 
 
 @numba.njit(cache=True, fastmath=False, nogil=True)
