@@ -64,17 +64,21 @@ def _error_vs_exact(dt: float, tension_n: float) -> float:
 
 def test_only_free_masses_are_stepped_and_fixed_springs_read_zero() -> None:
     model = SkinModel(SkinParams(size=(12, 9)))
-    ranges = moving_ranges(model.mesh.fixed)
-    stepped = np.concatenate([np.arange(m0, m0 + n) for m0, n in ranges])
-    assert np.array_equal(stepped, model.mesh.free)  # each free mass once, in order
-    assert len(ranges) == (12 - 2) + (11 - 2)  # the inner rows of layers 1 and 2
     mech = LeapfrogMechanics(model.mesh, 1e-4, 50.0, 0.05, 0.0, 1e-4)
+    ranges = moving_ranges(model.mesh.fixed, mech.slots)
+    stepped = np.concatenate([np.arange(m0, m0 + n) for _, m0, n in ranges])
+    assert np.array_equal(stepped, model.mesh.free)  # each free mass once, in order
+    slots = np.concatenate([np.arange(s0, s0 + n) for s0, _, n in ranges])
+    assert np.array_equal(slots, mech.slots[model.mesh.free])  # in its slot
+    assert len(ranges) == (12 - 2) + (11 - 2)  # the inner rows of layers 1 and 2
     push = np.zeros((200, model.n_masses, 3))
     push[:, model.mesh.free, 2] = -0.01
     out = mech.advance(push)
     between_fixed = model.mesh.fixed[model.mesh.springs].all(axis=1)
     assert np.all(out[:, between_fixed] == 0.0) and np.abs(out[:, ~between_fixed]).max() > 0
-    assert np.all(mech.q[model.mesh.fixed] == 0.0)
+    assert np.all(mech.displacement_m()[model.mesh.fixed] == 0.0)
+    unused = np.setdiff1d(np.arange(mech.state.shape[2]), mech.slots)
+    assert unused.size and np.all(mech.state[:, :, unused] == 0.0)  # padding never moves
 
 
 def test_leapfrog_is_second_order() -> None:
@@ -101,10 +105,9 @@ def test_leapfrog_substeps_keep_it_stable(damping: float, tension: float, dt: fl
     zero = np.zeros((1, model.n_masses, 3))
     for col in range(3 * n):
         mech.reset()
-        state = (mech.q, mech.v, mech.w)[col // n]
-        state[free[(col % n) // 3], col % 3] = 1.0
+        mech.state[col // n, col % 3, mech.slots[free[(col % n) // 3]]] = 1.0
         mech.advance(zero)
-        step[:, col] = np.concatenate([a[free].ravel() for a in (mech.q, mech.v, mech.w)])
+        step[:, col] = np.concatenate([mech.of_masses(k)[free].ravel() for k in range(3)])
     assert np.abs(np.linalg.eigvals(step)).max() <= 1.0 + 1e-9
 
 

@@ -65,7 +65,7 @@ import numba
 import numpy as np
 from scipy.sparse.linalg import eigsh
 
-from skinhil.model.geometry import Mesh
+from skinhil.model.geometry import Mesh, mass_position
 from skinhil.model.mechanics.linear import assemble, free_block, spring_frames
 from skinhil.model.mechanics.readout import Readout, spring_signal
 
@@ -90,27 +90,48 @@ direction (the rest positions of a regular mesh give the same direction to withi
 RUN_FIELDS = 5
 """Columns of a run table: first spring, spring stride, first mass i, first mass j, length."""
 
-LeapfrogOperands = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool,
-                         np.floating, np.floating, np.ndarray, np.floating, np.floating,
-                         np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
-"""``LeapfrogMechanics.operands``: the run table, each run's unit vector e, T/L and rest
+MAX_GAP = 4
+""":func:`join_runs` bridges at most this many pairs of fixed masses between two runs."""
+
+LeapfrogOperands = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                         np.ndarray, bool, np.floating, np.floating, np.ndarray, np.floating,
+                         np.floating, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                         np.ndarray, np.ndarray]
+"""``LeapfrogMechanics.operands``: the strip table and its segments (:func:`join_runs`),
+each strip's unit vector e, T/L and rest
 length, the springs between fixed masses, whether the readout is the length change, k, c,
-the moving masses as (first, count) ranges, 1/m, the flush threshold, then
-the state q, v, w (velocity at the step start), f_prev, and scratch: acc (3, n_masses) and
-(4, longest run); arrays updated in place, the state stored by component (3, n_masses); the
-reals all in the stepper's precision (:data:`DTYPE`)."""
+the moving masses as (first slot, first mass, count) ranges, 1/m, the flush threshold, then
+the state q, v, w (velocity at the step start), f_prev, and scratch: acc (3, n_slots) and
+(4, longest strip); arrays updated in place, the state stored by component and slot (3,
+n_slots, :func:`grid_slots`); the reals all in the stepper's precision (:data:`DTYPE`)."""
 
 
-def moving_ranges(fixed: np.ndarray) -> np.ndarray:
-    """The masses that are not fixed as (first, count) rows of consecutive indices (int64):
-    the interior of each row of layers 1 and 2 on a grid; layer 3 and the edges, fixed,
-    are never stepped."""
+def grid_slots(mesh: Mesh) -> np.ndarray:
+    """Each mass's slot (int64) in the stepper's state: layer ``L``, row ``r``, column ``c``
+    at ``L·rows·cols + r·cols + c`` for the top layer's ``rows x cols``, so every layer has
+    the top layer's row stride (the lower layers' rows end in unused slots, held fixed).
+
+    Then the springs of one kind join masses a constant number of slots apart in every row,
+    between layers too (in mass numbers a lower layer's rows are one or two shorter), and
+    :func:`join_runs` makes one strip of them."""
+    rows, cols = mesh.size
+    where = [mass_position(i, mesh.size) for i in range(mesh.positions.shape[0])]
+    return np.array([(layer * rows + r) * cols + c for layer, r, c in where], dtype=np.int64)
+
+
+def moving_ranges(fixed: np.ndarray, slots: np.ndarray | None = None) -> np.ndarray:
+    """The masses that are not fixed as (first slot, first mass, count) rows (int64): runs
+    of masses consecutive both in number and in slot (:func:`grid_slots`; by default each
+    mass in the slot of its number), i.e. the interior of each row of layers 1 and 2 on a
+    grid; layer 3 and the edges, fixed, are never stepped."""
     free = np.flatnonzero(~np.asarray(fixed, dtype=bool))
     if free.size == 0:
-        return np.zeros((0, 2), dtype=np.int64)
-    starts = np.flatnonzero(np.diff(free, prepend=free[0] - 2) != 1)
+        return np.zeros((0, 3), dtype=np.int64)
+    slot = free if slots is None else np.asarray(slots)[free]
+    starts = np.flatnonzero((np.diff(free, prepend=free[0] - 2) != 1)
+                            | (np.diff(slot, prepend=slot[0] - 2) != 1))
     counts = np.diff(np.append(starts, free.size))
-    return np.stack([free[starts], counts], axis=1).astype(np.int64)
+    return np.stack([slot[starts], free[starts], counts], axis=1).astype(np.int64)
 
 
 def spring_runs(springs: np.ndarray, e: np.ndarray, t_over_l: np.ndarray,
@@ -151,9 +172,69 @@ def spring_runs(springs: np.ndarray, e: np.ndarray, t_over_l: np.ndarray,
             np.ascontiguousarray(rest[first]))
 
 
+def join_runs(runs: np.ndarray, fixed: np.ndarray,
+              kinds: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Join the runs of one kind (equal ``kinds``: direction, T/L and rest length) that
+    continue each other across at most :data:`MAX_GAP` pairs of fixed masses into strips.
+
+    The springs of one kind along a grid row are a run of 32 or 33 at 34x34, too short for
+    the compiler's vector loops (16 single-precision lanes, unrolled); the next row's run of
+    the same kind starts a mass or two further on, past a pair of fixed edge masses, which
+    never move: a "spring" between them would read zero and push nothing. So a strip steps
+    the runs and the pairs between them as one run of ~1,100 (the kernel computes the pairs'
+    zero forces and writes no readout for them).
+
+    Returns the (n_strips, 5) int64 table (i0, j0, length, first segment, segments), the
+    (n_segments, 4) int64 segments (offset in the strip, first spring, spring stride,
+    length) whose readouts go out, and for each strip the index of its first run (for its
+    e, T/L and rest length).
+    """
+    order = np.lexsort((runs[:, 2], runs[:, 3] - runs[:, 2], kinds))
+    strips: list[list[int]] = []
+    segments: list[tuple[int, int, int, int]] = []
+    first_run: list[int] = []
+    for r in order:
+        s0, ds, i0, j0, n = (int(x) for x in runs[r])
+        if strips:
+            si0, sj0, sn, _, _ = strips[-1]
+            gap = i0 - (si0 + sn)
+            if (kinds[r] == kinds[first_run[-1]] and j0 - i0 == sj0 - si0
+                    and 0 <= gap <= MAX_GAP and fixed[si0 + sn:i0].all()
+                    and fixed[sj0 + sn:j0].all()):
+                segments.append((sn + gap, s0, ds, n))
+                strips[-1][2] = sn + gap + n
+                strips[-1][4] += 1
+                continue
+        strips.append([i0, j0, n, len(segments), 1])
+        segments.append((0, s0, ds, n))
+        first_run.append(int(r))
+    return (np.array(strips, dtype=np.int64).reshape(-1, 5),
+            np.array(segments, dtype=np.int64).reshape(-1, 4), np.array(first_run, np.int64))
+
+
+def run_kinds(run_e: np.ndarray, run_tl: np.ndarray, run_l0: np.ndarray) -> np.ndarray:
+    """A label per run, equal for runs whose direction, T/L and rest length agree to
+    :data:`SAME_DIRECTION` (relative for T/L and the length)."""
+    keys: list[np.ndarray] = []
+    labels = np.empty(len(run_e), dtype=np.int64)
+    for r in range(len(run_e)):
+        row = np.concatenate([run_e[r], [run_tl[r], run_l0[r]]])
+        for label, key in enumerate(keys):
+            scale = np.maximum(np.abs(key), 1.0) * np.array([1, 1, 1, 0, 0]) + np.abs(key) * \
+                np.array([0, 0, 0, 1, 1])
+            if np.all(np.abs(row - key) <= SAME_DIRECTION * scale):
+                labels[r] = label
+                break
+        else:
+            labels[r] = len(keys)
+            keys.append(row)
+    return labels
+
+
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
 def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: int,
-                    runs: np.ndarray, run_e: np.ndarray, run_tl: np.ndarray,
+                    runs: np.ndarray, segments: np.ndarray, run_e: np.ndarray,
+                    run_tl: np.ndarray,
                     run_l0: np.ndarray, still: np.ndarray, length: bool, k: np.floating,
                     c: np.floating, moving: np.ndarray, inv_m: np.floating, tiny: np.floating,
                     q: np.ndarray, v: np.ndarray, w: np.ndarray,
@@ -179,8 +260,8 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
             row[s] = 0.0
         for sub in range(substeps):
             acc[:] = 0.0
-            for r in range(runs.shape[0]):
-                s0, ds, i0, j0, n = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3], runs[r, 4]
+            for r in range(runs.shape[0]):  # strip by strip
+                i0, j0, n, g0, ng = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3], runs[r, 4]
                 ex, ey, ez, tl = run_e[r, 0], run_e[r, 1], run_e[r, 2], run_tl[r]
                 kex, key, kez, l0 = k * ex, k * ey, k * ez, run_l0[r]
                 qxi, qyi, qzi = qx[i0:i0 + n], qy[i0:i0 + n], qz[i0:i0 + n]
@@ -199,14 +280,15 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
                     fx_s[t] = ax * ex + tl * dx
                     fy_s[t] = ax * ey + tl * dy
                     fz_s[t] = ax * ez + tl * dz
-                if sub == 0:
+                for g in range(g0, g0 + ng if sub == 0 else g0):  # the runs' readouts
+                    o, s0, ds, m = segments[g, 0], segments[g, 1], segments[g, 2], segments[g, 3]
                     if ds == 1:  # a slice: the compiler vectorises the copy
-                        contiguous = row[s0:s0 + n]
-                        for t in range(n):
-                            contiguous[t] = sig_s[t]
+                        contiguous = row[s0:s0 + m]
+                        for t in range(m):
+                            contiguous[t] = sig_s[o + t]
                     else:
-                        for t in range(n):
-                            row[s0 + ds * t] = sig_s[t]
+                        for t in range(m):
+                            row[s0 + ds * t] = sig_s[o + t]
                 # the spring's force (axial along e, tension across) on mass i, and minus it
                 # on mass j: two loops, since the masses i of a run may be its masses j
                 gxi, gyi, gzi = gx[i0:i0 + n], gy[i0:i0 + n], gz[i0:i0 + n]
@@ -221,9 +303,9 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
                     gzj[t] -= fz_s[t]
             for a in range(3):  # the moving masses; the fixed ones stay at rest
                 for mr in range(moving.shape[0]):
-                    m0, nm = moving[mr, 0], moving[mr, 1]
+                    m0, f0, nm = moving[mr, 0], moving[mr, 1], moving[mr, 2]  # slot, mass
                     qa, va, wa = q[a, m0:m0 + nm], v[a, m0:m0 + nm], w[a, m0:m0 + nm]
-                    fa, ga, fsa = f_prev[a, m0:m0 + nm], acc[a, m0:m0 + nm], fs[a, m0:m0 + nm]
+                    fa, ga, fsa = f_prev[a, m0:m0 + nm], acc[a, m0:m0 + nm], fs[a, f0:f0 + nm]
                     for m in range(nm):
                         f_now = fsa[m]
                         am = (ga[m] + half * (fa[m] + f_now)) * inv_m
@@ -287,33 +369,45 @@ class LeapfrogMechanics:
         self.substeps = substeps_for(self.omega_max, self.gamma_max, dt_s)
         self.n_masses = n
         self.n_springs = mesh.springs.shape[0]
-        runs, run_e, run_tl, run_l0 = spring_runs(mesh.springs, e, tension_n / length, length)
+        self.slots = grid_slots(mesh)
+        """Each mass's slot in :attr:`state` (:func:`grid_slots`)."""
+        n_slots = 3 * mesh.size[0] * mesh.size[1]
+        fixed = np.ones(n_slots, dtype=bool)  # the unused slots never move
+        fixed[self.slots] = mesh.fixed
+        runs, run_e, run_tl, run_l0 = spring_runs(self.slots[mesh.springs], e,
+                                                  tension_n / length, length)
         # a run between fixed masses only is never stretched: its springs' force stays 0
-        live = np.array([not (mesh.fixed[i0:i0 + n].all() and mesh.fixed[j0:j0 + n].all())
+        live = np.array([not (fixed[i0:i0 + n].all() and fixed[j0:j0 + n].all())
                          for _, _, i0, j0, n in runs], dtype=bool)
         still = np.concatenate([s0 + ds * np.arange(n) for s0, ds, _, _, n in runs[~live]]
                                + [np.zeros(0, dtype=np.int64)]).astype(np.int64)
         runs, run_e, run_tl, run_l0 = runs[live], run_e[live], run_tl[live], run_l0[live]
-        state = np.zeros((4, 3, n), dtype=self.dtype)
-        self.q, self.v, self.w, self.f_prev = (s.T for s in state)
-        """Displacement (m), velocity (m/s) at the half step and at the step start, and the
-        last input (N): (n_masses, 3) views of the state the kernel keeps by component."""
-        self._state = state
-        scratch = np.zeros((4, int(runs[:, 4].max(initial=1))), dtype=self.dtype)
+        strips, segments, first = join_runs(runs, fixed, run_kinds(run_e, run_tl, run_l0))
+        run_e, run_tl, run_l0 = run_e[first], run_tl[first], run_l0[first]
+        self.state = np.zeros((4, 3, n_slots), dtype=self.dtype)
+        """Displacement q (m), velocity v (m/s) at the half step and w at the step start,
+        and the last input (N), by component and slot (:attr:`slots`); updated in place."""
+        scratch = np.zeros((4, int(strips[:, 2].max(initial=1))), dtype=self.dtype)
+        state = self.state
         self.operands: LeapfrogOperands = (
-            runs, run_e.astype(self.dtype), run_tl.astype(self.dtype),
+            strips, segments, run_e.astype(self.dtype), run_tl.astype(self.dtype),
             run_l0.astype(self.dtype), still, readout == "length", real(stiffness_n_per_m),
-            real(damping_n_s_per_m), moving_ranges(mesh.fixed), real(1.0 / mass_kg),
-            real(TINY[self.dtype]), state[0], state[1], state[2], state[3],
-            np.zeros((3, n), dtype=self.dtype), scratch)
+            real(damping_n_s_per_m), moving_ranges(mesh.fixed, self.slots),
+            real(1.0 / mass_kg), real(TINY[self.dtype]), state[0], state[1], state[2],
+            state[3], np.zeros((3, n_slots), dtype=self.dtype), scratch)
 
     def reset(self) -> None:
         """Back to rest: zero displacement, velocity and held input."""
-        self._state[:] = 0.0
+        self.state[:] = 0.0
+
+    def of_masses(self, which: int) -> np.ndarray:
+        """A copy of :attr:`state` ``which`` (0 q, 1 v, 2 w, 3 the last input) per mass:
+        (n_masses, 3)."""
+        return self.state[which][:, self.slots].T.copy()
 
     def displacement_m(self) -> np.ndarray:
         """Every mass's displacement from rest now (n_masses, 3) m; fixed masses 0."""
-        return np.array(self.q)
+        return self.of_masses(0)
 
     def advance(self, forces_n: np.ndarray) -> np.ndarray:
         """Step ``len(forces_n)`` steps; ``forces_n`` is (n, n_masses, 3) N; returns
