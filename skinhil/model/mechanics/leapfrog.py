@@ -96,14 +96,15 @@ MAX_GAP = 4
 LeapfrogOperands = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
                          np.ndarray, bool, np.floating, np.floating, np.ndarray, np.floating,
                          np.floating, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                         np.ndarray, np.ndarray]
-"""``LeapfrogMechanics.operands``: the strip table and its segments (:func:`join_runs`),
-each strip's unit vector e, T/L and rest
+                         np.ndarray, np.ndarray, np.ndarray]
+"""``LeapfrogMechanics.operands``: the strip table (:func:`join_runs`) and the readout plan
+(:func:`readout_plan`), each strip's unit vector e, T/L and rest
 length, the springs between fixed masses, whether the readout is the length change, k, c,
 the moving masses as (first slot, first mass, count) ranges, 1/m, the flush threshold, then
-the state q, v, w (velocity at the step start), f_prev, and scratch: acc (3, n_slots) and
-(4, longest strip); arrays updated in place, the state stored by component and slot (3,
-n_slots, :func:`grid_slots`); the reals all in the stepper's precision (:data:`DTYPE`)."""
+the state q, v, w (velocity at the step start), f_prev, and scratch: acc (3, n_slots), the
+readouts (n_strips, longest strip) and the forces (3, longest strip); arrays updated in
+place, the state stored by component and slot (3, n_slots, :func:`grid_slots`); the reals
+all in the stepper's precision (:data:`DTYPE`)."""
 
 
 def grid_slots(mesh: Mesh) -> np.ndarray:
@@ -231,14 +232,72 @@ def run_kinds(run_e: np.ndarray, run_tl: np.ndarray, run_l0: np.ndarray) -> np.n
     return labels
 
 
+PLAN_FIELDS = 12
+"""Columns of a readout plan: first spring, spring stride, members (1 or 4), length, then
+each member's strip and offset in it (-1 where unused)."""
+
+
+def readout_plan(strips: np.ndarray, segments: np.ndarray) -> np.ndarray:
+    """How the kernel writes the strips' readouts in spring order: one row per segment of a
+    run (:func:`join_runs`), except that four segments of stride 4 that interleave (springs
+    ``s0 + 4t + k``: the four springs a lower mass sends up or down, numbered together) go
+    as one row, which the compiler writes as contiguous vectors; a
+    stride-4 segment alone would be written a float at a time.
+
+    Returns the (n_rows, :data:`PLAN_FIELDS`) int64 plan."""
+    strip_of = np.repeat(np.arange(len(strips)), strips[:, 4])
+    first = {(int(s0), int(ds), int(m)): g for g, (_, s0, ds, m) in enumerate(segments)}
+    done = np.zeros(len(segments), dtype=bool)
+    plan = []
+    for g in np.argsort(segments[:, 1], kind="stable"):  # by first spring
+        _, s0, ds, m = segments[g]
+        if done[g]:
+            continue
+        mates = [first.get((int(s0) + k, int(ds), int(m))) for k in range(1, 4)]
+        group = [g]
+        if ds == 4 and all(p is not None and not done[p] for p in mates):
+            group += [int(p) for p in mates if p is not None]
+        members = [(strip_of[x], segments[x, 0]) for x in group]
+        members += [(-1, -1)] * (4 - len(members))
+        plan.append((s0, ds, len(group), m, *(v for pair in members for v in pair)))
+        done[group] = True
+    return np.array(plan, dtype=np.int64).reshape(-1, PLAN_FIELDS)
+
+
+@numba.njit(inline="always")
+def _write_readouts(row: np.ndarray, signals: np.ndarray,
+                    plan: np.ndarray) -> None:  # pragma: no cover - compiled
+    # the strips' readouts (signals, by strip) into the spring-ordered row, by the plan
+    for p in range(plan.shape[0]):
+        s0, ds, members, m = plan[p, 0], plan[p, 1], plan[p, 2], plan[p, 3]
+        a = signals[plan[p, 4], plan[p, 5]:plan[p, 5] + m]
+        if members == 4:  # four interleaved runs: contiguous in the row
+            b = signals[plan[p, 6], plan[p, 7]:plan[p, 7] + m]
+            c = signals[plan[p, 8], plan[p, 9]:plan[p, 9] + m]
+            d = signals[plan[p, 10], plan[p, 11]:plan[p, 11] + m]
+            dest = row[s0:s0 + 4 * m]
+            for t in range(m):
+                dest[4 * t] = a[t]
+                dest[4 * t + 1] = b[t]
+                dest[4 * t + 2] = c[t]
+                dest[4 * t + 3] = d[t]
+        elif ds == 1:  # a slice: the compiler vectorises the copy
+            dest = row[s0:s0 + m]
+            for t in range(m):
+                dest[t] = a[t]
+        else:
+            for t in range(m):
+                row[s0 + ds * t] = a[t]
+
+
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
 def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: int,
-                    runs: np.ndarray, segments: np.ndarray, run_e: np.ndarray,
+                    runs: np.ndarray, plan: np.ndarray, run_e: np.ndarray,
                     run_tl: np.ndarray,
                     run_l0: np.ndarray, still: np.ndarray, length: bool, k: np.floating,
                     c: np.floating, moving: np.ndarray, inv_m: np.floating, tiny: np.floating,
                     q: np.ndarray, v: np.ndarray, w: np.ndarray,
-                    f_prev: np.ndarray, acc: np.ndarray,
+                    f_prev: np.ndarray, acc: np.ndarray, signals: np.ndarray,
                     scratch: np.ndarray) -> None:  # pragma: no cover - compiled
     """forces (n, 3, n_masses) N, by component, held per step of ``dt`` (s), each in
     ``substeps`` leapfrog steps → out (n, n_springs) N; the operands after ``substeps`` are
@@ -252,7 +311,7 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
     qx, qy, qz = q[0], q[1], q[2]
     wx, wy, wz = w[0], w[1], w[2]
     gx, gy, gz = acc[0], acc[1], acc[2]
-    sig_s, fx_s, fy_s, fz_s = scratch[0], scratch[1], scratch[2], scratch[3]
+    fx_s, fy_s, fz_s = scratch[0], scratch[1], scratch[2]
     for step in range(forces.shape[0]):
         fs = forces[step]  # only the moving masses' input is read
         row = out[step]
@@ -261,7 +320,8 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
         for sub in range(substeps):
             acc[:] = 0.0
             for r in range(runs.shape[0]):  # strip by strip
-                i0, j0, n, g0, ng = runs[r, 0], runs[r, 1], runs[r, 2], runs[r, 3], runs[r, 4]
+                i0, j0, n = runs[r, 0], runs[r, 1], runs[r, 2]
+                sig_s = signals[r]
                 ex, ey, ez, tl = run_e[r, 0], run_e[r, 1], run_e[r, 2], run_tl[r]
                 kex, key, kez, l0 = k * ex, k * ey, k * ez, run_l0[r]
                 qxi, qyi, qzi = qx[i0:i0 + n], qy[i0:i0 + n], qz[i0:i0 + n]
@@ -280,15 +340,6 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
                     fx_s[t] = ax * ex + tl * dx
                     fy_s[t] = ax * ey + tl * dy
                     fz_s[t] = ax * ez + tl * dz
-                for g in range(g0, g0 + ng if sub == 0 else g0):  # the runs' readouts
-                    o, s0, ds, m = segments[g, 0], segments[g, 1], segments[g, 2], segments[g, 3]
-                    if ds == 1:  # a slice: the compiler vectorises the copy
-                        contiguous = row[s0:s0 + m]
-                        for t in range(m):
-                            contiguous[t] = sig_s[o + t]
-                    else:
-                        for t in range(m):
-                            row[s0 + ds * t] = sig_s[o + t]
                 # the spring's force (axial along e, tension across) on mass i, and minus it
                 # on mass j: two loops, since the masses i of a run may be its masses j
                 gxi, gyi, gzi = gx[i0:i0 + n], gy[i0:i0 + n], gz[i0:i0 + n]
@@ -301,6 +352,8 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
                     gxj[t] -= fx_s[t]
                     gyj[t] -= fy_s[t]
                     gzj[t] -= fz_s[t]
+            if sub == 0:
+                _write_readouts(row, signals, plan)
             for a in range(3):  # the moving masses; the fixed ones stay at rest
                 for mr in range(moving.shape[0]):
                     m0, f0, nm = moving[mr, 0], moving[mr, 1], moving[mr, 2]  # slot, mass
@@ -387,14 +440,17 @@ class LeapfrogMechanics:
         self.state = np.zeros((4, 3, n_slots), dtype=self.dtype)
         """Displacement q (m), velocity v (m/s) at the half step and w at the step start,
         and the last input (N), by component and slot (:attr:`slots`); updated in place."""
-        scratch = np.zeros((4, int(strips[:, 2].max(initial=1))), dtype=self.dtype)
+        longest = int(strips[:, 2].max(initial=1))
         state = self.state
         self.operands: LeapfrogOperands = (
-            strips, segments, run_e.astype(self.dtype), run_tl.astype(self.dtype),
+            strips, readout_plan(strips, segments), run_e.astype(self.dtype),
+            run_tl.astype(self.dtype),
             run_l0.astype(self.dtype), still, readout == "length", real(stiffness_n_per_m),
             real(damping_n_s_per_m), moving_ranges(mesh.fixed, self.slots),
             real(1.0 / mass_kg), real(TINY[self.dtype]), state[0], state[1], state[2],
-            state[3], np.zeros((3, n_slots), dtype=self.dtype), scratch)
+            state[3], np.zeros((3, n_slots), dtype=self.dtype),
+            np.zeros((len(strips), longest), dtype=self.dtype),
+            np.zeros((3, longest), dtype=self.dtype))
 
     def reset(self) -> None:
         """Back to rest: zero displacement, velocity and held input."""
