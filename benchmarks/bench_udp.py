@@ -10,14 +10,17 @@ board's own final status (``events_sent``) and the decoder's ``events_lost``.
 Usage::
 
     python benchmarks/bench_udp.py [--sizes 6x6,32x32] [--duration 60] [--snr-db DB]
-                                   [--threads N] [--realtime]
+                                   [--threads N] [--realtime] [--cpu N]
 
-``--sizes`` needs ``skinhil serve --size``; 6x6 is the default skin either way.
+``--sizes`` needs ``skinhil serve --size``; 6x6 is the default skin either way. ``--cpu N``
+runs the board on core N (``serve --cpu N``) and this process, the receiver, on the others:
+a board with its core to itself, as firmware, and its receiver beside it.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import threading
 import time
@@ -37,6 +40,9 @@ from skinhil.transports import UdpTransport  # noqa: E402
 class CountingHost:
     """Decodes every datagram on a UDP port of 127.0.0.1 and keeps counts, not events."""
 
+    cores: set[int] | None = None
+    """The cores the receiving thread runs on (None: any)."""
+
     def __init__(self) -> None:
         self.link = UdpTransport("127.0.0.1", 0, listen=True)
         self.decoder = protocols.SerialDecoder()
@@ -50,6 +56,8 @@ class CountingHost:
         self._thread.start()
 
     def _run(self) -> None:
+        if self.cores is not None:
+            os.sched_setaffinity(0, self.cores)  # this thread only
         while not self._stop.is_set():
             grams = self.link.recv_from(timeout=0.05)
             for _, data in grams:
@@ -112,10 +120,17 @@ def main() -> int:
     ap.add_argument("--threads", default=None, help="serve --threads N (neuron threads)")
     ap.add_argument("--realtime", action="store_true",
                     help="serve with --realtime (FIFO scheduling; needs root or CAP_SYS_NICE)")
+    ap.add_argument("--cpu", type=int, default=None,
+                    help="the board on this core (serve --cpu), the receiver on the others")
     args = ap.parse_args()
     extra = (["--snr-db", args.snr_db] if args.snr_db else []) + (
         ["--threads", args.threads] if args.threads else []) + (
-        ["--realtime"] if args.realtime else [])
+        ["--realtime"] if args.realtime else []) + (
+        ["--cpu", str(args.cpu)] if args.cpu is not None else [])
+    if args.cpu is not None:
+        CountingHost.cores = os.sched_getaffinity(0) - {args.cpu}
+        if not CountingHost.cores:
+            ap.error(f"--cpu {args.cpu}: no other core is left for the receiver")
     print(describe(), flush=True)
     for size in [s for s in args.sizes.split(",") if s] or [None]:
         print(run(size, args.duration, extra), flush=True)

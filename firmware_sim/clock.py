@@ -53,6 +53,17 @@ def request_realtime(priority: int = 10) -> str | None:
     return None
 
 
+def pin_to_cores(cores: tuple[int, ...]) -> str | None:
+    """Run this process (and the threads it starts) on ``cores`` only, as firmware has its
+    core to itself: no other program's thread takes turns on them unless it is pinned there
+    too. Returns None on success, else why not (one line)."""
+    try:
+        os.sched_setaffinity(0, set(cores))
+    except (OSError, AttributeError, ValueError) as exc:
+        return f"cannot run on cores {', '.join(map(str, cores))} ({exc})"
+    return None
+
+
 class TickClock:
     """Fixed-period tick scheduler on ``time.monotonic`` with lateness statistics.
 

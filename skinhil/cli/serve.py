@@ -16,13 +16,13 @@ from firmware_sim.board import (
     BoardConfig,
     BoardSummary,
 )
-from firmware_sim.clock import request_realtime
+from firmware_sim.clock import pin_to_cores, request_realtime
 from protocols.versions import wire_version
 from skinhil.cli import signals
 from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.options import SCHEDULE_HELP, add_model_options, noise_from_args, read_schedule
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
-from skinhil.cli.values import MAX_DURATION_S, MAX_REST_S, integer, real
+from skinhil.cli.values import MAX_DURATION_S, MAX_REST_S, cores_value, integer, real
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import format_size, spring_count
 from skinhil.model.timeline import Timeline
@@ -106,6 +106,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="run with real-time (FIFO) scheduling so other programs cannot delay "
                         "ticks (or replayed units), and spin the last 0.3 ms before each tick "
                         "instead of sleeping (needs root or CAP_SYS_NICE)")
+    p.add_argument("--cpu", type=cores_value, metavar="N[,N...]",
+                   help="run the board on these CPU cores only (as firmware has its core to "
+                        "itself): with the receiver or the decoder under test on another "
+                        "core, no other program takes turns on the board's; as many cores "
+                        "as --threads")
     p.add_argument("--response-window", dest="response_window_s", type=float,
                    default=DEFAULT_RESPONSE_WINDOW_S, metavar="SECONDS",
                    help="score the decoder under test: a DECISION answers the latest stimulus "
@@ -137,6 +142,19 @@ def _config(args: argparse.Namespace) -> BoardConfig:
                        start_running=not args.stopped, reconnect=args.reconnect,
                        response_window_s=args.response_window_s,
                        spin_s=REALTIME_SPIN_S if args.realtime else 0.0).check()
+
+
+def _pin(args: argparse.Namespace) -> None:
+    """``--cpu``: this process on those cores, or :class:`ConfigError`."""
+    if args.cpu is None:
+        return
+    threads = getattr(args, "threads", 1)
+    if threads > len(args.cpu):
+        raise ConfigError(f"--threads {threads} runs the board on {threads} cores: give "
+                          f"--cpu as many ({len(args.cpu)} given)")
+    why = pin_to_cores(args.cpu)
+    if why is not None:
+        raise ConfigError(f"--cpu: {why}")
 
 
 DRAIN_NOTICE_S = 2.0
@@ -244,6 +262,7 @@ def run_replay(args: argparse.Namespace) -> int:
         why = request_realtime()
         if why is not None:
             raise ConfigError(f"--realtime: {why}")
+    _pin(args)
     with open_transport(args) as transport:
         replayer = Replayer(recording, transport, args.speed, scoreboard)
         if not args.quiet and not args.json:
@@ -312,6 +331,7 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
         why = request_realtime()
         if why is not None:
             raise ConfigError(f"--realtime: {why}")
+    _pin(args)
     announce_cold_cache("serve")  # board.run compiles: its warm-up runs every kernel once
 
     def on_second(b: Board) -> None:

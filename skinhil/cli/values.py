@@ -78,6 +78,22 @@ def snr_value(text: str) -> float:
     return value
 
 
+def cores_value(text: str) -> tuple[int, ...]:
+    """argparse type: CPU cores, comma-separated, each one this process may run on."""
+    allowed = sorted(os.sched_getaffinity(0))
+    try:
+        cores = tuple(sorted({int(part) for part in text.split(",")}))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a list of CPU core numbers (e.g. "
+                                         f"'1' or '0,1')") from None
+    wrong = [c for c in cores if c not in allowed]
+    if wrong:
+        raise argparse.ArgumentTypeError(
+            f"core {wrong[0]} is not one this process may run on: pick from "
+            f"{', '.join(map(str, allowed))}")
+    return cores
+
+
 def size_value(text: str) -> MeshSize:
     """argparse type: a mesh size ROWSxCOLS (>= 3x3, at most :data:`MAX_CHANNELS` sensors)."""
     try:
