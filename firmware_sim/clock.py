@@ -57,8 +57,16 @@ def pin_to_cores(cores: tuple[int, ...]) -> str | None:
     """Run this process (and the threads it starts) on ``cores`` only, as firmware has its
     core to itself: no other program's thread takes turns on them unless it is pinned there
     too. Returns None on success, else why not (one line)."""
+    try:  # every thread running now (Linux pins a thread; later ones inherit its cores)
+        tasks = [int(t) for t in os.listdir("/proc/self/task")] or [0]
+    except OSError:
+        tasks = [0]
     try:
-        os.sched_setaffinity(0, set(cores))
+        for task in tasks:
+            try:
+                os.sched_setaffinity(task, set(cores))
+            except ProcessLookupError:  # a thread that has just ended
+                continue
     except (OSError, AttributeError, ValueError) as exc:
         return f"cannot run on cores {', '.join(map(str, cores))} ({exc})"
     return None

@@ -1,12 +1,15 @@
 """``skinhil serve --udp`` on loopback (127.0.0.1): whole packets in every datagram, every
 event and marker arrives, commands are answered, and the loss accounting is exact; the 6x6
 skin in the narrow format (version 3) and a 32x32 skin (15,730 channels) in the wide one; a
-board on two threads (``--threads 2``) streams what one thread does and answers commands."""
+board on two threads (``--threads 2``) streams what one thread does and answers commands; a
+board on one core (``--cpu N``) runs there alone."""
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -117,3 +120,17 @@ def test_serve_two_threads_answers_commands_and_keeps_the_account() -> None:
     for st in peer.of(protocols.Status):
         assert st.events_generated == st.events_sent + st.events_dropped + st.events_queued
     assert serve.summary()["generated"] == serve.summary()["sent"] == len(peer.events)
+
+
+def test_serve_cpu_runs_the_board_on_that_core_alone() -> None:
+    """``--cpu N`` pins the board (all its threads) to core N and streams as without it."""
+    core = max(os.sched_getaffinity(0))
+    args = ("--size", "16x16", "--duration", "1.5", "--seed", "6", "--rest", "0.05",
+            "--snr-db", "10")
+    pinned: list[set[int]] = []
+    with _udp_board(*args, "--cpu", str(core)) as (peer, serve):
+        assert peer.wait_for(lambda p: p.of(protocols.Status) or serve.exited, 60)
+        for task in Path(f"/proc/{serve.proc.pid}/task").iterdir():  # every thread
+            pinned.append(os.sched_getaffinity(int(task.name)))
+    assert pinned and all(cores == {core} for cores in pinned), pinned
+    assert np.array_equal(peer.events, _udp_run(*args)[0])
