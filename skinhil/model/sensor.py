@@ -22,7 +22,6 @@ import numba
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.events import EVENT_DTYPE
 from skinhil.model.geometry import format_size
 from skinhil.model.mechanics.leapfrog import (
     LeapfrogMechanics,
@@ -32,6 +31,7 @@ from skinhil.model.mechanics.leapfrog import (
 )
 from skinhil.model.mechanics.linear import LinearMechanics, ModalOperands, _advance_modal_kernel
 from skinhil.model.neurons import (
+    MAX_CHANNELS,
     IzhikevichParams,
     KernelOperands,
     NeuronPopulation,
@@ -96,8 +96,6 @@ def _scheduled_leapfrog_sensor_kernel(
     _leapfrog_sensor_kernel(forces, springs, spikes, dt_s, substeps, mechanics, neurons)
 
 
-MAX_CHANNELS = int(np.iinfo(EVENT_DTYPE["addr"]).max) + 1
-"""Channels an event address can name (16-bit: 65,536)."""
 
 
 class SkinSensor:
