@@ -26,7 +26,6 @@ from skinhil.model.geometry import format_size
 from skinhil.model.mechanics.leapfrog import (
     LeapfrogMechanics,
     LeapfrogOperands,
-    by_component,
     leapfrog_kernel,
 )
 from skinhil.model.mechanics.linear import LinearMechanics, ModalOperands, _advance_modal_kernel
@@ -73,7 +72,7 @@ def _scheduled_modal_sensor_kernel(
 def _leapfrog_sensor_kernel(forces: np.ndarray, springs: np.ndarray, spikes: np.ndarray,
                             dt_s: float, substeps: int, mechanics: LeapfrogOperands,
                             neurons: KernelOperands) -> None:  # pragma: no cover - compiled
-    # forces (n, 3, n_masses) N by component → springs (n, n_springs) N → spikes over steps
+    # forces (n, 3, n_slots) N by slot → springs (n, n_springs) N → spikes over steps
     # of dt_s (s); mechanics is LeapfrogMechanics.operands, neurons
     # NeuronPopulation.kernel_operands()
     leapfrog_kernel(forces, springs, dt_s, substeps, *mechanics)
@@ -84,15 +83,18 @@ def _leapfrog_sensor_kernel(forces: np.ndarray, springs: np.ndarray, spikes: np.
 
 @numba.njit(cache=True)
 def _scheduled_leapfrog_sensor_kernel(
-        first_step: int, dt_s: float, t_offset_s: float, n_masses: int, springs: np.ndarray,
-        spikes: np.ndarray, schedule: ScheduleOperands, substeps: int,
+        first_step: int, dt_s: float, t_offset_s: float, slots: np.ndarray, n_slots: int,
+        springs: np.ndarray, spikes: np.ndarray, schedule: ScheduleOperands, substeps: int,
         mechanics: LeapfrogOperands, neurons: KernelOperands) -> None:  # pragma: no cover
     # the schedule's forces (N) for steps first_step.. of dt_s (s), schedule time 0 at
-    # t_offset_s (s), then _leapfrog_sensor_kernel; schedule is Schedule.kernel_operands
+    # t_offset_s (s), on the masses' slots (LeapfrogMechanics.slots), then
+    # _leapfrog_sensor_kernel; schedule is Schedule.kernel_operands
     n_steps = springs.shape[0]
     t = (first_step + np.arange(n_steps)) * dt_s - t_offset_s
-    forces = np.zeros((n_steps, 3, n_masses), dtype=springs.dtype)  # the stepper's precision
-    add_schedule_forces(forces.transpose(0, 2, 1), t, *schedule)
+    forces = np.zeros((n_steps, 3, n_slots), dtype=springs.dtype)  # the stepper's precision
+    starts, onsets, ends, which, stim_onsets, stim_ends, taus, ptr, pushed, peaks = schedule
+    add_schedule_forces(forces.transpose(0, 2, 1), t, starts, onsets, ends, which,
+                        stim_onsets, stim_ends, taus, ptr, slots[pushed], peaks)
     _leapfrog_sensor_kernel(forces, springs, spikes, dt_s, substeps, mechanics, neurons)
 
 
@@ -146,7 +148,7 @@ class SkinSensor:
         if self._modal is not None:
             springs, spikes = self._advance_modal(forces_n)
         elif self._leapfrog is not None:
-            forces = by_component(forces_n, self._leapfrog.dtype)
+            forces = self._leapfrog.by_slot(forces_n)
             springs, spikes = self._outputs(forces.shape[0])
             _leapfrog_sensor_kernel(forces, springs, spikes, self.dt_s,
                                     self._leapfrog.substeps, self._leapfrog.operands,
@@ -178,8 +180,9 @@ class SkinSensor:
         springs, spikes = self._outputs(n_steps)
         if self._leapfrog is not None:
             _scheduled_leapfrog_sensor_kernel(
-                self.step_index, self.dt_s, float(t_offset_s), self.model.n_masses, springs,
-                spikes, schedule.kernel_operands, self._leapfrog.substeps,
+                self.step_index, self.dt_s, float(t_offset_s), self._leapfrog.slots,
+                self._leapfrog.state.shape[2], springs, spikes, schedule.kernel_operands,
+                self._leapfrog.substeps,
                 self._leapfrog.operands, self.neurons.kernel_operands())
         else:
             assert self._modal is not None

@@ -8,7 +8,7 @@ O(springs) time and memory where the exact ZOH of :mod:`skinhil.model.mechanics.
 O(dof²). The pass goes run by run (:func:`spring_runs`: the springs of one kind along a row
 of the grid), each run reading and updating its masses as contiguous slices, so the compiler
 vectorises it: a third less time per step at 32x32 than spring by spring. Only what can
-move is stepped: the free masses (:func:`moving_ranges`) and the runs with a free mass; the
+move is stepped: the free masses (:func:`moving_bands`) and the runs with a free mass; the
 springs between fixed masses (all of layer 3's, the edges') read 0 (26x26: 38 -> 32 µs per
 step). The model uses it above ``EXACT_MAX_FREE_DOFS`` free degrees of freedom
 (:mod:`skinhil.model.skin`).
@@ -94,13 +94,14 @@ MAX_GAP = 4
 """:func:`join_runs` bridges at most this many pairs of fixed masses between two runs."""
 
 LeapfrogOperands = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                         np.ndarray, bool, np.floating, np.floating, np.ndarray, np.floating,
+                         np.ndarray, bool, np.floating, np.floating, np.ndarray, np.ndarray,
                          np.floating, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
                          np.ndarray, np.ndarray, np.ndarray]
 """``LeapfrogMechanics.operands``: the strip table (:func:`join_runs`) and the readout plan
 (:func:`readout_plan`), each strip's unit vector e, T/L and rest
 length, the springs between fixed masses, whether the readout is the length change, k, c,
-the moving masses as (first slot, first mass, count) ranges, 1/m, the flush threshold, then
+the bands of slots stepped (:func:`moving_bands`), 1/m per slot (0 where fixed), the flush
+threshold, then
 the state q, v, w (velocity at the step start), f_prev, and scratch: acc (3, n_slots), the
 readouts (n_strips, longest strip) and the forces (3, longest strip); arrays updated in
 place, the state stored by component and slot (3, n_slots, :func:`grid_slots`); the reals
@@ -120,19 +121,18 @@ def grid_slots(mesh: Mesh) -> np.ndarray:
     return np.array([(layer * rows + r) * cols + c for layer, r, c in where], dtype=np.int64)
 
 
-def moving_ranges(fixed: np.ndarray, slots: np.ndarray | None = None) -> np.ndarray:
-    """The masses that are not fixed as (first slot, first mass, count) rows (int64): runs
-    of masses consecutive both in number and in slot (:func:`grid_slots`; by default each
-    mass in the slot of its number), i.e. the interior of each row of layers 1 and 2 on a
-    grid; layer 3 and the edges, fixed, are never stepped."""
+def moving_bands(fixed: np.ndarray) -> np.ndarray:
+    """The slots the kernel steps, as (first, count) rows (int64): from each free slot to the
+    next across at most :data:`MAX_GAP` fixed ones, i.e. on a grid one band per layer 1 and
+    2 from its first free mass to its last, the fixed edge masses between its rows included
+    (their 1/m is 0 in the kernel: they never move) so that the loop runs long; layer 3,
+    all fixed, is never stepped."""
     free = np.flatnonzero(~np.asarray(fixed, dtype=bool))
     if free.size == 0:
-        return np.zeros((0, 3), dtype=np.int64)
-    slot = free if slots is None else np.asarray(slots)[free]
-    starts = np.flatnonzero((np.diff(free, prepend=free[0] - 2) != 1)
-                            | (np.diff(slot, prepend=slot[0] - 2) != 1))
-    counts = np.diff(np.append(starts, free.size))
-    return np.stack([slot[starts], free[starts], counts], axis=1).astype(np.int64)
+        return np.zeros((0, 2), dtype=np.int64)
+    starts = np.flatnonzero(np.diff(free, prepend=free[0] - MAX_GAP - 2) > MAX_GAP + 1)
+    ends = np.append(free[starts[1:] - 1], free[-1])
+    return np.stack([free[starts], ends - free[starts] + 1], axis=1).astype(np.int64)
 
 
 def spring_runs(springs: np.ndarray, e: np.ndarray, t_over_l: np.ndarray,
@@ -295,11 +295,12 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
                     runs: np.ndarray, plan: np.ndarray, run_e: np.ndarray,
                     run_tl: np.ndarray,
                     run_l0: np.ndarray, still: np.ndarray, length: bool, k: np.floating,
-                    c: np.floating, moving: np.ndarray, inv_m: np.floating, tiny: np.floating,
+                    c: np.floating, moving: np.ndarray, inv_m: np.ndarray, tiny: np.floating,
                     q: np.ndarray, v: np.ndarray, w: np.ndarray,
                     f_prev: np.ndarray, acc: np.ndarray, signals: np.ndarray,
                     scratch: np.ndarray) -> None:  # pragma: no cover - compiled
-    """forces (n, 3, n_masses) N, by component, held per step of ``dt`` (s), each in
+    """forces (n, 3, n_slots) N, by component and slot (:meth:`LeapfrogMechanics.by_slot`),
+    held per step of ``dt`` (s), each in
     ``substeps`` leapfrog steps → out (n, n_springs) N; the operands after ``substeps`` are
     :attr:`LeapfrogMechanics.operands`. Every real is in the state's precision: no float64
     constant promotes single-precision arithmetic."""
@@ -313,7 +314,7 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
     gx, gy, gz = acc[0], acc[1], acc[2]
     fx_s, fy_s, fz_s = scratch[0], scratch[1], scratch[2]
     for step in range(forces.shape[0]):
-        fs = forces[step]  # only the moving masses' input is read
+        fs = forces[step]
         row = out[step]
         for s in still:  # between fixed masses: never stretched
             row[s] = 0.0
@@ -354,14 +355,15 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
                     gzj[t] -= fz_s[t]
             if sub == 0:
                 _write_readouts(row, signals, plan)
-            for a in range(3):  # the moving masses; the fixed ones stay at rest
+            for a in range(3):  # the bands of moving masses (a fixed one's 1/m is 0)
                 for mr in range(moving.shape[0]):
-                    m0, f0, nm = moving[mr, 0], moving[mr, 1], moving[mr, 2]  # slot, mass
+                    m0, nm = moving[mr, 0], moving[mr, 1]
                     qa, va, wa = q[a, m0:m0 + nm], v[a, m0:m0 + nm], w[a, m0:m0 + nm]
-                    fa, ga, fsa = f_prev[a, m0:m0 + nm], acc[a, m0:m0 + nm], fs[a, f0:f0 + nm]
+                    fa, ga, fsa = f_prev[a, m0:m0 + nm], acc[a, m0:m0 + nm], fs[a, m0:m0 + nm]
+                    ima = inv_m[m0:m0 + nm]
                     for m in range(nm):
                         f_now = fsa[m]
-                        am = (ga[m] + half * (fa[m] + f_now)) * inv_m
+                        am = (ga[m] + half * (fa[m] + f_now)) * ima[m]
                         fa[m] = f_now
                         vm = va[m] + h * am
                         qm = qa[m] + h * vm
@@ -369,12 +371,6 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
                         va[m] = vm if abs(vm) > tiny else zero
                         qa[m] = qm if abs(qm) > tiny else zero
                         wa[m] = wm if abs(wm) > tiny else zero
-
-
-def by_component(forces_n: np.ndarray, dtype: np.typing.DTypeLike = DTYPE) -> np.ndarray:
-    """External forces (n, n_masses, 3) N as :func:`leapfrog_kernel` reads them: (n, 3,
-    n_masses), contiguous per component, in precision ``dtype``."""
-    return np.ascontiguousarray(np.asarray(forces_n).transpose(0, 2, 1), dtype=dtype)
 
 
 def fastest_rates(mesh: Mesh, mass_kg: float, stiffness_n_per_m: float,
@@ -446,11 +442,19 @@ class LeapfrogMechanics:
             strips, readout_plan(strips, segments), run_e.astype(self.dtype),
             run_tl.astype(self.dtype),
             run_l0.astype(self.dtype), still, readout == "length", real(stiffness_n_per_m),
-            real(damping_n_s_per_m), moving_ranges(mesh.fixed, self.slots),
-            real(1.0 / mass_kg), real(TINY[self.dtype]), state[0], state[1], state[2],
-            state[3], np.zeros((3, n_slots), dtype=self.dtype),
+            real(damping_n_s_per_m), moving_bands(fixed),
+            np.where(fixed, 0.0, 1.0 / mass_kg).astype(self.dtype), real(TINY[self.dtype]),
+            state[0], state[1], state[2], state[3], np.zeros((3, n_slots), dtype=self.dtype),
             np.zeros((len(strips), longest), dtype=self.dtype),
             np.zeros((3, longest), dtype=self.dtype))
+
+    def by_slot(self, forces_n: np.ndarray) -> np.ndarray:
+        """External forces (n, n_masses, 3) N as :func:`leapfrog_kernel` reads them: (n, 3,
+        n_slots), by component and slot, in the stepper's precision."""
+        f = np.asarray(forces_n)
+        out = np.zeros((f.shape[0], 3, self.state.shape[2]), dtype=self.dtype)
+        out[:, :, self.slots] = f.transpose(0, 2, 1)
+        return out
 
     def reset(self) -> None:
         """Back to rest: zero displacement, velocity and held input."""
@@ -468,7 +472,7 @@ class LeapfrogMechanics:
     def advance(self, forces_n: np.ndarray) -> np.ndarray:
         """Step ``len(forces_n)`` steps; ``forces_n`` is (n, n_masses, 3) N; returns
         (n, n_springs) N, row ``j`` the spring forces at the start of step ``j``."""
-        forces = by_component(forces_n, self.dtype)
+        forces = self.by_slot(forces_n)
         out = np.empty((forces.shape[0], self.n_springs), dtype=self.dtype)
         leapfrog_kernel(forces, out, self.dt_s, self.substeps, *self.operands)
         return out
