@@ -31,8 +31,8 @@ Defaults and their reasoning (the paper gives the structure, not SI values):
   core, this process's CPU time at load ~10), the linear one 4-7 ns; with the neurons
   (~3 ns per channel) the geometric skin takes about a third of a core at 10x10, so the
   board keeps real time there with room for its encoder and link, and above it the linear
-  mechanics (exact, then leapfrog) carries the board to ~29x29 on one core
-  (``benchmarks/bench_size.py``).
+  mechanics (exact, then leapfrog) carries the board beyond a whole hand's 17,000 sensors on
+  one core (34x34, 17,866, at 1.4x real time; ``benchmarks/bench_size.py``, README).
   ``"linear"`` and ``"geometric"`` force one; the geometric one refuses steps above its
   stability limit (~0.14 ms at the defaults).
 - ``readout = "length"``: every spring reports ``k·(|L0·e + q_j − q_i| − L0)``, its length

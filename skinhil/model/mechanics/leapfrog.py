@@ -13,6 +13,17 @@ springs between fixed masses (all of layer 3's, the edges') read 0 (26x26: 38 ->
 step). The model uses it above ``EXACT_MAX_FREE_DOFS`` free degrees of freedom
 (:mod:`skinhil.model.skin`).
 
+A row's run is short (32-33 springs at 34x34), shorter than one pass of the compiler's
+vector loop (16 single-precision lanes, unrolled), which then ran it a float at a time. So
+the state is kept in grid slots (:func:`grid_slots`: every layer with the top layer's row
+stride, the lower layers' rows padded with unused slots that never move), where the springs
+of one kind join masses a constant number of slots apart in every row, and the runs of a
+kind are joined across the fixed pairs between rows into strips of ~1,100
+(:func:`join_runs`: 14 strips at 34x34 instead of 382 runs); the readouts go out to the
+springs' order by a plan (:func:`readout_plan`), the moving masses in one band per layer
+(:func:`moving_bands`). At 34x34, single precision: 30.7 µs per step by runs, 24.8 by
+strips, 22.3 with the plan, the fixed part (the masses' update) 4.9 -> 2.8 µs with bands.
+
 Scheme (kick-drift leapfrog, velocities at half steps; ``h = dt``, ``m`` the nodal mass):
 
     w_n       = v_{n−½} + (h/2)·a_{n−1}                 (velocity at t_n, extrapolated)
