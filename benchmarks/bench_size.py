@@ -9,8 +9,9 @@ as :meth:`firmware_sim.board.Board.tick` does, without pacing and without a tran
 default 10 dB), spikes to events, and the events encoded for the wire
 (:class:`protocols.SerialEncoder`, wide format above 338 channels). It reports
 
-- per step: mechanics (µs and ns per spring), neurons (µs and ns per channel), each timed
-  alone on the same forces, and per tick the events and encoding (µs);
+- per step: mechanics (µs and ns per spring; the leapfrog's kernel on its input by slot),
+  neurons (µs and ns per channel), each timed alone on the same forces, and per tick the
+  events and encoding (µs);
 - memory: the peak of the bytes allocated (tracemalloc, kernels compiled beforehand) while
   the model, the timeline and the encoder are built and run for 20 ticks;
 - the real-time factor of the whole loop (simulated s per wall s; >= 1 keeps real time),
@@ -54,6 +55,7 @@ from machine import describe, load_average  # noqa: E402
 
 import protocols  # noqa: E402
 from skinhil.model.geometry import format_size, parse_size  # noqa: E402
+from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, leapfrog_kernel  # noqa: E402
 from skinhil.model.pipeline import SensorPipeline  # noqa: E402
 from skinhil.model.sensor import SkinSensor  # noqa: E402
 from skinhil.model.skin import SkinModel, SkinParams  # noqa: E402
@@ -151,7 +153,13 @@ def measure(size: tuple[int, int], threads: int, snr_db: float, seconds: float,
         spikes = tick()
     stepper = model.stepper(DT_S)
     springs = stepper.advance(forces)
-    mech_us = _best_per_tick(lambda: stepper.advance(forces), seconds / 4, repeats)
+    if isinstance(stepper, LeapfrogMechanics):  # its kernel alone, as the tick runs it
+        slotted, out = stepper.by_slot(forces), np.empty_like(springs)
+        mech_us = _best_per_tick(lambda: leapfrog_kernel(slotted, out, DT_S, stepper.substeps,
+                                                         *stepper.operands),
+                                 seconds / 4, repeats)
+    else:
+        mech_us = _best_per_tick(lambda: stepper.advance(forces), seconds / 4, repeats)
     neurons = sensor.neurons
     neur_us = _best_per_tick(lambda: neurons.step_block(springs, DT_S), seconds / 4, repeats)
     first = sensor.step_index
