@@ -144,8 +144,13 @@ def _config(args: argparse.Namespace) -> BoardConfig:
                        spin_s=REALTIME_SPIN_S if args.realtime else 0.0).check()
 
 
-def _pin(args: argparse.Namespace) -> None:
-    """``--cpu``: this process on those cores, or :class:`ConfigError`."""
+def _claim_cpu(args: argparse.Namespace) -> None:
+    """``--realtime`` and ``--cpu``: this process in the real-time class and on those cores,
+    or :class:`ConfigError`."""
+    if args.realtime:
+        why = request_realtime()
+        if why is not None:
+            raise ConfigError(f"--realtime: {why}")
     if args.cpu is None:
         return
     threads = getattr(args, "threads", 1)
@@ -258,11 +263,7 @@ def run_replay(args: argparse.Namespace) -> int:
     recording = open_recording(args.replay)
     score_path = check_output_path(args.score) if args.score is not None else None
     scoreboard = DecisionScoreboard(args.response_window_s)
-    if args.realtime:
-        why = request_realtime()
-        if why is not None:
-            raise ConfigError(f"--realtime: {why}")
-    _pin(args)
+    _claim_cpu(args)
     with open_transport(args) as transport:
         replayer = Replayer(recording, transport, args.speed, scoreboard)
         if not args.quiet and not args.json:
@@ -327,11 +328,7 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
     board = Board(config, open_link, schedule, on_link)
     if made is not None:
         made.append(board)
-    if args.realtime:
-        why = request_realtime()
-        if why is not None:
-            raise ConfigError(f"--realtime: {why}")
-    _pin(args)
+    _claim_cpu(args)
     announce_cold_cache("serve")  # board.run compiles: its warm-up runs every kernel once
 
     def on_second(b: Board) -> None:

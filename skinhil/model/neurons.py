@@ -455,33 +455,28 @@ def _spike_times(raster: np.ndarray, t0_us: int,
     words = flat[:lines * line].view(np.uint64)
     busy = np.zeros(lines + 1, dtype=np.bool_)
     busy[lines] = True  # the bytes after the last whole line
-    count = 0
     for c in range(lines):
         any_spike = np.uint64(0)
         for k in range(SCAN_WORDS):
             any_spike |= words[c * SCAN_WORDS + k]
-        if any_spike:
-            busy[c] = True
-    for c in range(lines + 1):
-        if busy[c]:
-            for k in range(c * line, min((c + 1) * line, flat.shape[0])):
-                count += flat[k]
-    t = np.empty(count, dtype=np.int64)
-    a = np.empty(count, dtype=np.uint16)
+        busy[c] = any_spike != 0
+    room = int(busy.sum()) * line  # at most a spike per byte of the busy lines
+    t = np.empty(room, dtype=np.int64)
+    a = np.empty(room, dtype=np.uint16)
     m = 0
     for c in range(lines + 1):
         if busy[c]:
             m = _spikes_in(flat, c * line, min((c + 1) * line, flat.shape[0]), n, t0_us,
                            dt_us, t, a, m)
-    return t, a
+    return t[:m], a[:m]
 
 
 def raster_to_events(raster: np.ndarray, dt_s: float, t0_us: int = 0) -> np.ndarray:
     """Event array from a bool raster (n_steps, n): spike in step k → ``t = t0 + k·dt`` (µs).
 
     Events are sorted by time, then address. ``dt_s`` must be a whole number of µs. A
-    compiled scan that skips spike-free cache lines: 7.6 µs for a 1 ms tick of 17,866
-    channels with 20 spikes, against 20.8 for numpy's flat nonzero.
+    compiled scan that skips spike-free cache lines: 11.6-11.9 µs for a 1 ms tick of 17,866
+    channels with 20 spikes, against 19.6-20.2 for numpy's flat nonzero.
     """
     dt_us = _dt_us(dt_s)
     r = np.ascontiguousarray(raster, dtype=np.bool_)

@@ -23,11 +23,7 @@ import numpy as np
 
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import format_size
-from skinhil.model.mechanics.leapfrog import (
-    LeapfrogMechanics,
-    LeapfrogOperands,
-    leapfrog_kernel,
-)
+from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, LeapfrogOperands, leapfrog_kernel
 from skinhil.model.mechanics.linear import LinearMechanics, ModalOperands, _advance_modal_kernel
 from skinhil.model.neurons import (
     MAX_CHANNELS,
@@ -96,8 +92,6 @@ def _scheduled_leapfrog_sensor_kernel(
     add_schedule_forces(forces.transpose(0, 2, 1), t, starts, onsets, ends, which,
                         stim_onsets, stim_ends, taus, ptr, slots[pushed], peaks)
     _leapfrog_sensor_kernel(forces, springs, spikes, dt_s, substeps, mechanics, neurons)
-
-
 
 
 class SkinSensor:

@@ -146,6 +146,14 @@ def moving_bands(fixed: np.ndarray) -> np.ndarray:
     return np.stack([free[starts], ends - free[starts] + 1], axis=1).astype(np.int64)
 
 
+def same_kind(e: np.ndarray, t_over_l: np.ndarray, rest: np.ndarray, a: int, b: int) -> bool:
+    """Whether springs (or runs) ``a`` and ``b`` share their unit vector ``e`` (to
+    :data:`SAME_DIRECTION` per component), T/L and rest length (to it relatively)."""
+    return bool(np.abs(e[b] - e[a]).max() <= SAME_DIRECTION
+                and abs(t_over_l[b] - t_over_l[a]) <= SAME_DIRECTION * abs(t_over_l[a])
+                and abs(rest[b] - rest[a]) <= SAME_DIRECTION * rest[a])
+
+
 def spring_runs(springs: np.ndarray, e: np.ndarray, t_over_l: np.ndarray,
                 rest: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Group the springs into runs for :func:`leapfrog_kernel`: spring ``s0 + t·ds`` of a
@@ -170,9 +178,7 @@ def spring_runs(springs: np.ndarray, e: np.ndarray, t_over_l: np.ndarray,
         while True:
             nxt = where.get((int(i) + length, int(j) + length))
             if (nxt is None or taken[nxt] or nxt <= last or (stride and nxt - last != stride)
-                    or np.abs(e[nxt] - e[s]).max() > SAME_DIRECTION
-                    or abs(t_over_l[nxt] - t_over_l[s]) > SAME_DIRECTION * abs(t_over_l[s])
-                    or abs(rest[nxt] - rest[s]) > SAME_DIRECTION * rest[s]):
+                    or not same_kind(e, t_over_l, rest, s, nxt)):
                 break
             stride, last = nxt - last, nxt
             taken[nxt] = True
@@ -225,21 +231,15 @@ def join_runs(runs: np.ndarray, fixed: np.ndarray,
 
 
 def run_kinds(run_e: np.ndarray, run_tl: np.ndarray, run_l0: np.ndarray) -> np.ndarray:
-    """A label per run, equal for runs whose direction, T/L and rest length agree to
-    :data:`SAME_DIRECTION` (relative for T/L and the length)."""
-    keys: list[np.ndarray] = []
+    """A label per run, equal for runs of the same kind (:func:`same_kind`)."""
+    firsts: list[int] = []  # the first run of each kind
     labels = np.empty(len(run_e), dtype=np.int64)
     for r in range(len(run_e)):
-        row = np.concatenate([run_e[r], [run_tl[r], run_l0[r]]])
-        for label, key in enumerate(keys):
-            scale = np.maximum(np.abs(key), 1.0) * np.array([1, 1, 1, 0, 0]) + np.abs(key) * \
-                np.array([0, 0, 0, 1, 1])
-            if np.all(np.abs(row - key) <= SAME_DIRECTION * scale):
-                labels[r] = label
-                break
-        else:
-            labels[r] = len(keys)
-            keys.append(row)
+        label = next((k for k, f in enumerate(firsts)
+                      if same_kind(run_e, run_tl, run_l0, f, r)), len(firsts))
+        if label == len(firsts):
+            firsts.append(r)
+        labels[r] = label
     return labels
 
 
