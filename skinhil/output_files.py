@@ -3,7 +3,9 @@
 Every file skinhil writes (decoders, simulations, recordings, figures, reports) is written to
 a temporary file beside its target and renamed over it only when complete: a crash, SIGTERM or
 a full disk leaves the previous file intact, never a half-written one. :func:`atomic_path`
-is the one way to do it.
+is the one way to do it. The file written has the mode a plain ``open()`` would give it,
+``0o666`` less the process's umask (a lab's shared folder reads it), not the ``0o600`` of a
+temporary file.
 """
 
 from __future__ import annotations
@@ -40,6 +42,21 @@ def check_output_path(path: Path, suffixes: tuple[str, ...] = ()) -> Path:
     return path
 
 
+def current_umask() -> int:
+    """The process's file-creation mask (read from /proc where it can be, so no thread sees
+    it changed; else set and restored at once)."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 @contextlib.contextmanager
 def atomic_path(path: Path) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; on a clean exit, rename it over ``path``.
@@ -48,6 +65,7 @@ def atomic_path(path: Path) -> Iterator[Path]:
     such as numpy's or python-can's, see the right one). On an exception (including
     KeyboardInterrupt and SystemExit) it is removed and ``path`` is left as it was; an
     ``OSError`` of the writer (a full disk, a lost folder) becomes one :class:`ConfigError`.
+    The file renamed over ``path`` has mode ``0o666`` less the umask.
     """
     path = check_output_path(path)
     fd, name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix}",
@@ -59,6 +77,7 @@ def atomic_path(path: Path) -> Iterator[Path]:
         if tmp.exists():
             with open(tmp, "rb+") as f:
                 os.fsync(f.fileno())
+            os.chmod(tmp, 0o666 & ~current_umask())
             os.replace(tmp, path)
     except OSError as exc:
         raise ConfigError(f"cannot write '{path}': {exc.strerror or exc} — free some space "

@@ -10,6 +10,17 @@ from pathlib import Path
 import numpy as np
 from pynwb import NWBHDF5IO, validate
 
+BAD = ("CRITICAL", "BEST_PRACTICE_VIOLATION")
+"""nwbinspector's findings DANDI refuses a file for (suggestions are allowed)."""
+
+
+def inspector_findings(path: Path) -> list[str]:
+    """nwbinspector's CRITICAL and BEST_PRACTICE_VIOLATION findings on ``path``."""
+    from nwbinspector import inspect_nwbfile
+
+    return [f"{m.importance.name}: {m.check_function_name}: {m.message}"
+            for m in inspect_nwbfile(nwbfile_path=str(path)) if m.importance.name in BAD]
+
 REPO = Path(__file__).resolve().parents[1]
 ARGS = ["simulate", "--stimulus", "120deg_0.5N", "--snr-db", "10", "--seed", "3",
         "--duration", "0.4", "--no-progress"]
@@ -22,12 +33,20 @@ def _skinhil(*args: str, pre: str = "") -> subprocess.CompletedProcess[str]:
 
 
 def test_simulate_nwb_validates_and_equals_the_npz(tmp_path: Path) -> None:
+    """The NWB file validates, nwbinspector finds nothing DANDI refuses, the metadata
+    options land in it, it holds what the .npz holds, and both follow the umask."""
+    import datetime
+
     nwb_path, npz_path = tmp_path / "run.nwb", tmp_path / "run.npz"
-    for out in (nwb_path, npz_path):
-        res = _skinhil(*ARGS, "--out", str(out))
+    before = datetime.datetime.now(datetime.UTC)
+    for out, extra in ((nwb_path, ["--experimenter", "Doe, Jane", "--keywords", "a,b c",
+                                   "--institution", "Lab U"]), (npz_path, [])):
+        res = _skinhil(*ARGS, "--out", str(out), *extra, pre="import os; os.umask(0o027); ")
         assert res.returncode == 0, res.stderr
         assert f"wrote {out}" in res.stdout
+        assert oct(out.stat().st_mode & 0o777) == oct(0o640), out  # 0o666 less the umask
     assert validate(path=str(nwb_path)) == []
+    assert inspector_findings(nwb_path) == []
     ref = np.load(npz_path)
     events, forces = ref["events"], ref["forces_n"]
     assert len(events) > 0
@@ -43,6 +62,14 @@ def test_simulate_nwb_validates_and_equals_the_npz(tmp_path: Path) -> None:
         assert list(trials["stimulus"]) == ["120deg_0.5N"]
         assert abs(trials["force_n"].iloc[0] - 0.5) < 1e-9
         assert abs(trials["angle_deg"].iloc[0] - 120.0) < 1e-6
+        assert list(nwb.experimenter) == ["Doe, Jane"] and list(nwb.keywords) == ["a", "b c"]
+        assert nwb.institution == "Lab U" and nwb.subject.subject_id == "skinhil-skin-6x6"
+        assert before <= nwb.session_start_time <= datetime.datetime.now(datetime.UTC)
+        assert nwb.units.resolution == 1e-4
+        assert "skinhil_board" in nwb.devices
+        # sensor 0 joins M1 and M2 of the top layer: its midpoint lies there, z = 0
+        row = units.iloc[0]
+        assert row["z_m"] == 0.0 and row["x_m"] < 0 < row["y_m"]
         ts = nwb.acquisition["spring_forces"]
         assert ts.unit == "N" and abs(ts.rate - 1e4) < 1e-6
         np.testing.assert_array_equal(ts.data[:], forces)
@@ -109,8 +136,14 @@ def test_listen_record_nwb_validates_and_holds_the_session(tmp_path: Path) -> No
     info = [json.loads(line) for line in out.splitlines() if '"summary"' in line][-1]
     assert info["link"]["events_decoded"] == generated > 0
     assert validate(path=str(session)) == []
+    assert inspector_findings(session) == []
     with NWBHDF5IO(str(session), "r") as io:
         nwb = io.read()
+        # the session starts when the board did (board time 0 on the wall clock), not
+        # when the file was written
+        start = nwb.session_start_time.timestamp()
+        assert abs(start - board.start_wall_s()) < 1.0, (start, board.start_wall_s())
+        assert nwb.units.resolution == 1e-4
         units = nwb.units.to_dataframe()
         assert len(units) == 338
         assert sum(len(t) for t in units["spike_times"]) == generated

@@ -4,6 +4,7 @@ UDP; several boards at once on one CAN bus (``--board-id 0,5,9``) or one UDP por
 from __future__ import annotations
 
 import argparse
+import datetime
 import json
 import math
 import sys
@@ -17,6 +18,7 @@ import numpy as np
 from skinhil.cli import signals
 from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.lab_outputs import add_lab_output_args, check_lab_outputs, lab_outputs
+from skinhil.cli.nwb_options import add_nwb_args, nwb_metadata
 from skinhil.cli.options import add_size_option
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.cli.values import MAX_DURATION_S, integer, real
@@ -75,6 +77,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                         "datagrams of others are refused and counted")
     add_size_option(p)
     add_lab_output_args(p)
+    add_nwb_args(p)
 
 
 def _board_ids(text: str) -> list[int]:
@@ -255,6 +258,7 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError("--view and --lsl show one board's stream: use them with one "
                           "board on --port or --can")
     record = None if args.record is None else check_output_path(args.record, (".npz", ".nwb"))
+    args.nwb_meta = nwb_metadata(args, record is not None and record.suffix == ".nwb")
     if record is not None and record.suffix == ".nwb":
         require_pynwb()
     check_lab_outputs(args, args.size)
@@ -279,7 +283,7 @@ def run(args: argparse.Namespace) -> int:
         with SessionRecorder(record.parent) as recorder:
             receiver.add_listener(recorder)
             info = listen_one(args, receiver, names, answerer)
-            save_session(args, recorder, names, info)
+            save_session(args, recorder, names, info, receiver)
     if args.json:
         print(json.dumps(info), flush=True)
     else:
@@ -310,15 +314,18 @@ def listen_one(args: argparse.Namespace, receiver: Receiver, names: dict[int, st
 
 
 def save_session(args: argparse.Namespace, recorder: SessionRecorder, names: dict[int, str],
-                 info: dict[str, Any]) -> None:
-    """Write the recorded session to --record: NWB for .nwb, else .npz."""
+                 info: dict[str, Any], receiver: Receiver) -> None:
+    """Write the recorded session to --record: NWB for .nwb (its start time the board's
+    start on the wall clock, by the receiver's clock model), else .npz."""
     if args.record.suffix == ".nwb":
+        wall = receiver.clock.wall_time_s(0)
+        start = None if wall is None else datetime.datetime.fromtimestamp(wall, datetime.UTC)
         p = SkinParams(size=args.size)
         write_session(args.record, mesh=build_mesh(p.spacing_m, p.layer_gap_m, p.size),
                       events=recorder.events, markers=recorder.markers,
                       decisions=recorder.decisions, names=names,
                       description=f"skinhil listen: {describe_transport(args)}, "
-                                  f"model {args.model}")
+                                  f"model {args.model}", start=start, meta=args.nwb_meta)
     else:
         recorder.save(args.record, {"model": str(args.model), "link": describe_transport(args),
                                     "summary": info})

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import datetime
 import json
 import math
 from pathlib import Path
@@ -11,6 +12,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from skinhil.cli.kernel_notice import announce_cold_cache
+from skinhil.cli.nwb_options import add_nwb_args, nwb_metadata
 from skinhil.cli.options import (
     SCHEDULE_HELP,
     add_model_options,
@@ -57,6 +59,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="do not keep the spring forces (n_steps x n_springs floats: 14 GB for "
                         "10 s of a 48x48 skin); the file then holds an empty forces_n")
     add_model_options(p)
+    add_nwb_args(p)
 
 
 def _schedule(args: argparse.Namespace) -> Schedule:
@@ -72,6 +75,7 @@ def _schedule(args: argparse.Namespace) -> Schedule:
 
 def run(args: argparse.Namespace) -> int:
     out = check_output_path(args.out, OUT_SUFFIXES)
+    nwb_meta = nwb_metadata(args, out.suffix == ".nwb")
     if out.suffix == ".nwb":
         require_pynwb()
     schedule = _schedule(args)
@@ -86,6 +90,7 @@ def run(args: argparse.Namespace) -> int:
     sensor = SkinSensor(model, args.dt_s, args.snr_db, args.seed,
                         noise=noise_from_args(args), threads=args.threads)
     block = max(1, int(round(BLOCK_S / args.dt_s)))
+    started = datetime.datetime.now(datetime.UTC)  # simulation time 0 (NWB's session start)
     forces = np.empty((n_steps if args.forces else 0, model.n_springs), dtype=np.float32)
     peak = 0.0
     events = []
@@ -114,7 +119,8 @@ def run(args: argparse.Namespace) -> int:
     if out.suffix == ".nwb":
         write_simulation(out, mesh=model.mesh, schedule=schedule, events=ev,
                          forces_n=forces if args.forces else None, dt_s=args.dt_s,
-                         description=f"skinhil simulate: {json.dumps(meta)}")
+                         description=f"skinhil simulate: {json.dumps(meta)}",
+                         start=started, meta=nwb_meta)
     else:
         with atomic_path(out) as tmp, tmp.open("wb") as fh:
             np.savez_compressed(fh, forces_n=forces, events=ev, markers=markers,

@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 import datetime
-import uuid
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from skinhil.model.geometry import Mesh
-from skinhil.nwb.simulation import add_units, require_pynwb
+from skinhil.nwb.metadata import NwbMetadata
+from skinhil.nwb.simulation import add_units, new_file, require_pynwb
 from skinhil.output_files import atomic_path
 
 
@@ -53,21 +53,36 @@ def _add_decisions(nwb: Any, decisions: np.ndarray, names: dict[int, str]) -> No
     nwb.add_time_intervals(table)
 
 
+def time_resolution_s(events: np.ndarray) -> float:
+    """The smallest possible difference of two spike times (s) as the received times show
+    it: their greatest common divisor in µs (the board's step, 100 µs by default; a whole
+    µs, the wire's unit, when there are too few to tell)."""
+    t = np.unique(np.asarray(events["t"], dtype=np.int64))
+    step = int(np.gcd.reduce(np.diff(t))) if t.size > 2 else 1
+    return max(step, 1) / 1e6
+
+
 def write_session(path: Path, *, mesh: Mesh, events: np.ndarray, markers: np.ndarray,
-                  decisions: np.ndarray, names: dict[int, str], description: str) -> Path:
+                  decisions: np.ndarray, names: dict[int, str], description: str,
+                  start: datetime.datetime | None = None,
+                  meta: NwbMetadata | None = None) -> Path:
     """Write a recorded session to ``path`` (.nwb, atomically); return the path written.
 
     ``events``: EVENT_DTYPE (``t`` µs board time); ``markers`` and ``decisions`` as
     :class:`skinhil.recording.SessionRecorder` keeps them; ``names``: stimulus id →
-    name.
+    name; ``start``: the wall-clock time of board time 0 (the receiver's clock model,
+    :meth:`skinhil.receiver.BoardClock.wall_time`; default now), so every time in the file
+    is board time and the file lines up with other recordings of the same wall clock;
+    ``meta``: the session's metadata (default :class:`NwbMetadata`'s).
     """
     require_pynwb()
-    from pynwb import NWBHDF5IO, NWBFile
+    from pynwb import NWBHDF5IO
 
-    nwb = NWBFile(session_description=description, identifier=str(uuid.uuid4()),
-                  session_start_time=datetime.datetime.now(datetime.UTC),
-                  source_script="skinhil listen", source_script_file_name="skinhil")
-    add_units(nwb, mesh, events)
+    nwb = new_file(meta, command="listen", mesh=mesh,
+                   start=start or datetime.datetime.now(datetime.UTC), description=description,
+                   experiment="a board's spike stream received, decoded and classified "
+                              "online (skinhil listen)")
+    add_units(nwb, mesh, events, time_resolution_s(events))
     _add_stimuli(nwb, markers, names)
     _add_decisions(nwb, decisions, names)
     with atomic_path(path) as tmp, NWBHDF5IO(str(tmp), "w") as io:

@@ -13,6 +13,7 @@ import numpy as np
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import Mesh
 from skinhil.model.stimuli import Schedule
+from skinhil.nwb.metadata import NwbMetadata
 from skinhil.output_files import atomic_path
 
 LAYER_NAMES = {1: "layer 1", 2: "layer 2", 3: "layer 3", 12: "layers 1-2", 23: "layers 2-3"}
@@ -28,24 +29,67 @@ def require_pynwb() -> None:
                           'pip install "skinhil[nwb]"') from None
 
 
-def add_units(nwb: Any, mesh: Mesh, events: np.ndarray) -> None:
+MODEL_TEXT = ("3-layer mass-spring-damper skin, one stochastic Izhikevich neuron per spring "
+              "(skinhil)")
+"""The model as NWB files name it (the subject's and the device's description)."""
+
+
+def spring_midpoints(mesh: Mesh) -> np.ndarray:
+    """(n_springs, 3) rest position (m) of each sensor: the midpoint of its spring; x to the
+    right and y up on the skin, z 0 at the top layer and negative below it."""
+    return 0.5 * (mesh.positions[mesh.springs[:, 0]] + mesh.positions[mesh.springs[:, 1]])
+
+
+def new_file(meta: NwbMetadata | None, *, command: str, mesh: Mesh,
+             start: datetime.datetime, description: str, experiment: str) -> Any:
+    """An :class:`pynwb.NWBFile` with the session's metadata, its subject (the simulated
+    skin) and the board as its device."""
+    from pynwb import NWBFile
+
+    meta = meta or NwbMetadata()
+    nwb = NWBFile(identifier=str(uuid.uuid4()), **meta.nwbfile_kwargs(
+        command=command, size=mesh.size, start=start, description=description,
+        experiment=experiment))
+    nwb.subject = meta.subject(mesh.size, MODEL_TEXT, start)
+    from skinhil import __version__
+
+    nwb.create_device(name="skinhil_board", description=(
+        f"emulated sensor board, skinhil {__version__}: {MODEL_TEXT}; "
+        f"{mesh.springs.shape[0]} sensors (springs), their rest positions in the units "
+        "table's x_m, y_m, z_m"))
+    return nwb
+
+
+def add_units(nwb: Any, mesh: Mesh, events: np.ndarray, resolution_s: float) -> None:
     """One unit per sensor of ``mesh``: its spike times (s, from ``events``' ``t`` in µs)
-    and its spring's metadata."""
+    and its spring's metadata and rest position; ``resolution_s``: the smallest possible
+    difference of two spike times (the board's step, s)."""
+    from pynwb.misc import Units
+
+    nwb.units = Units(name="units", resolution=float(resolution_s),
+                      description="one unit per sensor (spring) of the skin, by wire address")
     nwb.add_unit_column("spring", "sensor (spring) address, 0-based, as on the wire")
     nwb.add_unit_column("mass_i", "first mass the spring joins, 1-based number M1..")
     nwb.add_unit_column("mass_j", "second mass the spring joins, 1-based number M1..")
     nwb.add_unit_column("layer", "the layer the spring lies in, or the two layers it joins")
     nwb.add_unit_column("rest_length_m", "the spring's rest length (m)")
+    for axis, text in (("x", "x (m, to the right on the skin, 0 at its centre)"),
+                       ("y", "y (m, up on the skin, 0 at its centre)"),
+                       ("z", "z (m, 0 at the top layer, negative below)")):
+        nwb.add_unit_column(f"{axis}_m", f"the sensor's position at rest, its spring's "
+                                         f"midpoint: {text}")
     order = np.argsort(events["addr"], kind="stable")
     addr = events["addr"][order]
     times = events["t"][order] * 1e-6
     bounds = np.searchsorted(addr, np.arange(mesh.springs.shape[0] + 1))
+    where = spring_midpoints(mesh)
     for s, (i, j) in enumerate(mesh.springs):
         rest = float(np.linalg.norm(mesh.positions[j] - mesh.positions[i]))
         nwb.add_unit(spike_times=times[bounds[s]:bounds[s + 1]], spring=s,
                      mass_i=int(i) + 1, mass_j=int(j) + 1,
                      layer=LAYER_NAMES.get(int(mesh.layer_of_spring[s]), "?"),
-                     rest_length_m=rest)
+                     rest_length_m=rest, x_m=float(where[s, 0]), y_m=float(where[s, 1]),
+                     z_m=float(where[s, 2]))
 
 
 def _add_trials(nwb: Any, schedule: Schedule) -> None:
@@ -67,19 +111,24 @@ def _add_trials(nwb: Any, schedule: Schedule) -> None:
 
 
 def write_simulation(path: Path, *, mesh: Mesh, schedule: Schedule, events: np.ndarray,
-                     forces_n: np.ndarray | None, dt_s: float, description: str) -> Path:
+                     forces_n: np.ndarray | None, dt_s: float, description: str,
+                     start: datetime.datetime | None = None,
+                     meta: NwbMetadata | None = None) -> Path:
     """Write a simulation to ``path`` (.nwb, atomically) and return the path written.
 
     ``events``: EVENT_DTYPE (``t`` µs, ``addr``); ``forces_n``: (n_steps, n_springs) N at
-    ``dt_s`` (s) from time 0, or None to leave them out.
+    ``dt_s`` (s) from time 0, or None to leave them out; ``start``: the wall-clock time of
+    simulation time 0, the file's session start (default: now); ``meta``: the session's
+    metadata (default :class:`NwbMetadata`'s).
     """
     require_pynwb()
-    from pynwb import NWBHDF5IO, NWBFile, TimeSeries
+    from pynwb import NWBHDF5IO, TimeSeries
 
-    nwb = NWBFile(session_description=description, identifier=str(uuid.uuid4()),
-                  session_start_time=datetime.datetime.now(datetime.UTC),
-                  source_script="skinhil simulate", source_script_file_name="skinhil")
-    add_units(nwb, mesh, events)
+    nwb = new_file(meta, command="simulate", mesh=mesh,
+                   start=start or datetime.datetime.now(datetime.UTC), description=description,
+                   experiment="an offline simulation of the skin under scheduled touch "
+                              "stimuli (skinhil simulate)")
+    add_units(nwb, mesh, events, dt_s)
     _add_trials(nwb, schedule)
     if forces_n is not None and forces_n.size:
         nwb.add_acquisition(TimeSeries(

@@ -56,3 +56,11 @@ class BoardClock:
     def host_time_s(self, board_t_us: int) -> float | None:
         """Host monotonic time (s) at which the board was at ``board_t_us``."""
         return None if not self.synced else board_t_us * 1e-6 + self.offset_s
+
+    def wall_time_s(self, board_t_us: int) -> float | None:
+        """Wall-clock time (s since the Unix epoch, ``time.time()``'s) at which the board was
+        at ``board_t_us`` (µs): :meth:`host_time_s` moved to the wall clock by the host's
+        current wall-minus-monotonic offset. ``wall_time_s(0)`` is when the board started
+        (the start time of a recorded session); None before any observation."""
+        host = self.host_time_s(board_t_us)
+        return None if host is None else host + (time.time() - time.monotonic())

@@ -9,6 +9,7 @@ import subprocess
 import sys
 import tempfile
 import threading
+import time
 from pathlib import Path
 from typing import Any
 
@@ -59,6 +60,8 @@ class ServeProcess:
                                      stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
                                      text=True, env=serve_env())
         self.lines: list[dict[str, Any]] = []
+        self.arrived: list[float] = []
+        """Wall-clock time (``time.time()``) each of ``lines`` was read."""
         self.stderr_lines: list[str] = []
         self._threads = [threading.Thread(target=self._read_out, daemon=True),
                          threading.Thread(target=self._read_err, daemon=True)]
@@ -69,9 +72,11 @@ class ServeProcess:
         assert self.proc.stdout is not None
         for line in self.proc.stdout:
             try:
-                self.lines.append(json.loads(line))
+                item = json.loads(line)
             except json.JSONDecodeError:
-                self.lines.append({"type": "text", "text": line})
+                item = {"type": "text", "text": line}
+            self.arrived.append(time.time())
+            self.lines.append(item)
 
     def _read_err(self) -> None:
         assert self.proc.stderr is not None
@@ -104,6 +109,16 @@ class ServeProcess:
         found = [x for x in self.lines if x.get("type") == "summary"]
         assert found, f"no summary; stderr:\n{self.stderr}"
         return found[-1]
+
+    def start_wall_s(self) -> float:
+        """When the board started on the wall clock (s since the epoch), from its status
+        lines: the earliest of each line's arrival minus its board time (a line leaves a
+        moment after its board time, so the earliest is the closest)."""
+        starts = [at - x["board_time_s"] for x, at in zip(list(self.lines), list(self.arrived),
+                                                          strict=False)
+                  if x.get("type") == "status"]
+        assert starts, f"no status line; stderr:\n{self.stderr}"
+        return min(starts)
 
     def kill(self) -> None:
         if self.proc.poll() is None:
