@@ -49,7 +49,8 @@ def test_psp_sensors_outside_the_skin_are_refused() -> None:
     assert "sensors 0..337" in line
 
 
-def test_several_boards_refuse_the_lab_outputs() -> None:
-    line = _one_error_line(_skinhil("listen", "--can", "vcan0", "--board-id", "0,5",
-                                    "--model", "none.npz", "--view", "0"))
-    assert "one board" in line
+def test_nwb_metadata_without_an_nwb_output_is_refused(tmp_path: Path) -> None:
+    line = _one_error_line(_skinhil("simulate", "--out", str(tmp_path / "run.npz"),
+                                    "--experimenter", "Doe, Jane"))
+    assert "--experimenter" in line and ".nwb" in line
+    assert not (tmp_path / "run.npz").exists()

@@ -29,7 +29,7 @@ KnownPeers = {127.0.0.1}
 """
 """liblsl on 127.0.0.1 only: no IPv6, machine-scope discovery sent to loopback."""
 
-STREAMS = ("spikes", "psp", "markers", "decisions")
+STREAMS = ("spikes", "psp", "markers", "decisions", "link")
 
 
 @pytest.fixture
@@ -148,14 +148,35 @@ def test_every_lsl_outlet_reads_back_as_the_receiver_decoded(
     decided = np.array(readers["decisions"].stamps)
     assert np.abs(decided - mapped(decisions["decided_t_us"])).max() < 2e-3
 
-    # PSP: 1 kHz, one channel per sensor with its spring's masses and unit
+    # PSP: 1 kHz, one channel per sensor with its spring's masses, unit and place (XDF:
+    # location X/Y/Z in mm; sensor 0 joins M1-M2 at the top layer's top-left edge)
     psp = readers["psp"]
     assert psp.info.nominal_srate() == 1000 and psp.info.channel_count() == 338
     labels = _channels(psp.info)
     assert labels[0] == {"label": "S0 M1-M2", "unit": "a.u.", "type": "PSP"}
+    loc = psp.info.desc().child("channels").child("channel").child("location")
+    x, y, z = (float(loc.child_value(a)) for a in "XYZ")
+    assert x < 0 < y and z == 0.0
+    # provenance in every stream's desc
+    for r in readers.values():
+        prov = r.info.desc().child("provenance")
+        assert prov.child_value("size") == "6x6" and prov.child_value("sensors") == "338"
+        assert len(prov.child_value("decoder_sha256")) == 64
+        assert prov.child_value("skinhil_version")
+        assert r.info.desc().child("acquisition").child_value("manufacturer") == "skinhil"
+    # the PSP stream covers the whole session: from its first item to the board's last
+    # STATUS, not only up to the last spike
     values = np.array(psp.samples)
-    span_s = (events["t"][-1] - events["t"][0]) * 1e-6
-    assert abs(values.shape[0] - span_s * 1000) <= 2
+    board_end_s = board.summary()["board_time_s"]
+    assert values.shape[0] >= (events["t"][-1] - events["t"][0]) * 1e-3
+    assert abs(psp.stamps[-1] - mapped(np.array([int(board_end_s * 1e6)]))[0]) < 0.05
+    # link health: one sample per STATUS, the receiver's counters; the last one whole
+    link = readers["link"]
+    assert link.info.type() == "LinkHealth" and link.info.channel_count() == 19
+    names = [c["label"] for c in _channels(link.info)]
+    last = dict(zip(names, link.samples[-1], strict=True))
+    assert last["events_decoded"] == len(events) and last["board_generated"] == len(events)
+    assert len(link.samples) >= 3 and (np.diff(link.stamps) >= 0).all()
     assert np.median(np.diff(psp.stamps)) == pytest.approx(1e-3, abs=1e-6)
     # each sensor's PSP integrates to tau_m (21.3 ms) per spike: total ≈ spikes × tau_m
     counts = np.bincount(events["addr"], minlength=338)

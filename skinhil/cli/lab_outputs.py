@@ -1,18 +1,24 @@
 """The lab outputs of a receiving command (``listen``, ``demo``): ``--view`` (the live view
-in the browser) and ``--lsl`` (Lab Streaming Layer outlets), one helper for both commands."""
+in the browser) and ``--lsl`` (Lab Streaming Layer outlets), one helper for both commands,
+for one board or several on one link (``listen --udp``, ``listen --can --board-id 0,5``):
+one view server whose page lists the boards, and each board's LSL streams (the first
+board's named NAME-..., each further board's NAME-2-..., NAME-3-... in the order they first
+sent; their desc says which board)."""
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import hashlib
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
+from pathlib import Path
 
 from skinhil.errors import ConfigError
 from skinhil.lsl import LslOutlets, require_pylsl
 from skinhil.model.geometry import MeshSize, build_mesh, format_size, spring_count
 from skinhil.model.skin import SkinParams
-from skinhil.receiver import Receiver
+from skinhil.receiver import Receiver, ReceiverListener
 from skinhil.view import ViewFeed, ViewServer, parse_address
 
 
@@ -37,7 +43,8 @@ def add_lab_output_args(parser: argparse.ArgumentParser, lsl: bool = True) -> No
     if lsl:
         parser.add_argument("--lsl", nargs="?", const="skinhil", metavar="NAME",
                             help="publish LSL outlets NAME-spikes, NAME-psp, NAME-markers, "
-                                 "NAME-decisions (default NAME: skinhil; "
+                                 "NAME-decisions, NAME-link (default NAME: skinhil; with "
+                                 "several boards the further ones' NAME-2-..., NAME-3-...; "
                                  "pip install \"skinhil[lsl]\")")
 
 
@@ -57,31 +64,80 @@ def check_lab_outputs(args: argparse.Namespace, size: MeshSize) -> None:
                           "in that range")
 
 
+def provenance(link: str, decoder: Path | None) -> dict[str, str]:
+    """What the LSL streams say of the run (:mod:`skinhil.lsl.metadata`): the link, the
+    decoder file and its SHA-256; the board's SNR and seed are not on the wire."""
+    out = {"link": link, "snr_db": "unknown (not sent by the board)",
+           "seed": "unknown (not sent by the board)"}
+    if decoder is not None:
+        out["decoder"] = str(Path(decoder).absolute())
+        try:
+            out["decoder_sha256"] = hashlib.sha256(Path(decoder).read_bytes()).hexdigest()
+        except OSError:
+            pass
+    return out
+
+
+class LabOutputs:
+    """The view server and the LSL outlets asked for by ``args``; :meth:`attach` gives a
+    board's receiver its listeners (the view's feed, the outlets)."""
+
+    def __init__(self, args: argparse.Namespace, names: dict[int, str], size: MeshSize,
+                 command: str, prov: Mapping[str, str] | None = None) -> None:
+        p = SkinParams(size=size)
+        self.mesh = build_mesh(p.spacing_m, p.layer_gap_m, p.size)
+        self.args, self.names, self.command = args, names, command
+        self.provenance = dict(prov or {})
+        self.server: ViewServer | None = None
+        self.outlets: list[LslOutlets] = []
+        self.boards = 0
+        if args.view is not None:
+            host, port = parse_address(args.view)
+            self.server = ViewServer(None, host, port).start()
+            print(f"skinhil {command}: live view at {self.server.url}", file=sys.stderr,
+                  flush=True)
+
+    def attach(self, key: object, receiver: Receiver,
+               answers: Callable[[], dict[str, int]] | None = None) -> list[ReceiverListener]:
+        """The listeners of board ``key``'s ``receiver`` (the view also shows ``answers()``,
+        the receiver's DECISION counters, when it answers the board)."""
+        self.boards += 1
+        out: list[ReceiverListener] = []
+        if self.server is not None:
+            feed = ViewFeed(receiver, self.mesh, self.names, self.args.psp_sensors, answers)
+            self.server.add_feed(str(key), feed)
+            out.append(feed)
+        if getattr(self.args, "lsl", None) is not None:
+            name = self.args.lsl if self.boards == 1 else f"{self.args.lsl}-{self.boards}"
+            outlets = LslOutlets(receiver, self.mesh, self.names, name,
+                                 self.args.psp_sensors, {**self.provenance, "board": str(key)})
+            self.outlets.append(outlets)
+            out.append(outlets)
+            print(f"skinhil {self.command}: LSL outlets {name}-spikes, -psp, -markers, "
+                  f"-decisions, -link (board {key})", file=sys.stderr, flush=True)
+        return out
+
+    def close(self) -> None:
+        """End the view's run and close the outlets (they push what they kept)."""
+        if self.server is not None:
+            self.server.close()
+        for outlets in self.outlets:
+            outlets.close()
+
+
 @contextlib.contextmanager
 def lab_outputs(args: argparse.Namespace, receiver: Receiver, names: dict[int, str],
                 size: MeshSize, command: str,
-                answers: Callable[[], dict[str, int]] | None = None) -> Iterator[None]:
+                answers: Callable[[], dict[str, int]] | None = None,
+                prov: Mapping[str, str] | None = None) -> Iterator[LabOutputs]:
     """While the body runs, the view and the LSL outlets asked for by ``args`` hear
-    ``receiver`` (the view also shows ``answers()``, the receiver's DECISION counters, when
-    it answers the board); the view's address goes to stderr."""
-    p = SkinParams(size=size)
-    mesh = build_mesh(p.spacing_m, p.layer_gap_m, p.size)
-    server = outlets = None
+    ``receiver`` (see :meth:`LabOutputs.attach`); the view's address goes to stderr."""
+    outputs = None
     try:
-        if args.view is not None:
-            host, port = parse_address(args.view)
-            feed = ViewFeed(receiver, mesh, names, args.psp_sensors, answers)
-            server = ViewServer(feed, host, port).start()
-            receiver.add_listener(feed)
-            print(f"skinhil {command}: live view at {server.url}", file=sys.stderr, flush=True)
-        if getattr(args, "lsl", None) is not None:
-            outlets = LslOutlets(receiver, mesh, names, args.lsl, args.psp_sensors)
-            receiver.add_listener(outlets)
-            print(f"skinhil {command}: LSL outlets {args.lsl}-spikes, -psp, -markers, "
-                  "-decisions", file=sys.stderr, flush=True)
-        yield
+        outputs = LabOutputs(args, names, size, command, prov)
+        for listener in outputs.attach(receiver.board_id, receiver, answers):
+            receiver.add_listener(listener)
+        yield outputs
     finally:
-        if server is not None:
-            server.close()
-        if outlets is not None:
-            outlets.close()
+        if outputs is not None:
+            outputs.close()

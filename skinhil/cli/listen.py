@@ -17,7 +17,13 @@ import numpy as np
 
 from skinhil.cli import signals
 from skinhil.cli.kernel_notice import announce_cold_cache
-from skinhil.cli.lab_outputs import add_lab_output_args, check_lab_outputs, lab_outputs
+from skinhil.cli.lab_outputs import (
+    LabOutputs,
+    add_lab_output_args,
+    check_lab_outputs,
+    lab_outputs,
+    provenance,
+)
 from skinhil.cli.nwb_options import add_nwb_args, nwb_metadata
 from skinhil.cli.options import add_size_option
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
@@ -254,9 +260,6 @@ def run(args: argparse.Namespace) -> int:
     if several and args.answer:
         raise ConfigError("--answer sends one board its decisions: use it with one board on "
                           "--port or --can")
-    if several and (args.view is not None or args.lsl is not None):
-        raise ConfigError("--view and --lsl show one board's stream: use them with one "
-                          "board on --port or --can")
     record = None if args.record is None else check_output_path(args.record, (".npz", ".nwb"))
     args.nwb_meta = nwb_metadata(args, record is not None and record.suffix == ".nwb")
     if record is not None and record.suffix == ".nwb":
@@ -267,10 +270,16 @@ def run(args: argparse.Namespace) -> int:
     announce_cold_cache("listen")
     names = class_names()
     if several:
-        bus = BusReceiver(transport, decoder, args.board_ids if args.can else (),
-                          max_sources=args.udp_max_sources, allow=args.udp_allow,
-                          listeners=lambda key, rx: [LivePrinter(rx, args.json, names, key)])
-        return run_bus(args, bus, names)
+        lab = LabOutputs(args, names, args.size, "listen",
+                         provenance(describe_transport(args), args.model))
+        try:
+            bus = BusReceiver(transport, decoder, args.board_ids if args.can else (),
+                              max_sources=args.udp_max_sources, allow=args.udp_allow,
+                              listeners=lambda key, rx: [LivePrinter(rx, args.json, names, key),
+                                                         *lab.attach(key, rx)])
+            return run_bus(args, bus, names)
+        finally:
+            lab.close()
     receiver = Receiver(transport, decoder, board_id=args.board_ids[0],
                         reopen=lambda: open_transport(args))
     receiver.add_listener(LivePrinter(receiver, args.json, names))
@@ -304,7 +313,8 @@ def listen_one(args: argparse.Namespace, receiver: Receiver, names: dict[int, st
               file=sys.stderr, flush=True)
     t0 = time.monotonic()
     with lab_outputs(args, receiver, names, args.size, "listen",
-                     answerer.as_dict if answerer is not None else None):
+                     answerer.as_dict if answerer is not None else None,
+                     provenance(describe_transport(args), args.model)):
         listen_until_stopped(args, receiver, lambda: receiver.link_report().as_dict(),
                              lambda: False)
     info = summary(receiver, time.monotonic() - t0)

@@ -1,7 +1,9 @@
-"""The LSL outlets of one receiver: spikes, PSP traces, ground-truth markers, decisions.
+"""The LSL outlets of one receiver: spikes, PSP traces, ground-truth markers, decisions,
+link health.
 
-Four streams, named ``NAME-spikes``, ``NAME-psp``, ``NAME-markers``, ``NAME-decisions``
-(source ids ``skinhil:NAME:...``, so a recorder that loses them finds them again):
+Five streams, named ``NAME-spikes``, ``NAME-psp``, ``NAME-markers``, ``NAME-decisions``,
+``NAME-link`` (source ids ``skinhil:NAME:...``, so a recorder that loses them finds them
+again):
 
 - **spikes** (type ``Spikes``, irregular rate, one ``int32`` channel): one sample per
   spike, its value the sensor (spring) address, stamped at the spike's board time;
@@ -10,16 +12,25 @@ Four streams, named ``NAME-spikes``, ``NAME-psp``, ``NAME-markers``, ``NAME-deci
 - **markers** (type ``Markers``, irregular, one string channel): each ground-truth marker
   as ``onset 3 120deg_0.5N t_board_s=12.3456``;
 - **decisions** (type ``Markers``, irregular, one string channel): each online decision as
-  ``decision 3 120deg_0.5N true=3 correct t_board_s=12.3456`` (board time of the decision).
+  ``decision 3 120deg_0.5N true=3 correct t_board_s=12.3456`` (board time of the decision);
+- **link** (type ``LinkHealth``, irregular, one ``double`` channel per counter of
+  :data:`LINK_CHANNELS`): the receiver's link and loss counters and the board's (late
+  ticks, events queued, running), one sample per board STATUS stamped at its board time
+  and one when the outlets close; an XDF file shows where data were lost where a counter
+  steps up.
 
-Every stream's ``desc`` holds the channel labels and units LSL tools read: for the psp
-stream one ``channel`` per sensor (``label`` ``S12 M8-M9``, ``unit`` ``a.u.``, ``type``
-``PSP``, the spring and its two masses), for the spikes stream the sensor table
-(``sensors/sensor``: address and the spring's two masses) and the ``unit`` of the value
-(``address``).
+Every stream's ``desc`` follows the XDF meta-data conventions (:mod:`skinhil.lsl.metadata`):
+``acquisition`` and ``provenance`` (version, model, size, SNR, seed, decoder, link), and the
+channels LSL tools read: for the psp stream one ``channel`` per sensor (``label`` ``S12
+M8-M9``, ``unit`` ``a.u.``, ``type`` ``PSP``, the spring, its two masses and its
+``location`` X/Y/Z in mm), for the spikes stream the sensor table (``sensors/sensor``:
+address, the spring's two masses, location) and the ``unit`` of the value (``address``).
 
-Spikes and PSP samples are pushed in chunks of :data:`PUSH_PERIOD_US` of board time (and
-whatever is left when the outlets close), markers and decisions at once.
+Spikes and PSP samples are pushed in chunks of :data:`PUSH_PERIOD_US` of board time, and at
+every STATUS sent with no event queued (board time known complete: a quiet board's PSP stream
+goes on), and whatever is left when the outlets close, up to the newest board time received
+(the PSP stream covers the session from the first item received to the last); markers,
+decisions and link samples at once.
 
 Time: a sample of board time ``t`` (µs) is stamped ``clock.host_time_s(t)`` (the
 receiver's board clock model, host monotonic seconds) plus the offset of LSL's
@@ -33,16 +44,29 @@ time lies.
 from __future__ import annotations
 
 import bisect
+import dataclasses
 import logging
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
 from skinhil.errors import ConfigError
+from skinhil.lsl.metadata import (
+    add_plain_channels,
+    add_sensor_channels,
+    add_sensor_table,
+    describe,
+)
 from skinhil.model.geometry import Mesh
-from skinhil.receiver import Receiver, ReceiverListener, ScoredDecision
+from skinhil.receiver import (
+    LinkReport,
+    Receiver,
+    ReceiverListener,
+    ScoredDecision,
+    in_stream_order,
+)
 from skinhil.receiver.traces import PspTraces
 
 log = logging.getLogger(__name__)
@@ -63,6 +87,13 @@ sends from threads of its own, and an outlet destroyed right after a push drops 
 have not sent yet (seen: the last 10 of 1,717 spikes, in 1 of 4 runs of tests/test_lsl.py)."""
 
 
+LINK_CHANNELS = tuple(f.name for f in dataclasses.fields(LinkReport)) + (
+    "board_late_ticks", "board_events_queued", "board_running")
+"""The link stream's channels: the receiver's :class:`LinkReport` counters (counts since it
+started), then the board's late ticks and queued events as of its last STATUS and whether
+it runs (1/0)."""
+
+
 def require_pylsl() -> None:
     """Raise :class:`ConfigError` (one line, the pip command) when pylsl is not installed."""
     try:
@@ -72,26 +103,23 @@ def require_pylsl() -> None:
                           'pip install "skinhil[lsl]"') from None
 
 
-def sensor_label(mesh: Mesh, address: int) -> str:
-    """``S12 M8-M9``: the sensor's address and the 1-based numbers of its spring's masses."""
-    i, j = mesh.springs[address]
-    return f"S{address} M{int(i) + 1}-M{int(j) + 1}"
-
-
 def _stream(name: str, kind: str, channels: int, rate_hz: float, fmt: Any,
-            source: str) -> Any:
+            source: str, provenance: Mapping[str, str]) -> Any:
     import pylsl
 
     info = pylsl.StreamInfo(name, kind, channels, rate_hz, fmt, source)
     info.desc().append_child_value("manufacturer", "skinhil")
+    describe(info, provenance)
     return info
 
 
 class LslOutlets(ReceiverListener):
-    """A receiver listener that publishes its stream as four LSL outlets (see the module)."""
+    """A receiver listener that publishes its stream as five LSL outlets (see the module);
+    ``provenance``: what the streams' desc says of the run (:mod:`skinhil.lsl.metadata`)."""
 
     def __init__(self, receiver: Receiver, mesh: Mesh, names: dict[int, str],
-                 name: str = "skinhil", psp_sensors: Sequence[int] | None = None) -> None:
+                 name: str = "skinhil", psp_sensors: Sequence[int] | None = None,
+                 provenance: Mapping[str, str] | None = None) -> None:
         require_pylsl()
         import pylsl
 
@@ -106,46 +134,36 @@ class LslOutlets(ReceiverListener):
         self._spikes: list[tuple[np.ndarray, np.ndarray]] = []
         self._spikes_n = 0
         self._last_event_us = -1
+        self._last_known_us = -1
+        """Newest board time (µs) before which the stream is complete (events, STATUS)."""
         self._pushed_us = -1
         self._read_ends_us: list[int] = []
         """Board time (µs) of the newest event of each recent read, increasing."""
         self._read_offsets_s: list[float] = []
         """The clock model's offset (s) when each of those reads arrived."""
 
+        prov = {"size": f"{mesh.size[0]}x{mesh.size[1]}", "sensors": str(n),
+                **(provenance or {})}
         spikes = _stream(f"{name}-spikes", "Spikes", 1, pylsl.IRREGULAR_RATE, "int32",
-                         f"skinhil:{name}:spikes")
-        ch = spikes.desc().append_child("channels").append_child("channel")
-        ch.append_child_value("label", "sensor")
-        ch.append_child_value("unit", "address")
-        ch.append_child_value("type", "SpikeAddress")
-        table = spikes.desc().append_child("sensors")
-        for a in range(n):
-            i, j = mesh.springs[a]
-            s = table.append_child("sensor")
-            s.append_child_value("address", str(a))
-            s.append_child_value("mass_i", f"M{int(i) + 1}")
-            s.append_child_value("mass_j", f"M{int(j) + 1}")
-
+                         f"skinhil:{name}:spikes", prov)
+        add_plain_channels(spikes, [("sensor", "address", "SpikeAddress")])
+        add_sensor_table(spikes, mesh)
         psp = _stream(f"{name}-psp", "PSP", len(chosen), self.traces.rate_hz, "float32",
-                      f"skinhil:{name}:psp")
-        chans = psp.desc().append_child("channels")
-        for a in chosen:
-            c = chans.append_child("channel")
-            c.append_child_value("label", sensor_label(mesh, a))
-            c.append_child_value("unit", "a.u.")
-            c.append_child_value("type", "PSP")
-            c.append_child_value("sensor", str(a))
-
+                      f"skinhil:{name}:psp", prov)
+        add_sensor_channels(psp, mesh, chosen, "a.u.", "PSP")
         markers = _stream(f"{name}-markers", "Markers", 1, pylsl.IRREGULAR_RATE, "string",
-                          f"skinhil:{name}:markers")
+                          f"skinhil:{name}:markers", prov)
+        add_plain_channels(markers, [("ground truth", "", "Marker")])
         decisions = _stream(f"{name}-decisions", "Markers", 1, pylsl.IRREGULAR_RATE,
-                            "string", f"skinhil:{name}:decisions")
-        for info, label in ((markers, "ground truth"), (decisions, "decision")):
-            c = info.desc().append_child("channels").append_child("channel")
-            c.append_child_value("label", label)
-            c.append_child_value("type", "Marker")
+                            "string", f"skinhil:{name}:decisions", prov)
+        add_plain_channels(decisions, [("decision", "", "Marker")])
+        link = _stream(f"{name}-link", "LinkHealth", len(LINK_CHANNELS),
+                       pylsl.IRREGULAR_RATE, "double64", f"skinhil:{name}:link", prov)
+        add_plain_channels(link, [(c, "" if c == "board_running" else "count", "Counter")
+                                  for c in LINK_CHANNELS])
         self.outlets = {key: pylsl.StreamOutlet(info) for key, info in (
-            ("spikes", spikes), ("psp", psp), ("markers", markers), ("decisions", decisions))}
+            ("spikes", spikes), ("psp", psp), ("markers", markers), ("decisions", decisions),
+            ("link", link))}
 
     def lsl_time_s(self, board_t_us: int | np.ndarray) -> Any:
         """LSL clock time (s) of board time ``board_t_us`` (µs) by the receiver's clock model
@@ -173,6 +191,7 @@ class LslOutlets(ReceiverListener):
         self._spikes_n += int(events.shape[0])
         self.traces.add(events)
         self._last_event_us = int(events["t"][-1])
+        self._last_known_us = max(self._last_known_us, self._last_event_us)
         if self._spikes_n >= MAX_SPIKES_PER_PUSH or \
                 self._last_event_us - self._pushed_us >= PUSH_PERIOD_US:
             self._push(self._last_event_us)
@@ -190,6 +209,24 @@ class LslOutlets(ReceiverListener):
         if values.shape[0]:
             last_us = (first + values.shape[0] - 1) * self.traces.sample_us
             self.outlets["psp"].push_chunk(values, float(self.lsl_time_s(last_us)))
+
+    def on_status(self, status: Any) -> None:
+        if in_stream_order(status) and int(status.t_us) > self._last_known_us:
+            self._last_known_us = int(status.t_us)
+            self._push(self._last_known_us)
+        self._push_link(int(status.t_us))
+
+    def _push_link(self, board_t_us: int) -> None:
+        """One link-health sample, stamped at ``board_t_us`` (µs)."""
+        if not self.receiver.clock.synced:
+            return
+        report = self.receiver.link_report().as_dict()
+        st = self.receiver.last_status
+        values = [float(report[c]) for c in LINK_CHANNELS[:len(report)]] + [
+            float(getattr(st, "late_ticks", 0) or 0),
+            float(getattr(st, "events_queued", 0) or 0),
+            1.0 if getattr(st, "running", False) else 0.0]
+        self.outlets["link"].push_sample(values, float(self.lsl_time_s(board_t_us)))
 
     def on_marker(self, marker: Any) -> None:
         phase = getattr(marker.phase, "name", str(marker.phase)).lower()
@@ -209,8 +246,10 @@ class LslOutlets(ReceiverListener):
     def close(self) -> None:
         """Push what is kept, then close the outlets (LSL consumers see the streams end),
         :data:`LINGER_S` after the last push while anyone reads them."""
-        if self._last_event_us >= 0:
-            self._push(self._last_event_us + self.traces.sample_us, final=True)
+        if self._last_known_us >= 0:
+            self._push(max(self._last_known_us, self._last_event_us + self.traces.sample_us),
+                       final=True)
+            self._push_link(self._last_known_us)
         if any(outlet.have_consumers() for outlet in self.outlets.values()):
             time.sleep(LINGER_S)
         self.outlets.clear()

@@ -143,6 +143,12 @@ class Mesh:
         return np.flatnonzero(~self.fixed)
 
 
+def sensor_positions(mesh: Mesh) -> np.ndarray:
+    """(n_springs, 3) rest position (m) of each sensor: the midpoint of its spring; x to the
+    right and y up on the skin, 0 at its centre; z 0 at the top layer, negative below."""
+    return 0.5 * (mesh.positions[mesh.springs[:, 0]] + mesh.positions[mesh.springs[:, 1]])
+
+
 def build_mesh(spacing_m: float, layer_gap_m: float, size: MeshSize = PAPER_SIZE) -> Mesh:
     """The mesh of top-layer ``size`` with lateral ``spacing_m`` and vertical ``layer_gap_m``
     (m)."""

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.model.geometry import Mesh
+from skinhil.model.geometry import Mesh, sensor_positions
 from skinhil.model.stimuli import Schedule
 from skinhil.nwb.metadata import NwbMetadata
 from skinhil.output_files import atomic_path
@@ -32,12 +32,6 @@ def require_pynwb() -> None:
 MODEL_TEXT = ("3-layer mass-spring-damper skin, one stochastic Izhikevich neuron per spring "
               "(skinhil)")
 """The model as NWB files name it (the subject's and the device's description)."""
-
-
-def spring_midpoints(mesh: Mesh) -> np.ndarray:
-    """(n_springs, 3) rest position (m) of each sensor: the midpoint of its spring; x to the
-    right and y up on the skin, z 0 at the top layer and negative below it."""
-    return 0.5 * (mesh.positions[mesh.springs[:, 0]] + mesh.positions[mesh.springs[:, 1]])
 
 
 def new_file(meta: NwbMetadata | None, *, command: str, mesh: Mesh,
@@ -82,7 +76,7 @@ def add_units(nwb: Any, mesh: Mesh, events: np.ndarray, resolution_s: float) -> 
     addr = events["addr"][order]
     times = events["t"][order] * 1e-6
     bounds = np.searchsorted(addr, np.arange(mesh.springs.shape[0] + 1))
-    where = spring_midpoints(mesh)
+    where = sensor_positions(mesh)
     for s, (i, j) in enumerate(mesh.springs):
         rest = float(np.linalg.norm(mesh.positions[j] - mesh.positions[i]))
         nwb.add_unit(spike_times=times[bounds[s]:bounds[s + 1]], spring=s,

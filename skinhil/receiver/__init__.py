@@ -10,7 +10,7 @@ from skinhil.receiver.decoder_adapter import WindowDecoder
 from skinhil.receiver.online import OnlineClassifier, Prediction
 from skinhil.receiver.onset import OnsetDetector
 from skinhil.receiver.params import OnsetParams, ReceiverParams
-from skinhil.receiver.receiver import LinkReport, Receiver, ReceiverListener
+from skinhil.receiver.receiver import LinkReport, Receiver, ReceiverListener, in_stream_order
 from skinhil.receiver.scoring import Scoreboard, ScoredDecision
 
 __all__ = [
@@ -28,4 +28,5 @@ __all__ = [
     "Scoreboard",
     "ScoredDecision",
     "WindowDecoder",
+    "in_stream_order",
 ]

@@ -112,7 +112,7 @@ def _is_onset(marker: Any) -> bool:
     return name.startswith("onset") or name == "0"
 
 
-def _in_stream_order(record: Any) -> bool:
+def in_stream_order(record: Any) -> bool:
     """Whether every event before the record's board time was sent before it: markers go in
     time order with the events; a status does only when the board had no events queued (a
     saturated board's status is stamped ahead of the events still waiting in its FIFO)."""
@@ -170,7 +170,7 @@ class Receiver:
 
     def _record(self, rec: Any, host_s: float) -> None:
         t = getattr(rec, "t_us", None)
-        if t is not None and _in_stream_order(rec):
+        if t is not None and in_stream_order(rec):
             self._last_record_us = max(self._last_record_us, int(t))
             self.clock.observe(int(t), host_s)
             self._last_item_host_s = host_s

@@ -9,10 +9,12 @@ It is not the classifier's filter (that one runs at the simulation step): it is 
 and export signal.
 
 Samples are handed out only for bins board time has passed (``advance``): the stream is
-in time order, so a bin before the newest event's time is complete. They are handed out in
-chunks of at least ``chunk_samples`` (20 ms of board time by default, unless ``final``):
-a listener called for every small read of the link then filters and publishes 50 times a
-second, not a thousand.
+in time order, so a bin before the newest event's time is complete, and so is one before a
+STATUS sent with no event queued (:func:`skinhil.receiver.in_stream_order`): a quiet board's
+traces go on. The traces start at the first event or advance, whichever comes first. They
+are handed out in chunks of at least ``chunk_samples`` (20 ms of board time by default,
+unless ``final``): a listener called for every small read of the link then filters and
+publishes 50 times a second, not a thousand.
 """
 
 from __future__ import annotations
@@ -56,7 +58,7 @@ class PspTraces:
         self._column[chans] = np.arange(chans.size)
         self.next_sample = -1
         """Index of the next sample to hand out (sample k covers board time k·sample_us µs
-        onward); -1 before the first event."""
+        onward); -1 before the first event or :meth:`advance`."""
         self._pending: list[np.ndarray] = []
 
     def add(self, events: np.ndarray) -> None:
@@ -77,9 +79,11 @@ class PspTraces:
         """Samples of every bin that ends by board time ``board_t_us`` (µs), once there are
         ``chunk_samples`` of them or ``final``: (index of the first sample, values of shape
         (n_samples, n_chosen), float32)."""
-        first = self.next_sample
         end = int(board_t_us) // self.sample_us
-        if first < 0 or (end - first < self.chunk_samples and not final):
+        if self.next_sample < 0:  # time known before any event (a STATUS): start there
+            self.next_sample = end
+        first = self.next_sample
+        if (end - first < self.chunk_samples and not final):
             return max(first, 0), np.zeros((0, self.channels.size), dtype=np.float32)
         if end - first > MAX_SAMPLES_PER_ADVANCE:
             self.bank.reset()

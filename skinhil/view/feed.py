@@ -4,7 +4,13 @@
 arrived since the last update; :meth:`ViewFeed.update` (on the view's publishing thread,
 every 0.1 s) drains it into one JSON-ready message:
 
-- ``t_board_us``: the newest board time seen (µs);
+- ``t_board_us``: the newest board time seen (µs): events, markers and STATUS records move
+  it, so a quiet board's page goes on;
+- ``run``: the run's state (:meth:`ViewFeed.run_state`): ``waiting`` (nothing received
+  yet), ``live``, ``silent`` (nothing from the board for :data:`SILENT_S` s), ``stopped``
+  (the board's STATUS says it does not publish), ``link lost`` or ``ended`` (the receiver
+  stopped, or :meth:`ViewFeed.end_run` said so: the board's end-of-run record will), with a
+  ``reason`` to show;
 - ``spikes``: the new events as base64 of little-endian arrays, ``t`` (uint32, µs after
   ``t0_us``) and ``addr`` (uint16), at most :data:`MAX_SPIKES_PER_UPDATE` (the rest are
   counted in ``spikes_not_drawn``, never silently left out);
@@ -15,9 +21,16 @@ every 0.1 s) drains it into one JSON-ready message:
 - ``score``: the running confusion matrix (rows true, columns decided), accuracy, misses,
   false alarms; ``link``: the receiver's link and loss counters; ``board``: the board's
   last status (late ticks, drops by reason);
+- ``psp_sensors`` and ``psp_labels``: present when the PSP sensors changed (a page picked
+  one, :meth:`ViewFeed.pick_psp_sensors`);
 - ``answers``: present when the receiver answers the board (``listen --answer``, ``demo``):
   its DECISIONs sent, ACKed, NACKed and not sent, shown in their own panel (the board's
   verdicts on them are its scoreboard: ``serve``'s status line and ``--score``).
+
+The ``config`` message a page gets first says what does not change: the channels, the
+class names, the PSP sensors, the skin's top layer (``grid`` rows, cols) and each sensor's
+place on it (``sensor_xy``: base64 float32 pairs, column then row in grid units from the
+top-left mass, its spring's midpoint at rest), what the skin map is drawn on.
 
 Nothing here copies the session: each message holds only what arrived since the last one.
 """
@@ -29,14 +42,15 @@ import dataclasses
 import logging
 import math
 import threading
+import time
 from collections import deque
 from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
 
-from skinhil.model.geometry import Mesh
-from skinhil.receiver import Receiver, ReceiverListener, ScoredDecision
+from skinhil.model.geometry import Mesh, sensor_positions
+from skinhil.receiver import Receiver, ReceiverListener, ScoredDecision, in_stream_order
 from skinhil.receiver.traces import PspTraces
 
 log = logging.getLogger(__name__)
@@ -50,9 +64,33 @@ RECENT_DECISIONS = 18
 DEFAULT_TRACES = 8
 """PSP traces shown when none are chosen: this many sensors spread over the addresses."""
 
+MAX_TRACES = 16
+"""Most PSP traces a page may pick."""
+
+SILENT_S = 3.0
+"""Host seconds without anything from the board after which the run is called silent."""
+
 
 def _b64(array: np.ndarray) -> str:
     return base64.b64encode(np.ascontiguousarray(array).tobytes()).decode("ascii")
+
+
+def grid_xy(mesh: Mesh) -> np.ndarray:
+    """(n_sensors, 2) float32: each sensor's place on the top layer in grid units, column
+    (0 at the left mass) then row (0 at the top mass), from its rest position."""
+    where = sensor_positions(mesh)
+    rows, cols = mesh.size
+    top = mesh.positions[: rows * cols]
+    spacing = float(top[1, 0] - top[0, 0]) if cols > 1 else 1.0
+    col = (where[:, 0] - top[:, 0].min()) / spacing
+    row = (top[:, 1].max() - where[:, 1]) / spacing
+    return np.stack([col, row], axis=1).astype(np.float32)
+
+
+def trace_labels(mesh: Mesh, sensors: Sequence[int]) -> list[str]:
+    """``S12 M8-M9`` for each sensor."""
+    return [f"S{a} M{int(mesh.springs[a][0]) + 1}-M{int(mesh.springs[a][1]) + 1}"
+            for a in sensors]
 
 
 def default_trace_sensors(n_channels: int, count: int = DEFAULT_TRACES) -> list[int]:
@@ -68,6 +106,7 @@ class ViewFeed(ReceiverListener):
                  answers: Callable[[], dict[str, int]] | None = None) -> None:
         self.receiver = receiver
         self.names = names
+        self.mesh = mesh
         self.n_channels = int(mesh.springs.shape[0])
         sensors = (default_trace_sensors(self.n_channels) if psp_sensors is None
                    else [int(s) for s in psp_sensors])
@@ -78,9 +117,16 @@ class ViewFeed(ReceiverListener):
             "type": "config", "n_channels": self.n_channels,
             "names": {str(k): v for k, v in names.items()},
             "psp_sensors": sensors, "psp_rate_hz": self.traces.rate_hz,
-            "psp_labels": [f"S{a} M{int(mesh.springs[a][0]) + 1}-M{int(mesh.springs[a][1]) + 1}"
-                           for a in sensors]}
+            "psp_labels": trace_labels(mesh, sensors), "max_traces": MAX_TRACES,
+            "grid": [int(mesh.size[0]), int(mesh.size[1])],
+            "sensor_xy": _b64(grid_xy(mesh).astype("<f4"))}
         self._lock = threading.Lock()
+        self._traces_changed = False
+        self._last_item_s = -math.inf
+        """Host monotonic time (s) of the newest item from the board."""
+        self._board_stopped = False
+        self._link_lost: str | None = None
+        self._ended: str | None = None
         self._events: list[np.ndarray] = []
         self._psp: list[np.ndarray] = []
         self._psp_first = -1
@@ -95,19 +141,81 @@ class ViewFeed(ReceiverListener):
     def on_events(self, events: np.ndarray, host_time_s: float) -> None:
         if events.shape[0] == 0:
             return
-        self.traces.add(events)
         with self._lock:
+            self.traces.add(events)
             self._events.append(events[["t", "addr"]].copy())
             self._t_board_us = max(self._t_board_us, int(events["t"][-1]))
+            self._heard(host_time_s)
         self._advance_traces(int(events["t"][-1]))
 
+    def _heard(self, host_s: float | None = None) -> None:
+        """Something came from the board (lock held)."""
+        self._last_item_s = time.monotonic() if host_s is None else host_s
+        self._link_lost = None
+
     def _advance_traces(self, board_t_us: int) -> None:
-        first, values = self.traces.advance(board_t_us)
-        if values.shape[0]:
-            with self._lock:
+        with self._lock:
+            first, values = self.traces.advance(board_t_us)
+            if values.shape[0]:
                 if not self._psp:
                     self._psp_first = first
                 self._psp.append(values)
+
+    def on_status(self, status: Any) -> None:
+        """A STATUS moves the clock (and the traces, when no event was queued before it:
+        :func:`skinhil.receiver.in_stream_order`), and says whether the board publishes."""
+        t = int(status.t_us)
+        with self._lock:
+            self._t_board_us = max(self._t_board_us, t)
+            self._board_stopped = not bool(status.running)
+            self._heard()
+        if in_stream_order(status):
+            self._advance_traces(t)
+
+    def pick_psp_sensors(self, sensors: Sequence[int]) -> list[int]:
+        """Show the PSP traces of ``sensors`` from now on (a page picked them); invalid
+        addresses, repeats and those past :data:`MAX_TRACES` are left out; return those
+        shown."""
+        chosen = list(dict.fromkeys(int(a) for a in sensors
+                                    if 0 <= int(a) < self.n_channels))[:MAX_TRACES]
+        if not chosen:
+            return [int(a) for a in self.traces.channels]
+        with self._lock:
+            traces = PspTraces(chosen, self.n_channels)
+            if self.traces.next_sample >= 0:
+                traces.advance(self.traces.next_sample * self.traces.sample_us)
+            self.traces = traces
+            self._psp, self._psp_first = [], -1
+            self._traces_changed = True
+            self.config = {**self.config, "psp_sensors": chosen,
+                           "psp_labels": trace_labels(self.mesh, chosen)}
+        return chosen
+
+    def end_run(self, reason: str) -> None:
+        """The run is over (``reason`` is shown): the receiver stopped, or the board said so
+        (its end-of-run record)."""
+        with self._lock:
+            if self._ended is None:
+                self._ended = reason
+
+    def run_state(self, now_s: float | None = None) -> dict[str, str]:
+        """``{"state": ..., "reason": ...}``: see the module."""
+        now = time.monotonic() if now_s is None else now_s
+        with self._lock:
+            if self._ended is not None:
+                return {"state": "ended", "reason": self._ended}
+            if self._link_lost is not None:
+                return {"state": "link lost", "reason": self._link_lost}
+            if not math.isfinite(self._last_item_s):
+                return {"state": "waiting", "reason": "nothing received from the board yet"}
+            quiet = now - self._last_item_s
+            if quiet >= SILENT_S:
+                return {"state": "silent",
+                        "reason": f"nothing from the board for {quiet:.0f} s"}
+            if self._board_stopped:
+                return {"state": "stopped", "reason": "the board does not publish "
+                                                      "(its STATUS says stopped)"}
+            return {"state": "live", "reason": ""}
 
     def on_marker(self, marker: Any) -> None:
         sid = int(marker.stimulus_id)
@@ -116,6 +224,7 @@ class ViewFeed(ReceiverListener):
                                   "phase": getattr(marker.phase, "name",
                                                    str(marker.phase)).lower()})
             self._t_board_us = max(self._t_board_us, int(marker.t_us))
+            self._heard()
 
     def on_decision(self, decision: ScoredDecision) -> None:
         p = decision.prediction
@@ -138,6 +247,7 @@ class ViewFeed(ReceiverListener):
     def on_link_error(self, message: str) -> None:
         with self._lock:
             self._link_errors.append(message)
+            self._link_lost = message
 
     # -- updates (publishing thread) ------------------------------------------------------
     def update(self) -> dict[str, Any]:
@@ -150,10 +260,15 @@ class ViewFeed(ReceiverListener):
             markers, self._markers = self._markers, []
             errors, self._link_errors = self._link_errors, []
             t_board = self._t_board_us
+            changed, self._traces_changed = self._traces_changed, False
+            n_traces = self.traces.channels.size
         self.updates += 1
         msg: dict[str, Any] = {"type": "update", "t_board_us": t_board,
                                "decisions": decisions, "markers": markers,
-                               "link_errors": errors}
+                               "link_errors": errors, "run": self.run_state()}
+        if changed:
+            msg["psp_sensors"] = self.config["psp_sensors"]
+            msg["psp_labels"] = self.config["psp_labels"]
         ev = np.concatenate(events) if events else np.zeros(0, [("t", "<i8"), ("addr", "<u2")])
         not_drawn = max(0, ev.shape[0] - MAX_SPIKES_PER_UPDATE)
         ev = ev[not_drawn:]
@@ -162,8 +277,7 @@ class ViewFeed(ReceiverListener):
                          "t": _b64((ev["t"] - t0).astype("<u4")),
                          "addr": _b64(ev["addr"].astype("<u2")),
                          "not_drawn": not_drawn}
-        values = np.concatenate(psp) if psp else np.zeros((0, self.traces.channels.size),
-                                                          dtype=np.float32)
+        values = np.concatenate(psp) if psp else np.zeros((0, n_traces), dtype=np.float32)
         msg["psp"] = {"first": psp_first, "n": int(values.shape[0]),
                       "values": _b64(values.astype("<f4"))}
         msg["score"] = self._score()

@@ -9,9 +9,13 @@ not need. Each page has its own thread and a short queue: a slow page loses its 
 updates (counted in ``/client``), never slows the receiver.
 
 Paths: ``/`` the page, ``/view.js`` and ``/view.css`` its assets (package data, no CDN),
-``/events`` the stream (a ``config`` event, then an ``update`` event every
-``period_s``), ``/client`` (GET) what the pages reported: their own errors and what they
-drew (POSTed by the page to ``/client``), for tests and for ``--json`` users.
+``/events`` the stream (a ``config`` event, then an ``update`` event every ``period_s``,
+and an ``end`` event when the server closes: the page then shows the run ended instead of
+reconnecting), ``/events?board=KEY`` the stream of one board where several send
+(``listen --udp``; the config lists them all in ``boards``), ``/psp`` (POST
+``{"board": KEY, "sensors": [...]}``) the PSP sensors a page picked, ``/client`` (GET)
+what the pages reported: their own errors and what they drew (POSTed by the page to
+``/client``), for tests and for ``--json`` users.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from importlib import resources
 from typing import Any
+from urllib.parse import parse_qs, urlsplit
 
 from skinhil.errors import ConfigError, TransportError
 from skinhil.transports.udp import parse_address as socket_address
@@ -37,6 +42,12 @@ UPDATE_PERIOD_S = 0.1
 
 QUEUE_UPDATES = 20
 """Updates a page may fall behind before its oldest are dropped."""
+
+END = "\x00end"
+"""A page's queue item that ends its stream (the server closes)."""
+
+END_FLUSH_S = 1.0
+"""Seconds :meth:`ViewServer.close` gives the pages to get the last update and the end."""
 
 ASSETS = {"/": ("index.html", "text/html; charset=utf-8"),
           "/index.html": ("index.html", "text/html; charset=utf-8"),
@@ -59,26 +70,41 @@ def _asset(name: str) -> bytes:
 
 
 class ViewServer:
-    """Serve the view of ``feed`` at ``host:port`` (port 0: any free port) on threads."""
+    """Serve the view of ``feed`` at ``host:port`` (port 0: any free port) on threads;
+    further boards' feeds join with :meth:`add_feed` (several boards on one link)."""
 
-    def __init__(self, feed: ViewFeed, host: str = "127.0.0.1", port: int = 0,
+    def __init__(self, feed: ViewFeed | None, host: str = "127.0.0.1", port: int = 0,
                  period_s: float = UPDATE_PERIOD_S) -> None:
-        self.feed = feed
+        self.feeds: dict[str, ViewFeed] = {}
+        """Each board's feed by its key (the first board's is ``"0"`` with one board)."""
         self.period_s = float(period_s)
-        self._clients: list[queue.Queue[str]] = []
+        self._clients: list[tuple[str, queue.Queue[str]]] = []
         self._clients_lock = threading.Lock()
         self.client_reports: dict[str, Any] = {"errors": [], "state": None, "dropped": 0}
         self._stop = threading.Event()
+        if feed is not None:
+            self.add_feed("0", feed)
         try:
             self.httpd = ThreadingHTTPServer((host, port), self._handler())
         except OSError as exc:
             raise ConfigError(f"--view cannot listen on {host}:{port}: {exc.strerror} — "
                               "choose another port") from None
         self.httpd.daemon_threads = True
-        self._threads = [threading.Thread(target=self.httpd.serve_forever, name="skinhil-view",
-                                          daemon=True),
-                         threading.Thread(target=self._publish, name="skinhil-view-updates",
+        self._threads = [threading.Thread(target=self._publish, name="skinhil-view-updates",
                                           daemon=True)]
+        self._serving = threading.Thread(target=self.httpd.serve_forever, name="skinhil-view",
+                                         daemon=True)
+
+    @property
+    def feed(self) -> ViewFeed | None:
+        """The first board's feed (None before any board)."""
+        with self._clients_lock:
+            return next(iter(self.feeds.values()), None)
+
+    def add_feed(self, key: str, feed: ViewFeed) -> None:
+        """Show board ``key``'s feed too (pages list the boards and pick one)."""
+        with self._clients_lock:
+            self.feeds[str(key)] = feed
 
     @property
     def url(self) -> str:
@@ -88,67 +114,134 @@ class ViewServer:
         return f"http://{name}:{port}/"
 
     def start(self) -> ViewServer:
-        for t in self._threads:
+        for t in (*self._threads, self._serving):
             t.start()
         log.info("live view at %s", self.url)
         return self
 
-    def close(self) -> None:
-        """Stop serving (pages see the stream end)."""
+    def close(self, reason: str = "the receiver stopped") -> None:
+        """End the run on every page (a last update, then the ``end`` event with
+        ``reason`` unless a feed already has one), then stop serving."""
         self._stop.set()
-        self.httpd.shutdown()
-        self.httpd.server_close()
         for t in self._threads:
             t.join(timeout=2.0)
+        with self._clients_lock:
+            feeds = dict(self.feeds)
+        for key, feed in feeds.items():
+            feed.end_run(reason)
+            self._broadcast(key, json.dumps(feed.update(), separators=(",", ":")))
+            self._broadcast(key, END)
+        end = time.monotonic() + END_FLUSH_S
+        while time.monotonic() < end:
+            with self._clients_lock:
+                if all(q.empty() for _, q in self._clients):
+                    break
+            time.sleep(0.02)
+        self.httpd.shutdown()
+        self.httpd.server_close()
+        self._serving.join(timeout=2.0)
+
+    def _broadcast(self, key: str, text: str) -> None:
+        with self._clients_lock:
+            queues = [q for k, q in self._clients if k == key]
+        for q in queues:
+            while True:
+                try:
+                    q.put_nowait(text)
+                    break
+                except queue.Full:
+                    try:
+                        q.get_nowait()
+                        self.client_reports["dropped"] += 1
+                    except queue.Empty:
+                        pass
 
     def _publish(self) -> None:
         next_t = time.monotonic()
         while not self._stop.is_set():
             next_t += self.period_s
             self._stop.wait(max(0.0, next_t - time.monotonic()))
-            msg = self.feed.update()
+            if self._stop.is_set():
+                return
             with self._clients_lock:
-                clients = list(self._clients)
-            if not clients:
-                continue
-            text = json.dumps(msg, separators=(",", ":"))
-            for q in clients:
-                while True:
-                    try:
-                        q.put_nowait(text)
-                        break
-                    except queue.Full:
-                        try:
-                            q.get_nowait()
-                            self.client_reports["dropped"] += 1
-                        except queue.Empty:
-                            pass
+                feeds = dict(self.feeds)
+                watched = {k for k, _ in self._clients}
+            for key, feed in feeds.items():
+                msg = feed.update()  # drained whether watched or not: nothing piles up
+                if key in watched:
+                    self._broadcast(key, json.dumps(msg, separators=(",", ":")))
 
-    def _stream(self, handler: BaseHTTPRequestHandler) -> None:
+    def _pick_feed(self, wanted: str | None, wait_s: float) -> tuple[str, ViewFeed] | None:
+        """The feed of board ``wanted`` (the first board's when None or unknown), waiting up
+        to ``wait_s`` for a first board to send."""
+        end = time.monotonic() + wait_s
+        while True:
+            with self._clients_lock:
+                if wanted in self.feeds:
+                    return str(wanted), self.feeds[str(wanted)]
+                if self.feeds:
+                    key = next(iter(self.feeds))
+                    return key, self.feeds[key]
+            if self._stop.is_set() or time.monotonic() >= end:
+                return None
+            time.sleep(0.1)
+
+    def _stream(self, handler: BaseHTTPRequestHandler, wanted: str | None) -> None:
         q: queue.Queue[str] = queue.Queue(maxsize=QUEUE_UPDATES)
         handler.send_response(HTTPStatus.OK)
         handler.send_header("Content-Type", "text/event-stream")
         handler.send_header("Cache-Control", "no-cache")
         handler.end_headers()
-        with self._clients_lock:
-            self._clients.append(q)
         try:
-            config = json.dumps(self.feed.hello(), separators=(",", ":"))
-            handler.wfile.write(f"event: config\ndata: {config}\n\n".encode())
-            handler.wfile.flush()
-            while not self._stop.is_set():
-                try:
-                    text = q.get(timeout=1.0)
-                except queue.Empty:
-                    handler.wfile.write(b": alive\n\n")
-                else:
-                    handler.wfile.write(f"event: update\ndata: {text}\n\n".encode())
+            picked = None
+            while picked is None and not self._stop.is_set():
+                picked = self._pick_feed(wanted, 1.0)
+                if picked is None:  # no board has sent yet
+                    handler.wfile.write(b": waiting for a board\n\n")
+                    handler.wfile.flush()
+            if picked is None:
+                return
+            key, feed = picked
+            with self._clients_lock:
+                self._clients.append((key, q))
+                boards = list(self.feeds)
+            try:
+                hello = {**feed.hello(), "board": key, "boards": boards}
+                config = json.dumps(hello, separators=(",", ":"))
+                handler.wfile.write(f"event: config\ndata: {config}\n\n".encode())
                 handler.wfile.flush()
+                while True:
+                    try:
+                        text = q.get(timeout=1.0)
+                    except queue.Empty:
+                        if self._stop.is_set():
+                            break
+                        handler.wfile.write(b": alive\n\n")
+                    else:
+                        if text == END:
+                            run = json.dumps(feed.run_state())
+                            handler.wfile.write(f"event: end\ndata: {run}\n\n".encode())
+                            handler.wfile.flush()
+                            break
+                        handler.wfile.write(f"event: update\ndata: {text}\n\n".encode())
+                    handler.wfile.flush()
+            finally:
+                with self._clients_lock:
+                    self._clients.remove((key, q))
         except (BrokenPipeError, ConnectionResetError):
             pass
-        finally:
-            with self._clients_lock:
-                self._clients.remove(q)
+
+    def _pick_psp(self, body: bytes) -> None:
+        """A page picked PSP sensors: ``{"board": KEY, "sensors": [...]}``."""
+        try:
+            req = json.loads(body or b"{}")
+            key, sensors = str(req.get("board", "0")), [int(a) for a in req["sensors"]]
+        except (json.JSONDecodeError, KeyError, TypeError, ValueError, AttributeError):
+            return
+        with self._clients_lock:
+            feed = self.feeds.get(key)
+        if feed is not None:
+            feed.pick_psp_sensors(sensors)
 
     def _report(self, body: bytes) -> None:
         try:
@@ -183,7 +276,8 @@ class ViewServer:
             def do_GET(self) -> None:  # noqa: N802 (the stdlib's name)
                 path = self.path.split("?", 1)[0]
                 if path == "/events":
-                    server._stream(self)
+                    query = parse_qs(urlsplit(self.path).query)
+                    server._stream(self, query.get("board", [None])[0])
                     self.close_connection = True
                 elif path == "/client":
                     self._send(json.dumps(server.client_reports).encode(),
@@ -201,6 +295,8 @@ class ViewServer:
                 body = self.rfile.read(length)
                 if self.path.split("?", 1)[0] == "/client":
                     server._report(body)
+                elif self.path.split("?", 1)[0] == "/psp":
+                    server._pick_psp(body)
                 self._send(b"", "text/plain", HTTPStatus.NO_CONTENT)
 
         return Handler

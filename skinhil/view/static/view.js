@@ -1,10 +1,16 @@
 // skinhil live view: draws the updates of /events (server-sent events) on canvases.
-// Raster: channels on y, board time scrolling right to left over WINDOW_S seconds.
+// Raster: channels on y, board time scrolling right to left over WINDOW_S seconds; spikes
+// add brightness, so a crowded pixel row (many channels) shows where the activity is.
+// Skin map: each place's mean spike rate, top view; its overlay canvas carries what is drawn
+// over the skin (the picked PSP sensors; the contact footprint goes there too).
 "use strict";
 
 const WINDOW_S = 10;          // board seconds across the raster
 const PSP_WINDOW_S = 5;       // board seconds across the PSP traces
-const MAX_DECISIONS = 18;     // rows of the decision table
+const RATE_TAU_S = 0.5;       // board seconds of the map's rate average
+const MAP_FLOOR_HZ = 20;      // the map's colour scale reaches at least this rate
+const MAX_DECISIONS = 12;     // rows of the decision table
+const ONSET = "#3cf", END_MARK = "#567";
 const ANSWERS = [
   ["sent", "DECISIONs sent"], ["acked", "ACKed"], ["nacked", "NACKed"], ["unsent", "not sent"],
 ];
@@ -29,7 +35,9 @@ const COUNTERS = [
 
 const view = {
   config: null, nowUs: null, shiftRest: 0, updates: 0, spikesDrawn: 0, notDrawn: 0,
-  decisions: [], psp: [], pspFirst: -1, lastLink: null, decisionsSeen: 0,
+  decisions: [], psp: [], pspEnd: 0, lastLink: null, decisionsSeen: 0,
+  markers: [], onsetsSeen: 0, onsetsDrawn: 0, run: {state: "waiting", reason: ""},
+  ended: false, rates: null, mapMaxHz: 0, picked: [],
 };
 
 function report(body) {
@@ -55,23 +63,43 @@ function name(id) {
   return (view.config && view.config.names[String(id)]) || String(id);
 }
 
-const raster = document.getElementById("raster");
-const rctx = raster.getContext("2d");
-const psp = document.getElementById("psp");
-const pctx = psp.getContext("2d");
+function traceColour(c, k) { return `hsl(${(c * 360) / Math.max(k, 1)}, 70%, 60%)`; }
 
+const $ = (id) => document.getElementById(id);
+const raster = $("raster"), rctx = raster.getContext("2d");
+const marks = $("raster-marks"), mctx = marks.getContext("2d");
+const psp = $("psp"), pctx = psp.getContext("2d");
+const mapCanvas = $("map"), mapCtx = mapCanvas.getContext("2d");
+const overlay = $("map-overlay"), octx = overlay.getContext("2d");
+
+// -- layout: canvases as wide as their column --------------------------------------------
+function fitWidths() {
+  const w = Math.max(200, Math.floor($("left").clientWidth));
+  for (const c of [raster, marks, $("raster-axis"), psp, $("psp-axis")]) c.width = w;
+}
+
+// -- raster ------------------------------------------------------------------------------
 function setupRaster(n) {
-  const rowPx = Math.max(1, Math.floor(700 / n));
-  raster.height = n <= 700 ? n * rowPx : 700;
-  view.rowPx = rowPx;
+  fitWidths();
+  const H = raster.height;
+  view.rowPx = n <= H ? Math.max(1, Math.floor(H / n)) : 0;
+  view.perRow = n <= H ? 1 : n / H;  // channels per pixel row
+  // brightness a spike adds: a pixel row of one channel lights fully; a row of many
+  // channels needs several spikes, so noise stays dim and a touched band stands out
+  view.spikeGain = n <= H ? 255 : Math.max(24, Math.round(510 / view.perRow));
   rctx.fillStyle = "#000";
-  rctx.fillRect(0, 0, raster.width, raster.height);
-  document.getElementById("raster-info").textContent =
-    `${n} channels on y (address 0 at the top), ${WINDOW_S} s of board time on x`;
+  rctx.fillRect(0, 0, raster.width, H);
+  $("raster-info").textContent = `${n} channels on y (address 0 at the top), ` +
+    `${WINDOW_S} s of board time on x; onsets in blue`;
+}
+
+function channelRow(a) {
+  const n = view.config.n_channels, H = raster.height;
+  return view.rowPx ? [a * view.rowPx, view.rowPx] : [Math.floor(a * H / n), 1];
 }
 
 function drawRaster(m) {
-  const W = raster.width, H = raster.height, n = view.config.n_channels;
+  const W = raster.width, H = raster.height;
   const now = m.t_board_us;
   if (view.nowUs === null) view.nowUs = now;
   const dx = (now - view.nowUs) / (WINDOW_S * 1e6) * W + view.shiftRest;
@@ -89,58 +117,223 @@ function drawRaster(m) {
     const a = new Uint16Array(bytes(s.addr));
     const img = rctx.getImageData(0, 0, W, H);
     const px = img.data;
-    const scale = W / (WINDOW_S * 1e6);
-    const h = n <= 700 ? view.rowPx : 1;
+    const scale = W / (WINDOW_S * 1e6), gain = view.spikeGain;
     for (let i = 0; i < s.n; i++) {
       const x = Math.floor(W - 1 - (now - (s.t0_us + t[i])) * scale);
       if (x < 0 || x >= W) continue;
-      const y0 = n <= 700 ? a[i] * view.rowPx : Math.floor(a[i] * H / n);
+      const [y0, h] = channelRow(a[i]);
       for (let y = y0; y < y0 + h && y < H; y++) {
         const k = (y * W + x) * 4;
-        px[k] = 255; px[k + 1] = 230; px[k + 2] = 120; px[k + 3] = 255;
+        const v = Math.min(255, px[k] + gain);
+        px[k] = v; px[k + 1] = Math.round(v * 0.9); px[k + 2] = Math.round(v * 0.47);
+        px[k + 3] = 255;
       }
     }
     rctx.putImageData(img, 0, 0);
     view.spikesDrawn += s.n;
   }
   view.notDrawn += s.not_drawn;
-  document.getElementById("raster-left").textContent = ((now * 1e-6) - WINDOW_S).toFixed(1) + " s";
-  document.getElementById("raster-right").textContent = (now * 1e-6).toFixed(1) + " s";
 }
 
+// x (px) of board time t_us on a plot whose right edge is end_us and that spans window_s
+function timeX(t_us, end_us, window_s, W) { return W - 1 - (end_us - t_us) / (window_s * 1e6) * W; }
+
+function drawMarks() {
+  const W = marks.width, H = marks.height, now = view.nowUs;
+  mctx.clearRect(0, 0, W, H);
+  mctx.font = "11px sans-serif";
+  let drawn = 0;
+  for (const mk of view.markers) {
+    const x = Math.round(timeX(mk.t_us, now, WINDOW_S, W));
+    if (x < 0 || x >= W) continue;
+    const onset = mk.phase.startsWith("onset");
+    mctx.fillStyle = onset ? ONSET : END_MARK;
+    mctx.fillRect(x, 0, onset ? 2 : 1, H);
+    if (onset) {
+      drawn += 1;
+      mctx.fillText(name(mk.stimulus_id), Math.min(x + 3, W - 70), 11);
+    }
+  }
+  view.onsetsDrawn = drawn;
+  // channel ticks on the left edge
+  const n = view.config.n_channels;
+  mctx.fillStyle = "#8a8a8a";
+  for (let k = 0; k <= 4; k++) {
+    const a = Math.min(n - 1, Math.round((k * (n - 1)) / 4));
+    const [y] = channelRow(a);
+    mctx.fillRect(0, Math.min(y, H - 1), 5, 1);
+    mctx.fillText(String(a), 7, Math.min(Math.max(y + 4, 10), H - 2));
+  }
+}
+
+function drawTimeAxis(canvas, end_us, window_s, step_s) {
+  const ctx = canvas.getContext("2d"), W = canvas.width, H = canvas.height;
+  ctx.clearRect(0, 0, W, H);
+  ctx.fillStyle = "#999";
+  ctx.font = "11px sans-serif";
+  const end = end_us * 1e-6, start = end - window_s;
+  for (let t = Math.ceil(start / step_s) * step_s; t <= end + 1e-9; t += step_s) {
+    const x = Math.round(timeX(t * 1e6, end_us, window_s, W));
+    const major = Math.abs(t / (2 * step_s) - Math.round(t / (2 * step_s))) < 1e-6;
+    ctx.fillRect(x, 0, 1, major ? 6 : 3);
+    if (major && x > 14 && x < W - 24) ctx.fillText(`${t.toFixed(step_s < 1 ? 1 : 0)} s`, x - 12, 16);
+  }
+}
+
+// -- PSP ---------------------------------------------------------------------------------
 function addPsp(m) {
   const p = m.psp, k = view.config.psp_sensors.length;
   if (p.n === 0) return;
   const v = new Float32Array(bytes(p.values));
   for (let i = 0; i < p.n; i++) view.psp.push(v.subarray(i * k, (i + 1) * k));
+  view.pspEnd = p.first + p.n;
   const keep = Math.round(PSP_WINDOW_S * view.config.psp_rate_hz);
   if (view.psp.length > keep) view.psp.splice(0, view.psp.length - keep);
 }
+
+function pspEndUs() { return view.pspEnd * 1e6 / view.config.psp_rate_hz; }
 
 function drawPsp() {
   const W = psp.width, H = psp.height, k = view.config.psp_sensors.length;
   const keep = Math.round(PSP_WINDOW_S * view.config.psp_rate_hz);
   pctx.fillStyle = "#000";
   pctx.fillRect(0, 0, W, H);
+  const endUs = pspEndUs();
+  for (const mk of view.markers) {  // onsets under the traces
+    const x = Math.round(timeX(mk.t_us, endUs, PSP_WINDOW_S, W));
+    if (x < 0 || x >= W) continue;
+    const onset = mk.phase.startsWith("onset");
+    pctx.fillStyle = onset ? ONSET : END_MARK;
+    pctx.fillRect(x, 0, onset ? 2 : 1, H);
+  }
   const lane = H / k;
   let top = 1;
   for (const row of view.psp) for (const x of row) if (x > top) top = x;
   pctx.font = "11px sans-serif";
   for (let c = 0; c < k; c++) {
-    const base = (c + 1) * lane - 3;
-    pctx.strokeStyle = `hsl(${(c * 360) / k}, 70%, 60%)`;
+    const base = (c + 1) * lane - 2;
+    pctx.strokeStyle = traceColour(c, k);
     pctx.beginPath();
     const off = keep - view.psp.length;
     view.psp.forEach((row, i) => {
-      const x = ((off + i) / keep) * W, y = base - (row[c] / top) * (lane - 6);
+      const x = ((off + i) / keep) * W, y = base - (row[c] / top) * (lane - 4);
       if (i === 0) pctx.moveTo(x, y); else pctx.lineTo(x, y);
     });
     pctx.stroke();
-    pctx.fillStyle = "#bbb";
-    pctx.fillText(view.config.psp_labels[c], 4, base - lane + 16);
+    pctx.fillStyle = traceColour(c, k);
+    pctx.fillText(view.config.psp_labels[c], 4, base - lane + 13);
   }
 }
 
+function pick(address) {
+  const list = view.picked.filter((a) => a !== address);
+  if (list.length === view.picked.length) list.push(address);
+  while (list.length > Math.min(8, view.config.max_traces)) list.shift();
+  if (list.length === 0) return;
+  view.picked = list;
+  fetch("/psp", {method: "POST", body: JSON.stringify({board: view.config.board, sensors: list})})
+    .catch(() => {});
+}
+
+// -- skin map ----------------------------------------------------------------------------
+function setupMap() {
+  const c = view.config, [rows, cols] = c.grid, n = c.n_channels;
+  const xy = new Float32Array(bytes(c.sensor_xy));
+  const bw = Math.max(1, 2 * (cols - 1)), bh = Math.max(1, 2 * (rows - 1));
+  const binOf = new Int32Array(n), count = new Float32Array(bw * bh);
+  for (let s = 0; s < n; s++) {
+    const bx = Math.min(bw - 1, Math.max(0, Math.floor(2 * xy[2 * s])));
+    const by = Math.min(bh - 1, Math.max(0, Math.floor(2 * xy[2 * s + 1])));
+    binOf[s] = by * bw + bx;
+    count[binOf[s]] += 1;
+  }
+  const side = 270;
+  mapCanvas.width = overlay.width = side;
+  mapCanvas.height = overlay.height = Math.max(40, Math.round(side * (rows - 1) / Math.max(cols - 1, 1)));
+  Object.assign(view, {xy, bw, bh, binOf, binCount: count, rates: new Float32Array(n),
+                       lastRateUs: null, mapImg: new ImageData(bw, bh)});
+  view.mapTmp = document.createElement("canvas");
+  view.mapTmp.width = bw; view.mapTmp.height = bh;
+  $("map-info").textContent = `${rows}x${cols} skin, spikes/s per place, top view`;
+}
+
+function hot(t) {  // black → red → yellow → white
+  return [Math.min(1, 3 * t), Math.min(1, Math.max(0, 3 * t - 1)), Math.min(1, Math.max(0, 3 * t - 2))];
+}
+
+function updateMap(m) {
+  const now = m.t_board_us, rates = view.rates;
+  const dt = view.lastRateUs === null ? 0 : Math.max(0, (now - view.lastRateUs) * 1e-6);
+  view.lastRateUs = now;
+  const decay = Math.exp(-dt / RATE_TAU_S);
+  for (let s = 0; s < rates.length; s++) rates[s] *= decay;
+  if (m.spikes.n > 0) {
+    const a = new Uint16Array(bytes(m.spikes.addr));
+    for (let i = 0; i < a.length; i++) rates[a[i]] += 1 / RATE_TAU_S;
+  }
+  const bins = new Float32Array(view.bw * view.bh);
+  for (let s = 0; s < rates.length; s++) bins[view.binOf[s]] += rates[s];
+  let max = 0;
+  for (let b = 0; b < bins.length; b++) {
+    bins[b] = view.binCount[b] ? bins[b] / view.binCount[b] : 0;
+    if (bins[b] > max) max = bins[b];
+  }
+  view.mapMaxHz = max;
+  const scale = Math.max(MAP_FLOOR_HZ, max), px = view.mapImg.data;
+  for (let b = 0; b < bins.length; b++) {
+    const [r, g, bl] = hot(bins[b] / scale);
+    px[4 * b] = 255 * r; px[4 * b + 1] = 255 * g; px[4 * b + 2] = 255 * bl; px[4 * b + 3] = 255;
+  }
+  view.mapTmp.getContext("2d").putImageData(view.mapImg, 0, 0);
+  mapCtx.imageSmoothingEnabled = false;
+  mapCtx.drawImage(view.mapTmp, 0, 0, mapCanvas.width, mapCanvas.height);
+  drawLegend(scale);
+  drawOverlay(m);
+}
+
+function drawLegend(scale) {
+  const c = $("map-legend"), ctx = c.getContext("2d"), W = c.width;
+  ctx.clearRect(0, 0, W, c.height);
+  for (let x = 0; x < 120; x++) {
+    const [r, g, b] = hot(x / 119);
+    ctx.fillStyle = `rgb(${255 * r},${255 * g},${255 * b})`;
+    ctx.fillRect(x, 2, 1, 10);
+  }
+  ctx.fillStyle = "#aaa";
+  ctx.font = "11px sans-serif";
+  ctx.fillText(`0 … ${scale.toFixed(0)} spikes/s (mean per place)`, 126, 11);
+}
+
+// map px ↔ grid units (column, row from the top-left mass)
+function mapPx(col, row) {
+  const [rows, cols] = view.config.grid;
+  return [col / Math.max(cols - 1, 1) * mapCanvas.width, row / Math.max(rows - 1, 1) * mapCanvas.height];
+}
+
+function nearestSensor(col, row) {
+  let best = 0, bestD = Infinity;
+  for (let s = 0; s < view.config.n_channels; s++) {
+    const d = (view.xy[2 * s] - col) ** 2 + (view.xy[2 * s + 1] - row) ** 2;
+    if (d < bestD) { bestD = d; best = s; }
+  }
+  return best;
+}
+
+// What is drawn over the skin: the picked PSP sensors (the contact footprint joins here).
+function drawOverlay(m) {
+  octx.clearRect(0, 0, overlay.width, overlay.height);
+  const k = view.config.psp_sensors.length;
+  view.config.psp_sensors.forEach((a, c) => {
+    const [x, y] = mapPx(view.xy[2 * a], view.xy[2 * a + 1]);
+    octx.strokeStyle = traceColour(c, k);
+    octx.lineWidth = 2;
+    octx.beginPath();
+    octx.arc(x, y, 5, 0, 2 * Math.PI);
+    octx.stroke();
+  });
+}
+
+// -- tables ------------------------------------------------------------------------------
 function showDecisions(m) {
   for (const d of m.decisions) view.decisions.unshift(d);
   view.decisionsSeen += m.decisions.length;
@@ -161,26 +354,27 @@ function showDecisions(m) {
     body.appendChild(tr);
   }
   const s = m.score;
-  document.getElementById("accuracy").textContent = s.accuracy === null ? "" :
-    `running ${(100 * s.accuracy).toFixed(1)} % of ${s.scored} (${s.misses} missed, ` +
+  $("accuracy").textContent = s.accuracy === null ? "" :
+    `${(100 * s.accuracy).toFixed(1)} % of ${s.scored} (${s.misses} missed, ` +
     `${s.false_alarms} false alarms)`;
 }
 
 function showConfusion(s) {
-  const t = document.getElementById("confusion");
+  const t = $("confusion");
   t.innerHTML = "";
   const head = document.createElement("tr");
   head.appendChild(document.createElement("th"));
   for (const c of s.classes) {
     const th = document.createElement("th");
-    th.textContent = String(c);
-    th.title = name(c);
+    th.className = "col";
+    th.textContent = name(c);
     head.appendChild(th);
   }
   t.appendChild(head);
   s.confusion.forEach((row, i) => {
     const tr = document.createElement("tr");
     const th = document.createElement("th");
+    th.className = "row";
     th.textContent = name(s.classes[i]);
     tr.appendChild(th);
     row.forEach((v, j) => {
@@ -194,7 +388,7 @@ function showConfusion(s) {
 }
 
 function showTable(id, rows) {
-  const t = document.getElementById(id);
+  const t = $(id);
   t.innerHTML = "";
   for (const [k, v] of rows) {
     const tr = document.createElement("tr");
@@ -206,34 +400,112 @@ function showTable(id, rows) {
   }
 }
 
+// -- the run's state ---------------------------------------------------------------------
+function showRun(run) {
+  view.run = run;
+  const st = $("status");
+  if (run.state === "ended") {
+    st.textContent = "run ended" + (run.reason ? ": " + run.reason : "");
+    const banner = $("ended-banner");
+    banner.textContent = "Run ended" + (run.reason ? " — " + run.reason : "");
+    banner.hidden = false;
+  } else {
+    st.textContent = run.state + (run.reason ? ": " + run.reason : "");
+  }
+  st.className = run.state.replace(" ", "-") === "link-lost" ? "down" : run.state;
+}
+
+function endRun(run) {
+  view.ended = true;
+  source.close();
+  showRun({state: "ended", reason: (run && run.reason) || "the stream closed"});
+  reportState();
+}
+
+function reportState() {
+  const m = view.lastMsg;
+  report({kind: "state", updates: view.updates, spikes_drawn: view.spikesDrawn,
+          decisions_shown: view.decisionsSeen, events_decoded: m ? m.link.events_decoded : 0,
+          t_board_us: m ? m.t_board_us : 0, scored: m ? m.score.scored : 0,
+          onsets_seen: view.onsetsSeen, run: view.run.state});
+}
+
 function onUpdate(m) {
   view.updates += 1;
+  view.lastMsg = m;
+  if (m.psp_sensors) {
+    view.config.psp_sensors = m.psp_sensors;
+    view.config.psp_labels = m.psp_labels;
+    view.picked = m.psp_sensors.slice();
+    view.psp = [];
+  }
+  for (const mk of m.markers) {
+    view.markers.push(mk);
+    if (mk.phase.startsWith("onset")) view.onsetsSeen += 1;
+  }
   drawRaster(m);
+  const horizon = view.nowUs - WINDOW_S * 1e6;
+  view.markers = view.markers.filter((mk) => mk.t_us >= horizon);
+  drawMarks();
+  drawTimeAxis($("raster-axis"), view.nowUs, WINDOW_S, 1);
   addPsp(m);
   drawPsp();
+  drawTimeAxis($("psp-axis"), pspEndUs(), PSP_WINDOW_S, 0.5);
+  updateMap(m);
   showDecisions(m);
   showConfusion(m.score);
   showTable("counters", COUNTERS.map(([k, f]) => [k, f(m)]));
-  document.getElementById("answers-panel").hidden = !m.answers;
+  $("answers-panel").hidden = !m.answers;
   if (m.answers) showTable("answers", ANSWERS.map(([k, label]) => [label, m.answers[k]]));
-  for (const e of m.link_errors) document.getElementById("status").textContent = "link error: " + e;
-  document.getElementById("clock").textContent = `board time ${(m.t_board_us * 1e-6).toFixed(2)} s`;
+  showRun(m.run);
+  for (const e of m.link_errors) $("status").textContent = "link error: " + e;
+  $("clock").textContent = `board time ${(m.t_board_us * 1e-6).toFixed(2)} s`;
   view.lastLink = m.link;
-  if (view.updates % 5 === 0) {
-    report({kind: "state", updates: view.updates, spikes_drawn: view.spikesDrawn,
-            decisions_shown: view.decisionsSeen, events_decoded: m.link.events_decoded,
-            t_board_us: m.t_board_us, scored: m.score.scored});
-  }
+  if (view.updates % 5 === 0) reportState();
 }
 
-const source = new EventSource("/events");
-const status = document.getElementById("status");
+function clickAt(canvas, e) {
+  const r = canvas.getBoundingClientRect();
+  return [(e.clientX - r.left) * canvas.width / r.width, (e.clientY - r.top) * canvas.height / r.height];
+}
+
+overlay.addEventListener("click", (e) => {
+  if (!view.config) return;
+  const [x, y] = clickAt(overlay, e), [rows, cols] = view.config.grid;
+  pick(nearestSensor(x / overlay.width * (cols - 1), y / overlay.height * (rows - 1)));
+});
+marks.addEventListener("click", (e) => {
+  if (!view.config) return;
+  const [, y] = clickAt(marks, e), n = view.config.n_channels;
+  pick(Math.min(n - 1, Math.floor(view.rowPx ? y / view.rowPx : y * n / marks.height)));
+});
+
+const board = new URLSearchParams(location.search).get("board");
+const source = new EventSource("/events" + (board === null ? "" : "?board=" + encodeURIComponent(board)));
 source.addEventListener("config", (e) => {
   view.config = JSON.parse(e.data);
   setupRaster(view.config.n_channels);
+  setupMap();
+  view.picked = view.config.psp_sensors.slice();
   view.decisions = view.config.recent_decisions.slice().reverse();
-  status.textContent = "live";
-  status.className = "live";
+  const boards = $("boards");
+  boards.innerHTML = "";
+  if (view.config.boards.length > 1) {
+    boards.append("boards: ");
+    for (const key of view.config.boards) {
+      const a = document.createElement("a");
+      a.href = "?board=" + encodeURIComponent(key);
+      a.textContent = key;
+      if (key === view.config.board) a.className = "on";
+      boards.appendChild(a);
+    }
+  }
+  showRun({state: "live", reason: ""});
 });
-source.addEventListener("update", (e) => { if (view.config) onUpdate(JSON.parse(e.data)); });
-source.onerror = () => { status.textContent = "stream ended (reconnecting…)"; status.className = "down"; };
+source.addEventListener("update", (e) => { if (view.config && !view.ended) onUpdate(JSON.parse(e.data)); });
+source.addEventListener("end", (e) => endRun(JSON.parse(e.data)));
+source.onerror = () => {
+  if (view.ended) return;
+  $("status").textContent = "stream lost (reconnecting…)";
+  $("status").className = "down";
+};
