@@ -36,13 +36,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "benchmarks")]
 
 from harness.host_link import linked_ptys  # noqa: E402
-from harness.lab import quick_model, wait_for_stderr  # noqa: E402
+from harness.lab import LOOPBACK_LSL_CFG, quick_model, wait_for_stderr  # noqa: E402
 from harness.serve import ServeProcess  # noqa: E402
 from machine import describe, load_average  # noqa: E402
-
-LOOPBACK_CFG = ("[ports]\nIPv6 = disable\n[multicast]\nResolveScope = machine\n"
-                "ListenAddress = 127.0.0.1\nAddressesOverride = {127.0.0.1}\n"
-                "[lab]\nKnownPeers = {127.0.0.1}\n")
 
 
 def cpu_s(pid: int) -> float:
@@ -215,7 +211,7 @@ def main() -> None:
     print(describe())
     tmp = Path(tempfile.mkdtemp(prefix="bench-lab-"))
     cfg = tmp / "lsl_api.cfg"
-    cfg.write_text(LOOPBACK_CFG)
+    cfg.write_text(LOOPBACK_LSL_CFG)
     os.environ["LSLAPICFG"] = str(cfg)
     for size in args.sizes.split(","):
         rows, cols = (int(v) for v in size.split("x"))

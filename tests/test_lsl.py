@@ -12,22 +12,10 @@ from typing import Any
 
 import numpy as np
 import pytest
-from harness.lab import listening, stop
+from harness.lab import LOOPBACK_LSL_CFG, listening, stop
 from harness.serve import ServeProcess
 
 pylsl = pytest.importorskip("pylsl")
-
-LOOPBACK_CFG = """\
-[ports]
-IPv6 = disable
-[multicast]
-ResolveScope = machine
-ListenAddress = 127.0.0.1
-AddressesOverride = {127.0.0.1}
-[lab]
-KnownPeers = {127.0.0.1}
-"""
-"""liblsl on 127.0.0.1 only: no IPv6, machine-scope discovery sent to loopback."""
 
 STREAMS = ("spikes", "psp", "markers", "decisions", "link")
 
@@ -35,7 +23,7 @@ STREAMS = ("spikes", "psp", "markers", "decisions", "link")
 @pytest.fixture
 def loopback_lsl(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     cfg = tmp_path / "lsl_api.cfg"
-    cfg.write_text(LOOPBACK_CFG)
+    cfg.write_text(LOOPBACK_LSL_CFG)
     monkeypatch.setenv("LSLAPICFG", str(cfg))
 
 

@@ -105,3 +105,143 @@ def test_chromium_shows_the_live_view_of_a_board_on_a_pty(tmp_path: Path) -> Non
     assert lit.sum() > 200, lit.sum()
     assert lit.any(axis=0).sum() > 50  # dots spread over time (x), not one column
     assert lit.any(axis=1).sum() > 50  # and over channels (y)
+
+
+POKE_MASS = (6, 19)
+"""Top-layer (row, col), 0-based, of the 26x26 skin's poked mass: off the centre, where the
+built-in stimuli are, so the map must light the right place and not just the middle."""
+
+POKE = """\
+[[stimulus]]
+name = "poke"
+forces = {{ {mass} = [0.3, 0.3, -0.3] }}
+indentation_s = 2.0
+decay_tau_s = inf
+
+[[event]]
+start_s = 0.6
+stimulus = "poke"
+"""
+
+LAB_STATE = """JSON.stringify({
+  updates: view.updates, onsets_seen: view.onsetsSeen, onsets_drawn: view.onsetsDrawn,
+  map_max_hz: view.mapMaxHz, ended: view.ended, status: document.getElementById('status')
+  .textContent, banner: document.getElementById('ended-banner').hidden ? null
+  : document.getElementById('ended-banner').textContent,
+  fits: [document.documentElement.scrollWidth, document.documentElement.scrollHeight,
+         window.innerWidth, window.innerHeight],
+  map: (() => { const r = document.getElementById('map').getBoundingClientRect();
+                return [r.left, r.top, r.width, r.height]; })(),
+  marks: (() => { const r = document.getElementById('raster-marks').getBoundingClientRect();
+                  return [r.left, r.top, r.width, r.height]; })()})"""
+
+
+def _wait_state(browser: Chromium, ok: Any, timeout_s: float = 60.0) -> dict[str, Any]:
+    """The page's state (:data:`LAB_STATE`) once ``ok(state)``; the last one seen else."""
+    end = time.monotonic() + timeout_s
+    state: dict[str, Any] = {}
+    while time.monotonic() < end:
+        raw = browser.evaluate(LAB_STATE)
+        state = json.loads(raw) if raw else {}
+        if state and ok(state):
+            break
+        time.sleep(0.1)
+    return state
+
+
+def _box(img: np.ndarray, rect: list[float]) -> np.ndarray:
+    left, top, width, height = (int(round(v)) for v in rect)
+    return img[top:top + height, left:left + width, :3]
+
+
+def test_udp_view_and_lsl_at_26x26_fit_a_laptop_and_show_the_touch(
+        tmp_path: Path, monkeypatch: Any) -> None:
+    """One page load, as a lab runs it: ``listen --udp --view --lsl`` at 26x26 (10,138
+    channels) in a 1366x768 window; a board pokes one off-centre mass. The page fits the
+    window, the skin map is brightest where the poke is, the onset is drawn on the raster,
+    the LSL streams carry the board (link health with its counters), and when the receiver
+    stops the page says the run ended (not "reconnecting")."""
+    import socket
+
+    import pylsl
+    from harness.lab import LOOPBACK_LSL_CFG, chance_model
+
+    cfg = tmp_path / "lsl_api.cfg"
+    cfg.write_text(LOOPBACK_LSL_CFG)
+    monkeypatch.setenv("LSLAPICFG", str(cfg))
+    rows, cols = 26, 26
+    model = chance_model(tmp_path, (rows, cols))
+    schedule = tmp_path / "poke.toml"
+    schedule.write_text(POKE.format(mass=POKE_MASS[0] * cols + POKE_MASS[1] + 1))
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        port = int(s.getsockname()[1])
+    listen = ServeProcess("--udp", f"127.0.0.1:{port}", "--size", "26x26", "--model",
+                          str(model), "--json", "--view", "0", "--lsl", "lab34",
+                          command="listen")
+    board = None
+    try:
+        url = wait_for_stderr(listen, "live view at").split()[-1]
+        with Chromium(1366, 768) as browser:
+            browser.open(url)
+            board = ServeProcess("--udp", f"127.0.0.1:{port}", "--size", "26x26", "--duration",
+                                 "3", "--seed", "1", "--snr-db", "10", "--schedule",
+                                 str(schedule), "--json")
+            found = pylsl.resolve_byprop("name", "lab34-link", timeout=60)
+            assert len(found) == 1
+            inlet = pylsl.StreamInlet(found[0], max_buflen=60)
+            inlet.open_stream(10)
+            # the poke is on from 0.6 s to 2.6 s: its onset drawn and the map lit
+            touched = _wait_state(browser, lambda st: st.get("onsets_drawn", 0) >= 1
+                                  and st.get("map_max_hz", 0) > 50)
+            time.sleep(0.6)
+            touched = _wait_state(browser, lambda st: True)
+            shot = browser.screenshot(tmp_path / "view-26x26.png")
+            assert board.wait(120) == 0, board.stderr
+            link_samples, _ = inlet.pull_chunk(timeout=2.0, max_samples=1000)
+            prov = inlet.info(10).desc().child("provenance")
+            board_of_streams = prov.child_value("board")
+            listen.interrupt()
+            assert listen.wait(60) == 130, listen.stderr
+            ended = _wait_state(browser, lambda st: st.get("ended"), timeout_s=10)
+            end_shot = browser.screenshot(tmp_path / "view-ended.png")
+            errors = list(browser.console_errors)
+    finally:
+        if board is not None:
+            board.kill()
+        listen.kill()
+    assert errors == [], errors
+    # the page fits a 1366x768 laptop: no scrolling either way (the window's viewport is
+    # 1366 wide and, less the browser's own bars, at most 768 high)
+    width, height, inner_w, inner_h = touched["fits"]
+    assert inner_w == 1366 and 600 < inner_h <= 768, touched
+    assert width <= inner_w and height <= inner_h, touched
+    # the onset is drawn on the raster: the marks' blue line is on the screenshot
+    img = _png(shot)
+    marks = _box(img, touched["marks"])
+    blue = (marks[..., 2] > 0.9) & (marks[..., 1] > 0.7) & (marks[..., 0] < 0.35)
+    assert touched["onsets_drawn"] >= 1 and blue.any(axis=0).sum() >= 1, touched
+    assert blue.any(axis=1).sum() > 0.8 * marks.shape[0]  # a line over every channel
+    # the map lights the poked place: its brightest patch (15x15 px, wider than the rings
+    # the overlay draws around the picked PSP sensors) lies on the poked mass
+    from scipy.ndimage import uniform_filter
+
+    skin = _box(img, touched["map"]).sum(axis=2)
+    h, w = skin.shape
+    py, px = POKE_MASS[0] / (rows - 1) * h, POKE_MASS[1] / (cols - 1) * w
+    yy, xx = np.mgrid[0:h, 0:w]
+    near = np.hypot(yy - py, xx - px) < 0.12 * w
+    cy, cx = np.unravel_index(np.argmax(uniform_filter(skin, 15)), skin.shape)
+    assert np.hypot(cy - py, cx - px) < 0.06 * w, ((cy, cx), (py, px))
+    assert skin[near].mean() > 4 * skin[~near].mean(), (skin[near].mean(), skin[~near].mean())
+    # LSL on UDP: the link-health stream of this board, counting its events
+    summary = listen.summary()
+    (key, info), = summary["boards"].items()
+    assert board_of_streams == key
+    decoded = [s[0] for s in link_samples]
+    assert decoded and max(decoded) == info["link"]["events_decoded"] == \
+        board.summary()["generated"] > 0
+    # the end of the run: said on the page, not "reconnecting"
+    assert ended["ended"] and ended["status"].startswith("run ended"), ended
+    assert ended["banner"] and "receiver stopped" in ended["banner"], ended
+    assert end_shot.exists()

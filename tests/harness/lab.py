@@ -12,6 +12,19 @@ from pathlib import Path
 from harness.host_link import linked_ptys
 from harness.serve import ServeProcess
 
+LOOPBACK_LSL_CFG = """\
+[ports]
+IPv6 = disable
+[multicast]
+ResolveScope = machine
+ListenAddress = 127.0.0.1
+AddressesOverride = {127.0.0.1}
+[lab]
+KnownPeers = {127.0.0.1}
+"""
+"""An lsl_api.cfg (``LSLAPICFG``) that keeps liblsl on 127.0.0.1: no IPv6, machine-scope
+discovery sent to loopback."""
+
 
 def quick_model(tmp_path: Path, size: tuple[int, int] = (6, 6)) -> Path:
     """A decoder for a skin of ``size`` trained in seconds (noise-free, one stimulus per
@@ -22,6 +35,25 @@ def quick_model(tmp_path: Path, size: tuple[int, int] = (6, 6)) -> Path:
     decoder, _ = train_decoder(math.inf, reps=1, seed=0, rest_s=0.05, cross_validation=False,
                                size=size)
     path = tmp_path / f"model-{size[0]}x{size[1]}.npz"
+    save_decoder(decoder, path)
+    return path
+
+
+def chance_model(tmp_path: Path, size: tuple[int, int]) -> Path:
+    """A decoder of the right shape for a skin of ``size`` fitted in a second on random
+    features (two per direction condition): for runs whose decisions do not matter (the
+    view's and the links' tests), where training on the skin would take tens of seconds."""
+    import numpy as np
+
+    from skinhil.decoding.classifier import DirectionDecoder
+    from skinhil.decoding.model_file import save_decoder
+    from skinhil.receiver.training import feature_spec
+
+    spec = feature_spec(size=size)
+    rng = np.random.default_rng(0)
+    labels = np.repeat(np.arange(9), 2)
+    decoder = DirectionDecoder(spec).fit(rng.random((labels.size, spec.n_features)), labels)
+    path = tmp_path / f"chance-{size[0]}x{size[1]}.npz"
     save_decoder(decoder, path)
     return path
 

@@ -176,7 +176,7 @@ function drawTimeAxis(canvas, end_us, window_s, step_s) {
     const x = Math.round(timeX(t * 1e6, end_us, window_s, W));
     const major = Math.abs(t / (2 * step_s) - Math.round(t / (2 * step_s))) < 1e-6;
     ctx.fillRect(x, 0, 1, major ? 6 : 3);
-    if (major && x > 14 && x < W - 24) ctx.fillText(`${t.toFixed(step_s < 1 ? 1 : 0)} s`, x - 12, 16);
+    if (major && t >= 0 && x > 14 && x < W - 24) ctx.fillText(`${t.toFixed(step_s < 1 ? 1 : 0)} s`, x - 12, 16);
   }
 }
 
@@ -301,7 +301,7 @@ function drawLegend(scale) {
   }
   ctx.fillStyle = "#aaa";
   ctx.font = "11px sans-serif";
-  ctx.fillText(`0 … ${scale.toFixed(0)} spikes/s (mean per place)`, 126, 11);
+  ctx.fillText(`0 … ${scale.toFixed(0)} spikes/s`, 126, 11);
 }
 
 // map px ↔ grid units (column, row from the top-left mass)
