@@ -100,7 +100,7 @@ class LslReaders:
         self.counts: dict[str, int] = {}
         self._stop = threading.Event()
         self._threads = []
-        for kind in ("spikes", "psp", "markers", "decisions"):
+        for kind in ("spikes", "psp", "markers", "decisions", "link"):
             info = pylsl.resolve_byprop("name", f"{name}-{kind}", timeout=10)[0]
             inlet = pylsl.StreamInlet(info, max_buflen=360)
             inlet.open_stream(10)
@@ -113,10 +113,10 @@ class LslReaders:
         import numpy as np
 
         n = inlet.channel_count
-        numeric = kind in ("spikes", "psp")  # into a numpy buffer, as a lab's consumer would
+        numeric = kind in ("spikes", "psp", "link")  # into a numpy buffer, as a lab would
         rows = max(1, min(200_000, 4_000_000 // n))
-        dest = np.empty((rows, n), np.float32 if kind == "psp" else np.int32) \
-            if numeric else None
+        kinds = {"psp": np.float32, "link": np.float64}
+        dest = np.empty((rows, n), kinds.get(kind, np.int32)) if numeric else None
         while not self._stop.is_set():
             _, stamps = inlet.pull_chunk(timeout=0.05, max_samples=rows, dest_obj=dest)
             self.counts[kind] += len(stamps)
