@@ -23,7 +23,7 @@ PAGE_STATE = """JSON.stringify({
            : document.getElementById('answers').innerText,
   confusion: document.getElementById('confusion').innerText,
   raster: (() => { const r = document.getElementById('raster').getBoundingClientRect();
-                   return [r.left, r.top, r.width, r.height]; })()})"""
+                   return [r.left, r.top, r.width, r.height]; })()}) : null"""
 
 
 def _state(browser: Chromium) -> dict[str, Any]:
@@ -123,17 +123,20 @@ start_s = 0.6
 stimulus = "poke"
 """
 
-LAB_STATE = """JSON.stringify({
+LAB_STATE = """view.config && view.xy ? JSON.stringify({
   updates: view.updates, onsets_seen: view.onsetsSeen, onsets_drawn: view.onsetsDrawn,
-  map_max_hz: view.mapMaxHz, ended: view.ended, status: document.getElementById('status')
-  .textContent, banner: document.getElementById('ended-banner').hidden ? null
-  : document.getElementById('ended-banner').textContent,
+  map_max_hz: view.mapMaxHz, ended: view.ended, psp_sensors: view.config.psp_sensors,
+  picked_xy: Array.from(view.xy.slice(2 * view.config.psp_sensors.at(-1),
+                                      2 * view.config.psp_sensors.at(-1) + 2)),
+  status: document.getElementById('status').textContent,
+  banner: document.getElementById('ended-banner').hidden ? null
+          : document.getElementById('ended-banner').textContent,
   fits: [document.documentElement.scrollWidth, document.documentElement.scrollHeight,
          window.innerWidth, window.innerHeight],
   map: (() => { const r = document.getElementById('map').getBoundingClientRect();
                 return [r.left, r.top, r.width, r.height]; })(),
   marks: (() => { const r = document.getElementById('raster-marks').getBoundingClientRect();
-                  return [r.left, r.top, r.width, r.height]; })()})"""
+                  return [r.left, r.top, r.width, r.height]; })()}) : null"""
 
 
 def _wait_state(browser: Chromium, ok: Any, timeout_s: float = 60.0) -> dict[str, Any]:
@@ -197,6 +200,15 @@ def test_udp_view_and_lsl_at_26x26_fit_a_laptop_and_show_the_touch(
             time.sleep(0.6)
             touched = _wait_state(browser, lambda st: True)
             shot = browser.screenshot(tmp_path / "view-26x26.png")
+            # a click on the map at the poke picks the sensor there for the PSP traces
+            left, top, w, h = touched["map"]
+            browser.evaluate(
+                "document.getElementById('map-overlay').dispatchEvent(new MouseEvent('click', "
+                f"{{clientX: {left + POKE_MASS[1] / (cols - 1) * w}, "
+                f"clientY: {top + POKE_MASS[0] / (rows - 1) * h}, bubbles: true}}))")
+            picked = _wait_state(browser, lambda st: len(st["psp_sensors"]) == 8 and
+                                 st["psp_sensors"][-1] not in touched["psp_sensors"],
+                                 timeout_s=10)
             assert board.wait(120) == 0, board.stderr
             link_samples, _ = inlet.pull_chunk(timeout=2.0, max_samples=1000)
             prov = inlet.info(10).desc().child("provenance")
@@ -234,6 +246,10 @@ def test_udp_view_and_lsl_at_26x26_fit_a_laptop_and_show_the_touch(
     cy, cx = np.unravel_index(np.argmax(uniform_filter(skin, 15)), skin.shape)
     assert np.hypot(cy - py, cx - px) < 0.06 * w, ((cy, cx), (py, px))
     assert skin[near].mean() > 4 * skin[~near].mean(), (skin[near].mean(), skin[~near].mean())
+    # the picked sensor (the newest PSP trace) lies at the poked mass
+    assert picked["psp_sensors"][:7] == touched["psp_sensors"][1:], (picked, touched)
+    col, row = picked["picked_xy"]
+    assert abs(col - POKE_MASS[1]) <= 0.5 and abs(row - POKE_MASS[0]) <= 0.5, picked
     # LSL on UDP: the link-health stream of this board, counting its events
     summary = listen.summary()
     (key, info), = summary["boards"].items()

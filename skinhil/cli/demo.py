@@ -27,7 +27,12 @@ from typing import Any
 
 from protocols.kernel_cache import source_hash
 from skinhil.cli.kernel_notice import announce_cold_cache
-from skinhil.cli.lab_outputs import add_lab_output_args, check_lab_outputs, lab_outputs
+from skinhil.cli.lab_outputs import (
+    add_lab_output_args,
+    check_lab_outputs,
+    lab_outputs,
+    provenance,
+)
 from skinhil.cli.listen import LivePrinter, class_names, print_summary, summary
 from skinhil.cli.options import DECODE_SNR_DB
 from skinhil.cli.train import print_report
@@ -176,7 +181,9 @@ def run(args: argparse.Namespace) -> int:
           f"receiver: {link.name}, model {model_path}", flush=True)
     t_link = time.monotonic()
     try:
-        with lab_outputs(args, receiver, names, PAPER_SIZE, "demo", answerer.as_dict):
+        prov = {**provenance(f"pty {link.slave_path} @ {args.baud} baud", model_path),
+                "snr_db": f"{args.snr_db:g}", "seed": str(args.seed)}  # the demo runs its board
+        with lab_outputs(args, receiver, names, PAPER_SIZE, "demo", answerer.as_dict, prov):
             status, out, err = run_against_board(receiver, cmd)
     except KeyboardInterrupt:  # stopped: the figures so far
         print()
