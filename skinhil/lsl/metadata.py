@@ -22,16 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from skinhil.model.geometry import Mesh, sensor_positions
-
-MODEL_TEXT = "3-layer mass-spring-damper skin, one stochastic Izhikevich neuron per spring"
-"""The model, as the streams' ``acquisition/model`` names it."""
-
-
-def sensor_label(mesh: Mesh, address: int) -> str:
-    """``S12 M8-M9``: the sensor's address and the 1-based numbers of its spring's masses."""
-    i, j = mesh.springs[address]
-    return f"S{address} M{int(i) + 1}-M{int(j) + 1}"
+from skinhil.model.geometry import Mesh, sensor_label, sensor_positions
+from skinhil.model.skin import MODEL_SUMMARY
 
 
 def add_location(node: Any, xyz_m: np.ndarray) -> None:
@@ -47,10 +39,10 @@ def describe(info: Any, provenance: Mapping[str, str]) -> None:
 
     acq = info.desc().append_child("acquisition")
     acq.append_child_value("manufacturer", "skinhil")
-    acq.append_child_value("model", MODEL_TEXT)
+    acq.append_child_value("model", MODEL_SUMMARY)
     acq.append_child_value("software_version", __version__)
     prov = info.desc().append_child("provenance")
-    for key, value in {"skinhil_version": __version__, "model": MODEL_TEXT,
+    for key, value in {"skinhil_version": __version__, "model": MODEL_SUMMARY,
                        **provenance}.items():
         prov.append_child_value(key, str(value))
 

@@ -149,6 +149,12 @@ def sensor_positions(mesh: Mesh) -> np.ndarray:
     return 0.5 * (mesh.positions[mesh.springs[:, 0]] + mesh.positions[mesh.springs[:, 1]])
 
 
+def sensor_label(mesh: Mesh, address: int) -> str:
+    """``S12 M8-M9``: the sensor's address and the 1-based numbers of its spring's masses."""
+    i, j = mesh.springs[address]
+    return f"S{address} M{int(i) + 1}-M{int(j) + 1}"
+
+
 def build_mesh(spacing_m: float, layer_gap_m: float, size: MeshSize = PAPER_SIZE) -> Mesh:
     """The mesh of top-layer ``size`` with lateral ``spacing_m`` and vertical ``layer_gap_m``
     (m)."""

@@ -82,6 +82,11 @@ Mechanics = Literal["auto", "linear", "geometric"]
 Dynamics = Literal["linear", "geometric"]
 LinearStepper = Literal["auto", "exact", "leapfrog"]
 
+MODEL_SUMMARY = ("3-layer mass-spring-damper skin, one stochastic Izhikevich neuron per "
+                 "spring (skinhil)")
+"""The model in one line, as lab outputs name it (NWB's subject and device, LSL's
+``acquisition/model``)."""
+
 INPUT_BLOCK_STEPS = 1000
 """Steps of input forces built at a time by :meth:`SkinModel.simulate_many` (bounded memory
 at any mesh size)."""

@@ -12,6 +12,7 @@ import numpy as np
 
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import Mesh, sensor_positions
+from skinhil.model.skin import MODEL_SUMMARY
 from skinhil.model.stimuli import Schedule
 from skinhil.nwb.metadata import NwbMetadata
 from skinhil.output_files import atomic_path
@@ -29,11 +30,6 @@ def require_pynwb() -> None:
                           'pip install "skinhil[nwb]"') from None
 
 
-MODEL_TEXT = ("3-layer mass-spring-damper skin, one stochastic Izhikevich neuron per spring "
-              "(skinhil)")
-"""The model as NWB files name it (the subject's and the device's description)."""
-
-
 def new_file(meta: NwbMetadata | None, *, command: str, mesh: Mesh,
              start: datetime.datetime, description: str, experiment: str) -> Any:
     """An :class:`pynwb.NWBFile` with the session's metadata, its subject (the simulated
@@ -44,11 +40,11 @@ def new_file(meta: NwbMetadata | None, *, command: str, mesh: Mesh,
     nwb = NWBFile(identifier=str(uuid.uuid4()), **meta.nwbfile_kwargs(
         command=command, size=mesh.size, start=start, description=description,
         experiment=experiment))
-    nwb.subject = meta.subject(mesh.size, MODEL_TEXT, start)
+    nwb.subject = meta.subject(mesh.size, MODEL_SUMMARY, start)
     from skinhil import __version__
 
     nwb.create_device(name="skinhil_board", description=(
-        f"emulated sensor board, skinhil {__version__}: {MODEL_TEXT}; "
+        f"emulated sensor board, skinhil {__version__}: {MODEL_SUMMARY}; "
         f"{mesh.springs.shape[0]} sensors (springs), their rest positions in the units "
         "table's x_m, y_m, z_m"))
     return nwb

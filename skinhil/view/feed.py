@@ -49,7 +49,7 @@ from typing import Any
 
 import numpy as np
 
-from skinhil.model.geometry import Mesh, sensor_positions
+from skinhil.model.geometry import Mesh, sensor_label, sensor_positions
 from skinhil.receiver import Receiver, ReceiverListener, ScoredDecision, in_stream_order
 from skinhil.receiver.traces import PspTraces
 
@@ -87,12 +87,6 @@ def grid_xy(mesh: Mesh) -> np.ndarray:
     return np.stack([col, row], axis=1).astype(np.float32)
 
 
-def trace_labels(mesh: Mesh, sensors: Sequence[int]) -> list[str]:
-    """``S12 M8-M9`` for each sensor."""
-    return [f"S{a} M{int(mesh.springs[a][0]) + 1}-M{int(mesh.springs[a][1]) + 1}"
-            for a in sensors]
-
-
 def default_trace_sensors(n_channels: int, count: int = DEFAULT_TRACES) -> list[int]:
     """``count`` sensor addresses spread evenly over ``0..n_channels-1``."""
     return sorted({int(a) for a in np.linspace(0, n_channels - 1, min(count, n_channels))})
@@ -117,7 +111,7 @@ class ViewFeed(ReceiverListener):
             "type": "config", "n_channels": self.n_channels,
             "names": {str(k): v for k, v in names.items()},
             "psp_sensors": sensors, "psp_rate_hz": self.traces.rate_hz,
-            "psp_labels": trace_labels(mesh, sensors), "max_traces": MAX_TRACES,
+            "psp_labels": [sensor_label(mesh, a) for a in sensors], "max_traces": MAX_TRACES,
             "grid": [int(mesh.size[0]), int(mesh.size[1])],
             "sensor_xy": _b64(grid_xy(mesh).astype("<f4"))}
         self._lock = threading.Lock()
@@ -188,7 +182,7 @@ class ViewFeed(ReceiverListener):
             self._psp, self._psp_first = [], -1
             self._traces_changed = True
             self.config = {**self.config, "psp_sensors": chosen,
-                           "psp_labels": trace_labels(self.mesh, chosen)}
+                           "psp_labels": [sensor_label(self.mesh, a) for a in chosen]}
         return chosen
 
     def end_run(self, reason: str) -> None:
