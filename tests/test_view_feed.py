@@ -94,8 +94,9 @@ def test_one_server_shows_several_boards_takes_picks_and_ends_the_run(
         assert kind == "config" and hello["board"] == "127.0.0.1:5001"
         assert hello["boards"] == ["0", "127.0.0.1:5001"]
         assert hello["grid"] == [6, 6] and len(hello["sensor_xy"]) > 0
-        (_, default), = _events(server.url + "events", 1)
+        (_, default), (kind, update) = _events(server.url + "events", 2)
         assert default["board"] == "0"
+        assert kind == "update" and update["boards"] == ["0", "127.0.0.1:5001"]
         # a page picks PSP sensors: that board's next update and config say so
         req = urllib.request.Request(server.url + "psp", method="POST", data=json.dumps(
             {"board": "127.0.0.1:5001", "sensors": [7, 7, 400, 3]}).encode())

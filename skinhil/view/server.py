@@ -12,7 +12,7 @@ Paths: ``/`` the page, ``/view.js`` and ``/view.css`` its assets (package data, 
 ``/events`` the stream (a ``config`` event, then an ``update`` event every ``period_s``,
 and an ``end`` event when the server closes: the page then shows the run ended instead of
 reconnecting), ``/events?board=KEY`` the stream of one board where several send
-(``listen --udp``; the config lists them all in ``boards``), ``/psp`` (POST
+(``listen --udp``; the config and every update list them all in ``boards``), ``/psp`` (POST
 ``{"board": KEY, "sensors": [...]}``) the PSP sensors a page picked, ``/client`` (GET)
 what the pages reported: their own errors and what they drew (POSTed by the page to
 ``/client``), for tests and for ``--json`` users.
@@ -168,6 +168,7 @@ class ViewServer:
                 watched = {k for k, _ in self._clients}
             for key, feed in feeds.items():
                 msg = feed.update()  # drained whether watched or not: nothing piles up
+                msg["boards"] = list(feeds)  # boards that began to send since are listed
                 if key in watched:
                     self._broadcast(key, json.dumps(msg, separators=(",", ":")))
 

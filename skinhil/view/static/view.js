@@ -458,10 +458,28 @@ function onUpdate(m) {
   $("answers-panel").hidden = !m.answers;
   if (m.answers) showTable("answers", ANSWERS.map(([k, label]) => [label, m.answers[k]]));
   showRun(m.run);
+  if (m.boards) showBoards(m.boards);
   for (const e of m.link_errors) $("status").textContent = "link error: " + e;
   $("clock").textContent = `board time ${(m.t_board_us * 1e-6).toFixed(2)} s`;
   view.lastLink = m.link;
   if (view.updates % 5 === 0) reportState();
+}
+
+// links to the other boards' pages where several send on the link
+function showBoards(keys) {
+  if (keys.join("\n") === view.boardsShown) return;
+  view.boardsShown = keys.join("\n");
+  const boards = $("boards");
+  boards.innerHTML = "";
+  if (keys.length < 2) return;
+  boards.append("boards: ");
+  for (const key of keys) {
+    const a = document.createElement("a");
+    a.href = "?board=" + encodeURIComponent(key);
+    a.textContent = key;
+    if (key === view.config.board) a.className = "on";
+    boards.appendChild(a);
+  }
 }
 
 function clickAt(canvas, e) {
@@ -488,18 +506,7 @@ source.addEventListener("config", (e) => {
   setupMap();
   view.picked = view.config.psp_sensors.slice();
   view.decisions = view.config.recent_decisions.slice().reverse();
-  const boards = $("boards");
-  boards.innerHTML = "";
-  if (view.config.boards.length > 1) {
-    boards.append("boards: ");
-    for (const key of view.config.boards) {
-      const a = document.createElement("a");
-      a.href = "?board=" + encodeURIComponent(key);
-      a.textContent = key;
-      if (key === view.config.board) a.className = "on";
-      boards.appendChild(a);
-    }
-  }
+  showBoards(view.config.boards);
   showRun({state: "live", reason: ""});
 });
 source.addEventListener("update", (e) => { if (view.config && !view.ended) onUpdate(JSON.parse(e.data)); });
