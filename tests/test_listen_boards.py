@@ -14,6 +14,8 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+from harness.lab import LOOPBACK_LSL_CFG
 from harness.serve import RUN_DIR, ServeProcess, serve_env
 
 from skinhil.decoding.model_file import save_decoder
@@ -36,9 +38,10 @@ def _free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def _listen_to_two_boards(tmp_path: Path, *listen_args: str) -> tuple[dict, list[int]]:
+def _listen_to_two_boards(tmp_path: Path, *listen_args: str) -> tuple[dict, list[int], str]:
     """Run ``listen --udp`` (with ``listen_args``) and two ``serve --udp`` boards sending to
-    it; return listen's JSON summary and the boards' generated counts (board seed 1, 2)."""
+    it; return listen's JSON summary, the boards' generated counts (board seed 1, 2) and
+    listen's stderr."""
     decoder, _ = train_decoder(math.inf, reps=1, seed=0, rest_s=0.05, cross_validation=False)
     model = tmp_path / "model.npz"
     save_decoder(decoder, model)
@@ -68,11 +71,17 @@ def _listen_to_two_boards(tmp_path: Path, *listen_args: str) -> tuple[dict, list
     assert listen.returncode == 130, err  # stopped cleanly by Ctrl-C, after its summary
     summary = [json.loads(line) for line in out.splitlines()
                if '"summary"' in line][-1]
-    return summary, [b.summary()["generated"] for b in boards]
+    return summary, [b.summary()["generated"] for b in boards], err
 
 
-def test_listen_decodes_two_udp_boards_at_once(tmp_path: Path) -> None:
-    summary, generated = _listen_to_two_boards(tmp_path)
+def test_listen_decodes_two_udp_boards_at_once(tmp_path: Path,
+                                              monkeypatch: pytest.MonkeyPatch) -> None:
+    """Both boards decoded whole, with the live view and LSL outlets on: one view server for
+    both, each board its LSL streams (the second one's named NAME-2-...)."""
+    cfg = tmp_path / "lsl_api.cfg"
+    cfg.write_text(LOOPBACK_LSL_CFG)
+    monkeypatch.setenv("LSLAPICFG", str(cfg))  # liblsl on 127.0.0.1 only
+    summary, generated, err = _listen_to_two_boards(tmp_path, "--view", "0", "--lsl", "two")
     generated = sorted(generated)
     per_board = summary["boards"]
     assert len(per_board) == 2
@@ -82,12 +91,18 @@ def test_listen_decodes_two_udp_boards_at_once(tmp_path: Path) -> None:
     link = summary["link"]
     assert link["events_decoded"] == sum(generated) > 0
     assert link["lost_on_link"] == link["frames_lost"] == link["crc_errors"] == 0
+    assert err.count("live view at") == 1, err
+    named = sorted(line.split("LSL outlets ")[1].split("-spikes")[0]
+                   for line in err.splitlines() if "LSL outlets" in line)
+    assert named == ["two", "two-2"], err
+    for key in per_board:
+        assert f"(board {key})" in err
 
 
 def test_listen_refuses_sources_past_its_cap(tmp_path: Path) -> None:
     """``--udp-max-sources 1``: the first board is decoded whole, the second one's datagrams
     are refused and counted, never a board of their own."""
-    summary, generated = _listen_to_two_boards(tmp_path, "--udp-max-sources", "1")
+    summary, generated, _ = _listen_to_two_boards(tmp_path, "--udp-max-sources", "1")
     per_board = summary["boards"]
     assert len(per_board) == 1
     decoded = next(iter(per_board.values()))["link"]
