@@ -101,7 +101,8 @@ class SkinSensor:
     def __init__(self, model: SkinModel | None = None, dt_s: float = 1e-4,
                  snr_db: float = math.inf, seed: int | None = None,
                  params: IzhikevichParams | None = None,
-                 noise: NoiseParams | None = None, threads: int = 1) -> None:
+                 noise: NoiseParams | None = None, threads: int = 1,
+                 state_forces: bool = False) -> None:
         self.model = model or SkinModel()
         if self.model.n_springs > MAX_CHANNELS:
             raise ConfigError(f"a {format_size(self.model.size)} skin has "
@@ -109,7 +110,9 @@ class SkinSensor:
                               f"(at most {MAX_CHANNELS} channels, a 63x63 skin): use a smaller "
                               "skin or several boards")
         self.dt_s = float(dt_s)
-        self.stepper = self.model.stepper(dt_s)
+        self.stepper = self.model.stepper(dt_s, state_forces)
+        """The mechanics; with ``state_forces`` one that can carry a contact
+        (:meth:`SkinModel.stepper`)."""
         self.neurons = NeuronPopulation(self.model.n_springs, params, snr_db, seed, noise=noise,
                                         threads=threads)
         self.threads = self.neurons.threads

@@ -206,6 +206,19 @@ class SkinModel:
             return self.params.linear_stepper
         return "exact" if 3 * self.mesh.free.size <= EXACT_MAX_FREE_DOFS else "leapfrog"
 
+    def regime_for(self, state_forces: bool) -> Literal["exact", "leapfrog"]:
+        """:attr:`linear_regime`, or with ``state_forces`` (a force that depends on the
+        state, as a contact's) the leapfrog: the exact ZOH holds a force known before the
+        step, so it cannot carry one; forcing ``"exact"`` then is refused in one line."""
+        if not state_forces:
+            return self.linear_regime
+        if self.params.linear_stepper == "exact":
+            raise ConfigError("the exact linear discretisation (ZOH) holds a force known "
+                              "before each step and cannot carry a contact, whose force "
+                              "depends on where the surface is: use linear_stepper "
+                              "'leapfrog' or 'auto', or the geometric mechanics")
+        return "leapfrog"
+
     def max_dt_s(self) -> float:
         """Largest step (s) the chosen mechanics accepts (inf for the linear mechanics: exact
         ZOH, or leapfrog substeps chosen for stability)."""
@@ -215,8 +228,10 @@ class SkinModel:
         return max_stable_dt(self.mesh, p.mass_kg, p.stiffness_n_per_m, p.damping_n_s_per_m,
                              p.tension_n)
 
-    def stepper(self, dt_s: float) -> SkinStepper:
-        """A fresh fixed-step stepper at rest for real-time block stepping at ``dt_s`` (s)."""
+    def stepper(self, dt_s: float, state_forces: bool = False) -> SkinStepper:
+        """A fresh fixed-step stepper at rest for real-time block stepping at ``dt_s`` (s);
+        ``state_forces``: one that can carry a force depending on the state (a contact's):
+        the geometric mechanics or the leapfrog (:meth:`regime_for`)."""
         if not (isinstance(dt_s, int | float) and math.isfinite(dt_s) and dt_s > 0):
             raise ConfigError(f"dt_s must be a finite number of seconds > 0, got {dt_s!r}")
         limit = self.max_dt_s()
@@ -228,7 +243,7 @@ class SkinModel:
         p = self.params
         cls: type[LinearMechanics | LeapfrogMechanics | GeometricMechanics] = (
             GeometricMechanics if p.dynamics == "geometric" else
-            LinearMechanics if self.linear_regime == "exact" else LeapfrogMechanics)
+            LinearMechanics if self.regime_for(state_forces) == "exact" else LeapfrogMechanics)
         return cls(self.mesh, p.mass_kg, p.stiffness_n_per_m, p.damping_n_s_per_m,
                    p.tension_n, float(dt_s), p.readout)
 

@@ -1,0 +1,121 @@
+"""What touches the skin: contacts (an indenter on a trajectory with its friction) in scene
+time, and the world's packed operands and state that the compiled step reads and updates."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from skinhil.errors import ConfigError
+from skinhil.world.contact import ContactParams
+from skinhil.world.indenters import Indenter
+from skinhil.world.trajectory import AXES, Trajectory
+
+MAX_CONTACTS = 64
+"""Most contacts in one scene."""
+MAX_MU = 5.0
+"""Largest friction coefficient."""
+
+
+@dataclass(frozen=True)
+class Contact:
+    """An indenter on a trajectory from ``start_s`` (s, scene time), with Coulomb friction of
+    static and kinetic coefficients ``mu_static`` >= ``mu_kinetic`` >= 0."""
+
+    indenter: Indenter
+    trajectory: Trajectory
+    start_s: float = 0.0
+    mu_static: float = 0.8
+    mu_kinetic: float = 0.6
+    name: str = "contact"
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.start_s) and self.start_s >= 0):
+            raise ConfigError(f"contact {self.name!r}: start_s must be >= 0 s")
+        if not (0 <= self.mu_kinetic <= self.mu_static <= MAX_MU):
+            raise ConfigError(f"contact {self.name!r}: friction needs 0 <= mu_kinetic <= "
+                              f"mu_static <= {MAX_MU:g}, got {self.mu_kinetic!r}, "
+                              f"{self.mu_static!r}")
+
+    @property
+    def end_s(self) -> float:
+        """Scene time (s) at which the contact ends."""
+        return self.start_s + self.trajectory.duration_s
+
+
+@dataclass(frozen=True)
+class Scene:
+    """The contacts of a scenario (scene time 0 where the scenario starts)."""
+
+    contacts: tuple[Contact, ...]
+
+    def __post_init__(self) -> None:
+        if not 1 <= len(self.contacts) <= MAX_CONTACTS:
+            raise ConfigError(f"a scene holds 1..{MAX_CONTACTS} contacts, got "
+                              f"{len(self.contacts)}")
+
+    @property
+    def duration_s(self) -> float:
+        """Scene time (s) at which the last contact ends."""
+        return max(c.end_s for c in self.contacts)
+
+
+class World:
+    """A scene on a skin: the operands the compiled contact step reads (:attr:`operands`)
+    and its state (:attr:`state`), updated in place.
+
+    ``index`` maps each top-layer mass (row-major) to its column in the stepper's state
+    arrays (-1 for a fixed mass); ``rest_xy`` (n_top, 2) m are their rest positions."""
+
+    def __init__(self, scene: Scene, index: np.ndarray, rest_xy: np.ndarray,
+                 size: tuple[int, int], spacing_m: float, params: ContactParams) -> None:
+        self.scene = scene
+        self.params = params
+        cs = scene.contacts
+        keys = [c.trajectory.keyframes for c in cs]
+        ptr = np.concatenate([[0], np.cumsum([len(k) for k in keys])]).astype(np.int64)
+        t = [c.trajectory for c in cs]
+        self.operands = (
+            np.ascontiguousarray(index, dtype=np.int64),
+            np.ascontiguousarray(rest_xy, dtype=np.float64),
+            np.array(size, dtype=np.int64), float(spacing_m), params.packed(),
+            np.array([c.indenter.code for c in cs], dtype=np.int64),
+            np.stack([c.indenter.geometry() for c in cs]),
+            np.array([c.indenter.reach_m for c in cs]),
+            np.array([c.start_s for c in cs]), ptr, np.concatenate(keys),
+            np.array([[x.normal == "force", x.tangential == "force"] for x in t],
+                     dtype=np.int64),
+            np.array([[x.vibration_amplitude_m, x.vibration_frequency_hz,
+                       AXES.index(x.vibration_axis)] for x in t]),
+            np.array([[c.mu_static, c.mu_kinetic] for c in cs]),
+            np.array([x.origin_m for x in t], dtype=np.float64))
+        n, n_top = len(cs), len(index)
+        self.state = (np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)),
+                      np.zeros(n, dtype=np.int64), np.full(n, np.nan),
+                      np.zeros((n, n_top), dtype=np.int8), np.zeros((n, n_top, 2)),
+                      np.full((n, n_top), -10, dtype=np.int64), np.zeros(1, dtype=np.int64))
+        """Pose (x, y, z_tip) m now and a step back, the last measured force (Fx, Fy, N) N,
+        running or not, the load set-point (N, NaN: the trajectory's), each mass's friction
+        state, anchor (m) and last step in contact, the step counter."""
+
+    def reset(self) -> None:
+        """Nothing touching, set-points cleared."""
+        pose, prev, meas, live, setpoint, nodes, anchor, stamp, counter = self.state
+        for a in (pose, prev, meas, live, nodes, anchor, counter):
+            a[...] = 0
+        setpoint[:] = np.nan
+        stamp[:] = -10
+
+    def set_load(self, contact: int, load_n: float | None) -> None:
+        """Replace a force-controlled contact's load (N) from the next step on (a grip
+        set-point); None returns it to its trajectory's."""
+        if not 0 <= contact < len(self.scene.contacts):
+            raise ConfigError(f"no contact {contact}: the scene has "
+                              f"{len(self.scene.contacts)}")
+        if self.scene.contacts[contact].trajectory.normal != "force":
+            raise ConfigError(f"contact {contact} is position-controlled: no load to set")
+        if load_n is not None and not (math.isfinite(load_n) and load_n >= 0):
+            raise ConfigError(f"a load must be a finite number of newtons >= 0, got {load_n!r}")
+        self.state[4][contact] = np.nan if load_n is None else float(load_n)
