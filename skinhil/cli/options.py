@@ -14,6 +14,7 @@ from skinhil.model.neurons import NoiseParams
 from skinhil.model.schedule_file import MAX_FILE_BYTES, load_schedule
 from skinhil.model.skin import AUTO_GEOMETRIC_MAX_SPRINGS, SkinModel, SkinParams
 from skinhil.model.stimuli import Schedule
+from skinhil.world.scenario_file import Scenario, load_scenario
 
 DT_RANGE_S = (1e-6, 1e-2)
 """Simulation steps (s) the options take: from 1 µs to 10 ms (the geometric mechanics and the
@@ -78,20 +79,33 @@ def model_from_args(args: argparse.Namespace) -> SkinModel:
                                 size=args.size))
 
 
-SCHEDULE_HELP = "schedule file (TOML; format and limits: docs/schedule.md)"
+SCHEDULE_HELP = ("schedule or scenario file (TOML: stimuli and contacts; format and limits: "
+                 "docs/schedule.md, docs/contact.md)")
 """The help text of every option that takes a schedule file."""
 SCHEDULE_NOTICE_BYTES = 1 << 20
 """Schedule files from this size (1 MiB, ~0.3 s to read) on are announced before reading."""
 
 
-def read_schedule(path: Path, size: MeshSize) -> Schedule:
-    """The schedule file ``path`` for a skin of top-layer ``size``, checked against its
-    schema; a big file is announced on stderr first (its reading takes a while)."""
+def read_scenario(path: Path, size: MeshSize) -> Scenario:
+    """The scenario (schedule file with contact tables, or a plain schedule) ``path`` for a
+    skin of top-layer ``size``; a big file is announced first, as by
+    :func:`read_schedule`."""
+    _announce(path)
+    return load_scenario(path, size)
+
+
+def _announce(path: Path) -> None:
     try:
         n_bytes = path.stat().st_size
     except OSError:
-        n_bytes = 0  # load_schedule says what is wrong with the path
+        n_bytes = 0  # the loader says what is wrong with the path
     if SCHEDULE_NOTICE_BYTES <= n_bytes <= MAX_FILE_BYTES:  # larger ones are refused at once
         print(f"skinhil: reading schedule {path} ({n_bytes / 2**20:.1f} MiB, about "
               f"{n_bytes / 2**20 * 0.3:.0f} s)", file=sys.stderr, flush=True)
+
+
+def read_schedule(path: Path, size: MeshSize) -> Schedule:
+    """The schedule file ``path`` for a skin of top-layer ``size``, checked against its
+    schema; a big file is announced on stderr first (its reading takes a while)."""
+    _announce(path)
     return load_schedule(path, size)

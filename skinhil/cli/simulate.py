@@ -18,14 +18,18 @@ from skinhil.cli.options import (
     add_model_options,
     model_from_args,
     noise_from_args,
-    read_schedule,
+    read_scenario,
 )
 from skinhil.cli.values import check_memory, real
 from skinhil.errors import ConfigError
 from skinhil.model.sensor import SkinSensor
 from skinhil.model.stimuli import Schedule, ScheduledStimulus, builtin_catalog
+from skinhil.model.strain import max_strain
 from skinhil.nwb import require_pynwb, write_simulation
 from skinhil.output_files import atomic_path, check_output_path
+from skinhil.world import TouchSensor
+from skinhil.world.scenario_file import Scenario
+from skinhil.world.truth import TRUTH_DTYPE, TRUTH_PERIOD_S
 
 MAX_DURATION_S = 1e6
 """Longest simulation (s of model time); memory is estimated before any is allocated."""
@@ -40,7 +44,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         "simulate", help="simulate a stimulus or schedule offline and save forces and spikes",
         description="Simulate the skin and its neurons offline and write an .npz file with "
                     "spring forces (N, float32, n_steps x n_springs, 338 at 6x6), spike "
-                    "events (t µs, addr, p) and the stimulus markers; numpy reads it with "
+                    "events (t µs, addr, p), the stimulus markers and, for a scenario with "
+                    "contacts, their ground truth per 1 ms tick (truth: docs/contact.md); "
+                    "it prints the skin's max strain; numpy reads it with "
                     "np.load(path). An --out ending in .nwb writes an NWB file instead "
                     "(pynwb: pip install \"skinhil[nwb]\"): one unit per sensor, the "
                     "stimuli as trials, the forces as a TimeSeries.")
@@ -62,15 +68,15 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     add_nwb_args(p)
 
 
-def _schedule(args: argparse.Namespace) -> Schedule:
+def _scenario(args: argparse.Namespace) -> Scenario:
     if args.schedule is not None:
-        return read_schedule(args.schedule, args.size)
+        return read_scenario(args.schedule, args.size)
     catalog = builtin_catalog(args.size)
     if args.stimulus not in catalog:
         raise ConfigError(f"unknown stimulus {args.stimulus!r}; choose one of "
                           f"{', '.join(catalog)} or give --schedule FILE")
     sid, stim = catalog[args.stimulus]
-    return Schedule((ScheduledStimulus(0.0, stim, sid),))
+    return Scenario(Schedule((ScheduledStimulus(0.0, stim, sid),)), None)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -78,8 +84,9 @@ def run(args: argparse.Namespace) -> int:
     nwb_meta = nwb_metadata(args, out.suffix == ".nwb")
     if out.suffix == ".nwb":
         require_pynwb()
-    schedule = _schedule(args)
-    duration = args.duration_s if args.duration_s is not None else schedule.duration_s + 0.25
+    scenario = _scenario(args)
+    schedule, scene = scenario.schedule, scenario.scene
+    duration = args.duration_s if args.duration_s is not None else scenario.duration_s + 0.25
     model = model_from_args(args)
     n_steps = int(round(duration / args.dt_s))
     if args.forces:
@@ -88,18 +95,29 @@ def run(args: argparse.Namespace) -> int:
                      "give --no-forces, a shorter --duration or a larger --dt")
     announce_cold_cache("simulate")
     sensor = SkinSensor(model, args.dt_s, args.snr_db, args.seed,
-                        noise=noise_from_args(args), threads=args.threads)
+                        noise=noise_from_args(args), threads=args.threads,
+                        state_forces=scene is not None)
+    touch = TouchSensor(sensor, scene) if scene is not None else None
+    if touch is not None:
+        touch.start(0.0)
+    every = max(1, int(round(TRUTH_PERIOD_S / args.dt_s)))
     block = max(1, int(round(BLOCK_S / args.dt_s)))
     started = datetime.datetime.now(datetime.UTC)  # simulation time 0 (NWB's session start)
     forces = np.empty((n_steps if args.forces else 0, model.n_springs), dtype=np.float32)
-    peak = 0.0
+    peak = strain = 0.0
     events = []
+    truth = []
     with tqdm(total=n_steps * args.dt_s, unit="sim-s", disable=args.no_progress,
               bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} sim-s [{elapsed}<{remaining}]") as bar:
         for start in range(0, n_steps, block):
             n = min(block, n_steps - start)
-            f, spikes = sensor.advance_schedule(schedule, n)
+            if touch is None:
+                f, spikes = sensor.advance_schedule(schedule, n)
+            else:
+                f, spikes, raw = touch.advance_schedule(schedule, n)
+                truth.append(touch.truth_at(raw, start, every))
             peak = max(peak, float(np.abs(f).max()))
+            strain = max(strain, max_strain(f, model))
             if args.forces:
                 forces[start:start + n] = f
             events.append(sensor.events(spikes, start))
@@ -108,6 +126,7 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"the spring forces overflowed (peak |force| {peak}) — give "
                           "smaller forces or a smaller --dt; nothing written")
     ev = np.concatenate(events)
+    truth_rec = np.concatenate(truth) if truth else np.zeros(0, dtype=TRUTH_DTYPE)
     markers = np.array([(e.onset_s, e.end_s, e.stimulus_id) for e in schedule.entries],
                        dtype=[("onset_s", "<f8"), ("end_s", "<f8"), ("stimulus_id", "<i4")])
     meta = {"dt_s": args.dt_s, "snr_db": args.snr_db, "noise": args.noise, "seed": args.seed,
@@ -115,17 +134,26 @@ def run(args: argparse.Namespace) -> int:
             "size": list(model.size),
             "duration_s": n_steps * args.dt_s,
             "stimuli": [e.stimulus.name for e in schedule.entries],
+            "contacts": [c.name for c in scene.contacts] if scene else [],
+            "max_strain": strain,
             "params": {k: v for k, v in vars(model.params).items()}}
     if out.suffix == ".nwb":
         write_simulation(out, mesh=model.mesh, schedule=schedule, events=ev,
                          forces_n=forces if args.forces else None, dt_s=args.dt_s,
                          description=f"skinhil simulate: {json.dumps(meta)}",
-                         start=started, meta=nwb_meta)
+                         start=started, meta=nwb_meta, truth=truth_rec,
+                         n_contacts=len(scene.contacts) if scene else 0)
     else:
         with atomic_path(out) as tmp, tmp.open("wb") as fh:
             np.savez_compressed(fh, forces_n=forces, events=ev, markers=markers,
-                                meta=np.array(json.dumps(meta)))
+                                truth=truth_rec, meta=np.array(json.dumps(meta)))
     rate = len(ev) / (n_steps * args.dt_s) / model.n_springs
     print(f"wrote {out}: {n_steps} steps of {args.dt_s * 1e3:g} ms, {len(ev)} spikes "
-          f"({rate:.1f} Hz per sensor), peak |force| {peak:.3g} N")
+          f"({rate:.1f} Hz per sensor), peak |force| {peak:.3g} N, max strain "
+          f"{100 * strain:.1f} %")
+    if scene is not None:
+        print(f"contact truth: {len(truth_rec)} records ({len(scene.contacts)} contact(s), "
+              f"one per {every * args.dt_s * 1e3:g} ms), peak normal force "
+              f"{truth_rec['normal_n'].max(initial=0.0):.3g} N, mechanics "
+              f"{model.params.dynamics} ({type(sensor.stepper).__name__})")
     return 0

@@ -119,26 +119,40 @@ def _tables(doc: Mapping[str, object], key: str, cap: int, where: str) -> list[o
     return tables
 
 
-def parse_schedule(text: str, where: str, size: MeshSize = PAPER_SIZE) -> Schedule:
-    """The schedule of TOML ``text`` (named ``where`` in errors) for a skin of top-layer
-    ``size``. Raises :class:`ConfigError` naming the entry and key for anything off-schema."""
+def parse_toml(text: str, where: str) -> dict[str, object]:
+    """The TOML document of ``text`` (named ``where`` in errors), or :class:`ConfigError`."""
     try:
-        doc = tomllib.loads(text)
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{where} is not valid TOML: {exc} — see docs/schedule.md") from None
     except RecursionError:
         raise ConfigError(f"{where} nests arrays or tables too deeply — a schedule nests at "
                           "most 3 levels (see docs/schedule.md)") from None
-    unknown = sorted(set(doc) - {"stimulus", "event"})
+
+
+def parse_schedule(text: str, where: str, size: MeshSize = PAPER_SIZE) -> Schedule:
+    """The schedule of TOML ``text`` (named ``where`` in errors) for a skin of top-layer
+    ``size``. Raises :class:`ConfigError` naming the entry and key for anything off-schema."""
+    return schedule_from_doc(parse_toml(text, where), where, size)
+
+
+def schedule_from_doc(doc: Mapping[str, object], where: str, size: MeshSize = PAPER_SIZE,
+                      other_sections: tuple[str, ...] = (),
+                      events_required: bool = True) -> Schedule:
+    """The schedule of a parsed TOML document (:func:`parse_schedule`); ``other_sections``
+    are left to the caller (the contact tables of :mod:`skinhil.world.scenario_file`), and
+    without ``events_required`` a file without ``[[event]]`` gives an empty schedule."""
+    sections = ("stimulus", "event") + other_sections
+    unknown = sorted(set(doc) - set(sections))
     if unknown:
         raise ConfigError(f"{where}: unknown section(s) {', '.join(unknown)} — use "
-                          "[[stimulus]] and [[event]]")
+                          f"{', '.join(f'[[{s}]]' for s in sections)}")
     catalog = builtin_catalog(size)
     for i, table in enumerate(_tables(doc, "stimulus", MAX_STIMULI, where)):
         stim = _stimulus(table, f"{where}: [[stimulus]] #{i + 1}", size)
         catalog[stim.name] = (USER_STIMULUS_ID_BASE + i, stim)
     events = _tables(doc, "event", MAX_EVENTS, where)
-    if not events:
+    if not events and events_required:
         raise ConfigError(f"{where} has no [[event]] entries — add [[event]] tables with "
                           "start_s and stimulus")
     entries = []
@@ -164,6 +178,14 @@ def load_schedule(path: str | Path, size: MeshSize = PAPER_SIZE) -> Schedule:
     Raises :class:`ConfigError` naming the problem for a missing, unreadable, oversized or
     malformed file.
     """
+    text, where = read_schedule_text(path)
+    return parse_schedule(text, where, size)
+
+
+def read_schedule_text(path: str | Path) -> tuple[str, str]:
+    """The text of schedule file ``path`` and its name for errors, within
+    :data:`MAX_FILE_BYTES`; :class:`ConfigError` for a missing, unreadable, oversized or
+    non-UTF-8 file."""
     p = Path(path)
     where = f"schedule file {str(p)!r}"
     try:
@@ -181,4 +203,4 @@ def load_schedule(path: str | Path, size: MeshSize = PAPER_SIZE) -> Schedule:
         text = data.decode("utf-8")
     except UnicodeDecodeError:
         raise ConfigError(f"{where} is not UTF-8 text — save it as UTF-8") from None
-    return parse_schedule(text, where, size)
+    return text, where

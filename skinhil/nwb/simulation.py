@@ -100,16 +100,49 @@ def _add_trials(nwb: Any, schedule: Schedule) -> None:
                       angle_deg=float(math.degrees(math.atan2(total[1], total[0]))))
 
 
+TRUTH_SERIES = (
+    ("normal_force", "normal_n", "N", 1.0, "normal force the indenter exerts on the skin"),
+    ("tangential_force_x", "tangential_x_n", "N", 1.0, "tangential force along x"),
+    ("tangential_force_y", "tangential_y_n", "N", 1.0, "tangential force along y"),
+    ("centroid_x", "x_mm", "m", 1e-3, "contact centroid x (NaN: nothing touching)"),
+    ("centroid_y", "y_mm", "m", 1e-3, "contact centroid y (NaN: nothing touching)"),
+    ("area", "area_mm2", "m^2", 1e-6, "contact area (touching masses x spacing^2)"),
+    ("slip_state", "slip", "n.a.", 1.0, "0 none, 1 stick, 2 partial slip, 3 gross slip"),
+    ("slip_speed", "slip_speed_mm_per_s", "m/s", 1e-3, "mean slip speed of slipping masses"),
+    ("indenter_x", "indenter_x_mm", "m", 1e-3, "indenter axis x"),
+    ("indenter_y", "indenter_y_mm", "m", 1e-3, "indenter axis y"),
+    ("indenter_depth", "indenter_depth_mm", "m", 1e-3, "indenter tip below the rest surface"),
+)
+"""The contact truth's fields as NWB time series: name, truth field, unit, conversion to the
+unit, description."""
+
+
+def _add_truth(nwb: Any, truth: np.ndarray, n_contacts: int) -> None:
+    """The contacts' ground truth (TRUTH_DTYPE, one record per contact per tick) as time
+    series of a processing module ``contact``, one column per contact."""
+    from pynwb import TimeSeries
+
+    module = nwb.create_processing_module("contact", "ground truth of every contact per tick "
+                                          "(skinhil.world.truth; docs/contact.md)")
+    rows = truth.reshape(-1, n_contacts)
+    times = rows["t_us"][:, 0] * 1e-6
+    for name, field, unit, conversion, text in TRUTH_SERIES:
+        module.add(TimeSeries(name=name, data=rows[field], unit=unit, conversion=conversion,
+                              timestamps=times, description=f"{text}; one column per contact"))
+
+
 def write_simulation(path: Path, *, mesh: Mesh, schedule: Schedule, events: np.ndarray,
                      forces_n: np.ndarray | None, dt_s: float, description: str,
                      start: datetime.datetime | None = None,
-                     meta: NwbMetadata | None = None) -> Path:
+                     meta: NwbMetadata | None = None,
+                     truth: np.ndarray | None = None, n_contacts: int = 0) -> Path:
     """Write a simulation to ``path`` (.nwb, atomically) and return the path written.
 
     ``events``: EVENT_DTYPE (``t`` µs, ``addr``); ``forces_n``: (n_steps, n_springs) N at
     ``dt_s`` (s) from time 0, or None to leave them out; ``start``: the wall-clock time of
     simulation time 0, the file's session start (default: now); ``meta``: the session's
-    metadata (default :class:`NwbMetadata`'s).
+    metadata (default :class:`NwbMetadata`'s); ``truth``: the contacts' ground truth
+    (``skinhil.world.TRUTH_DTYPE``, ``n_contacts`` records per tick), or None.
     """
     require_pynwb()
     from pynwb import NWBHDF5IO, TimeSeries
@@ -126,6 +159,8 @@ def write_simulation(path: Path, *, mesh: Mesh, schedule: Schedule, events: np.n
             starting_time=0.0,
             description="force across each spring (N, tension positive), one column per "
                         "sensor in wire address order"))
+    if truth is not None and truth.size and n_contacts:
+        _add_truth(nwb, truth, n_contacts)
     with atomic_path(path) as tmp, NWBHDF5IO(str(tmp), "w") as io:
         io.write(nwb)
     return Path(path).absolute()

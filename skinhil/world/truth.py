@@ -23,6 +23,9 @@ edge first); all slip."""
 
 (T_ACTIVE, T_X, T_Y, T_AREA, T_NORMAL, T_FX, T_FY, T_SLIP, T_SLIP_SPEED, T_NODES, T_IX, T_IY,
  T_DEPTH, T_LOAD) = range(14)
+TRUTH_PERIOD_S = 1e-3
+"""One truth record per contact per this period (s): the board's tick, the state at its
+start."""
 RAW_FIELDS = 14
 """Columns of the compiled kernel's per-step truth (SI units: m, m², N, m/s)."""
 

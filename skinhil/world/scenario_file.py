@@ -1,0 +1,237 @@
+"""Scenario files: a schedule file (docs/schedule.md) that also holds contact tables.
+
+    [[indenter]]                  # a rigid indenter (docs/contact.md)
+    name = "probe"
+    shape = "sphere"              # sphere | flat | edge | pins
+    radius_mm = 3.0
+
+    [[contact]]                   # the indenter on a trajectory, in the file's time
+    indenter = "probe"
+    start_s = 0.1
+    motion = "slide"              # press | slide | tap | path
+    x_mm = -3.0                   # where it starts
+    y_mm = 0.0
+    to_x_mm = 3.0                 # slide: where it ends, at speed_mm_per_s
+    speed_mm_per_s = 20.0
+    depth_mm = 0.4                # or load_n: a force-controlled normal load
+    vibration_mm = 0.02           # optional: a vibration of this amplitude ...
+    vibration_hz = 100.0          # ... and frequency, along vibration_axis (z: depth)
+
+Every key has a type and a range (:data:`CONTACT_LIMITS`, :data:`INDENTER_LIMITS`), unknown
+keys are refused, and each refusal is one line naming the table and the key, as the
+schedule's.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from skinhil.errors import ConfigError
+from skinhil.model.geometry import PAPER_SIZE, MeshSize
+from skinhil.model.schedule_file import parse_toml, read_schedule_text, schedule_from_doc
+from skinhil.model.stimuli import Schedule
+from skinhil.world.indenters import SHAPES, Indenter
+from skinhil.world.scene import MAX_CONTACTS, Contact, Scene
+from skinhil.world.trajectory import AXES, MAX_KEYFRAMES, Trajectory
+
+MAX_INDENTERS = 64
+"""Most ``[[indenter]]`` tables."""
+MAX_DEPTH_MM = 2.0
+"""Deepest position-controlled indentation (mm): two spacings of the default skin, strain of
+tens of percent; deeper presses stretch springs by hundreds of percent."""
+MAX_LOAD_N = 2.0
+"""Largest normal load (N): four times the paper's 0.5 N."""
+
+INDENTER_LIMITS: dict[str, tuple[float, float]] = {
+    "radius_mm": (0.05, 100.0), "width_mm": (0.05, 100.0), "angle_deg": (-360.0, 360.0),
+    "pitch_mm": (0.1, 100.0), "pin_radius_mm": (0.05, 50.0),
+}
+"""Range of each number key of ``[[indenter]]`` (inclusive)."""
+CONTACT_LIMITS: dict[str, tuple[float, float]] = {
+    "start_s": (0.0, 1e6), "x_mm": (-100.0, 100.0), "y_mm": (-100.0, 100.0),
+    "to_x_mm": (-100.0, 100.0), "to_y_mm": (-100.0, 100.0),
+    "depth_mm": (0.0, MAX_DEPTH_MM), "load_n": (0.0, MAX_LOAD_N),
+    "ramp_s": (0.0, 10.0), "hold_s": (0.0, 1e5), "dwell_s": (0.0, 1e5),
+    "speed_mm_per_s": (0.01, 1000.0), "taps": (1, 10_000), "period_s": (1e-3, 1e4),
+    "contact_s": (1e-3, 1e4), "vibration_mm": (0.0, 0.5), "vibration_hz": (0.0, 1000.0),
+    "mu_static": (0.0, 5.0), "mu_kinetic": (0.0, 5.0),
+}
+"""Range of each number key of ``[[contact]]`` (inclusive)."""
+MOTIONS = ("press", "slide", "tap", "path")
+MOTION_KEYS = {
+    "press": ("x_mm", "y_mm", "ramp_s", "hold_s"),
+    "slide": ("x_mm", "y_mm", "to_x_mm", "to_y_mm", "speed_mm_per_s", "ramp_s", "dwell_s"),
+    "tap": ("x_mm", "y_mm", "taps", "period_s", "contact_s"),
+    "path": ("path",),
+}
+"""The keys each motion takes besides the common ones."""
+COMMON_KEYS = ("indenter", "start_s", "motion", "depth_mm", "load_n", "vibration_mm",
+               "vibration_hz", "vibration_axis", "mu_static", "mu_kinetic", "name")
+INDENTER_KEYS = ("name", "shape", *INDENTER_LIMITS)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A scenario file's stimuli (possibly none) and its contacts (None if it has none)."""
+
+    schedule: Schedule
+    scene: Scene | None
+
+    @property
+    def duration_s(self) -> float:
+        """Time (s) at which the last stimulus or contact ends."""
+        return max(self.schedule.duration_s, self.scene.duration_s if self.scene else 0.0)
+
+
+def _number(t: Mapping[str, object], key: str, where: str,
+            limits: Mapping[str, tuple[float, float]], default: float | None = None) -> float:
+    if key not in t:
+        if default is None:
+            raise ConfigError(f"{where}: needs {key} = <number>")
+        return default
+    value = t[key]
+    lo, hi = limits[key]
+    ok = isinstance(value, int | float) and not isinstance(value, bool)
+    if not (ok and math.isfinite(float(value)) and lo <= float(value) <= hi):  # type: ignore[arg-type]
+        raise ConfigError(f"{where}: {key} = {value!r} — give a number in {lo:g}..{hi:g} "
+                          "(no quotes)")
+    return float(value)  # type: ignore[arg-type]
+
+
+def _table(table: object, allowed: tuple[str, ...], where: str) -> Mapping[str, object]:
+    if not isinstance(table, Mapping):
+        raise ConfigError(f"{where} is not a table — write it as [[...]]")
+    unknown = sorted(set(table) - set(allowed))
+    if unknown:
+        raise ConfigError(f"{where}: unknown key(s) {', '.join(unknown)} — allowed: "
+                          f"{', '.join(allowed)}")
+    return table
+
+
+def _name(t: Mapping[str, object], where: str, default: str | None = None) -> str:
+    name = t.get("name", default)
+    if not (isinstance(name, str) and 0 < len(name) <= 64):
+        raise ConfigError(f"{where}: name = {name!r} — give 1..64 characters in quotes")
+    return name
+
+
+def _indenter(table: object, where: str) -> tuple[str, Indenter]:
+    t = _table(table, INDENTER_KEYS, where)
+    name = _name(t, where)
+    shape = t.get("shape")
+    if shape not in SHAPES:
+        raise ConfigError(f"{where}: shape = {shape!r} — give one of {', '.join(SHAPES)}")
+    mm = {k: _number(t, k, where, INDENTER_LIMITS) * 1e-3
+          for k in ("radius_mm", "width_mm", "pitch_mm", "pin_radius_mm") if k in t}
+    kwargs = {k.replace("_mm", "_m"): v for k, v in mm.items()}
+    if "angle_deg" in t:
+        kwargs["angle_deg"] = _number(t, "angle_deg", where, INDENTER_LIMITS)
+    try:
+        return name, Indenter(shape, **kwargs)  # type: ignore[arg-type]
+    except ConfigError as exc:
+        raise ConfigError(f"{where}: {exc}") from None
+
+
+def _path(value: object, where: str) -> np.ndarray:
+    if not (isinstance(value, list) and 1 <= len(value) <= MAX_KEYFRAMES and all(
+            isinstance(row, list) and len(row) == 4 and all(
+                isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+                for v in row) for row in value)):
+        raise ConfigError(f"{where}: path — give 1..{MAX_KEYFRAMES} keyframes "
+                          "[t_s, x_mm, y_mm, depth_mm (or load_n)]")
+    k = np.array(value, dtype=float)
+    if np.any(np.diff(k[:, 0]) < 0) or k[0, 0] < 0:
+        raise ConfigError(f"{where}: path times must start >= 0 and not decrease")
+    if np.any(np.abs(k[:, 1:3]) > 100) or np.any(k[:, 3] < 0) or np.any(k[:, 3] > MAX_DEPTH_MM):
+        raise ConfigError(f"{where}: path x_mm, y_mm within ±100, depth within "
+                          f"0..{MAX_DEPTH_MM:g} mm")
+    k[:, 1:] *= 1e-3
+    return k
+
+
+def _contact(table: object, where: str, indenters: Mapping[str, Indenter],
+             index: int) -> Contact:
+    motion = table.get("motion") if isinstance(table, Mapping) else None
+    if motion not in MOTIONS:
+        raise ConfigError(f"{where}: motion = {motion!r} — give one of {', '.join(MOTIONS)}")
+    t = _table(table, COMMON_KEYS + MOTION_KEYS[motion], where)
+    which = t.get("indenter")
+    if not isinstance(which, str) or which not in indenters:
+        raise ConfigError(f"{where}: indenter = {which!r} — give the name of an "
+                          f"[[indenter]]: {', '.join(indenters) or 'none defined'}")
+    force = "load_n" in t
+    if force == ("depth_mm" in t) and motion != "path":
+        raise ConfigError(f"{where}: give depth_mm (position control) or load_n (a normal "
+                          "load), one of them")
+    if force and motion in ("tap", "path"):
+        raise ConfigError(f"{where}: a {motion} is position-controlled: give depth_mm")
+    value = (_number(t, "load_n", where, CONTACT_LIMITS) if force
+             else _number(t, "depth_mm", where, CONTACT_LIMITS, 0.0) * 1e-3)
+    def mm(key: str, default: float | None = None) -> float:
+        return _number(t, key, where, CONTACT_LIMITS,
+                       None if default is None else default * 1e3) * 1e-3
+    def num(key: str, default: float | None = None) -> float:
+        return _number(t, key, where, CONTACT_LIMITS, default)
+    try:
+        if motion == "press":
+            traj = Trajectory.press(mm("x_mm", 0.0), mm("y_mm", 0.0), value, num("ramp_s", 0.02),
+                                    num("hold_s", 0.2), load=force)
+        elif motion == "slide":
+            traj = Trajectory.slide((mm("x_mm"), mm("y_mm", 0.0)),
+                                    (mm("to_x_mm"), mm("to_y_mm", 0.0)),
+                                    num("speed_mm_per_s") * 1e-3, value, num("ramp_s", 0.02),
+                                    num("dwell_s", 0.05), load=force)
+        elif motion == "tap":
+            traj = Trajectory.taps(mm("x_mm", 0.0), mm("y_mm", 0.0), value, int(num("taps")),
+                                   num("period_s"), num("contact_s"))
+        else:
+            if "path" not in t:
+                raise ConfigError("needs path = [[t_s, x_mm, y_mm, depth_mm], ...]")
+            traj = Trajectory(_path(t["path"], where))
+        amp = num("vibration_mm", 0.0) * 1e-3
+        if amp > 0:
+            axis = t.get("vibration_axis", "z")
+            if axis not in AXES:
+                raise ConfigError(f"vibration_axis = {axis!r} — give x, y or z")
+            traj = traj.with_vibration(amp, num("vibration_hz"), str(axis))
+        return Contact(indenters[which], traj, num("start_s", 0.0), num("mu_static", 0.8),
+                       num("mu_kinetic", 0.6), _name(t, where, f"contact{index}"))
+    except ConfigError as exc:
+        text = str(exc)
+        raise ConfigError(text if text.startswith(where) else f"{where}: {text}") from None
+
+
+def _list(doc: Mapping[str, object], key: str, cap: int, where: str) -> list[object]:
+    tables = doc.get(key, [])
+    if not isinstance(tables, list):
+        raise ConfigError(f"{where}: '{key}' is not a list of tables — write [[{key}]]")
+    if len(tables) > cap:
+        raise ConfigError(f"{where} has {len(tables)} [[{key}]] tables — at most {cap}")
+    return tables
+
+
+def parse_scenario(text: str, where: str, size: MeshSize = PAPER_SIZE) -> Scenario:
+    """The scenario of TOML ``text`` (named ``where`` in errors) for a skin of ``size``."""
+    doc = parse_toml(text, where)
+    contacts_in = _list(doc, "contact", MAX_CONTACTS, where)
+    schedule = schedule_from_doc(doc, where, size, ("indenter", "contact"),
+                                 events_required=not contacts_in)
+    indenters: dict[str, Indenter] = {}
+    for i, table in enumerate(_list(doc, "indenter", MAX_INDENTERS, where)):
+        name, ind = _indenter(table, f"{where}: [[indenter]] #{i + 1}")
+        indenters[name] = ind
+    contacts = tuple(_contact(t, f"{where}: [[contact]] #{i + 1}", indenters, i)
+                     for i, t in enumerate(contacts_in))
+    return Scenario(schedule, Scene(contacts) if contacts else None)
+
+
+def load_scenario(path: str | Path, size: MeshSize = PAPER_SIZE) -> Scenario:
+    """Read the scenario (or plain schedule) file ``path`` for a skin of ``size``; the same
+    caps as a schedule file (:func:`skinhil.model.schedule_file.load_schedule`)."""
+    text, where = read_schedule_text(path)
+    return parse_scenario(text, where, size)
