@@ -59,6 +59,7 @@ from skinhil.model.stimuli import Schedule, ScheduledStimulus
 from skinhil.model.timeline import MarkerEvent, Timeline
 from skinhil.scoring import DecisionScoreboard, answer_reason
 from skinhil.transports import Transport
+from skinhil.world import Scene, TouchSensor, TruthLog
 
 log = logging.getLogger(__name__)
 
@@ -197,26 +198,42 @@ class Board:
 
     ``open_link`` is called at start and again on every reconnection attempt; it returns a
     :class:`~skinhil.transports.Transport` or raises :class:`TransportError`.
-    ``file_schedule`` is the schedule file's content (schedule mode 2).
+    ``file_schedule`` is the schedule file's content (schedule mode 2), ``scene`` its
+    contacts (:mod:`skinhil.world`), which play with it: from the moment schedule mode 2
+    starts, lifted when another mode starts. The contacts' ground truth stays on the board
+    (:attr:`truth`), never on the link.
     """
 
     def __init__(self, config: BoardConfig, open_link: Callable[[], Transport[Any]],
                  file_schedule: Schedule | None = None,
-                 on_link: Callable[[str], None] | None = None) -> None:
+                 on_link: Callable[[str], None] | None = None,
+                 scene: Scene | None = None) -> None:
         self.config = config.check()
+        if scene is not None and config.threads > 1:
+            raise ConfigError("a scenario with contacts steps the mechanics and the neurons "
+                              "on one thread: give --threads 1")
         self._open_link = open_link
         self.on_link = on_link or (lambda msg: log.warning("%s", msg))
         model = SkinModel(SkinParams(mechanics=config.mechanics,  # type: ignore[arg-type]
                                      readout=config.readout,  # type: ignore[arg-type]
                                      size=config.size))
         self.sensor = SkinSensor(model, config.dt_s, config.snr_db, config.seed,
-                                 noise=config.noise, threads=max(1, config.threads - 1))
+                                 noise=config.noise, threads=max(1, config.threads - 1),
+                                 state_forces=scene is not None)
+        self.touch = TouchSensor(self.sensor, scene) if scene is not None else None
+        """The skin touching the scenario's contacts (inside the compiled step), or None."""
+        self.truth = TruthLog()
+        """The contacts' ground truth, one record per contact per tick (the board's secret:
+        for scoring and recordings, never sent on the link)."""
         self.pipeline = SensorPipeline(self.sensor) if config.threads > 1 else None
         """The model's two stages on their own threads (``threads`` > 1), else None."""
         log.info("board %d: %dx%d skin, %d channels, model on %d thread(s)", config.board_id,
                  model.size[0], model.size[1], model.n_springs, config.threads)
+        if scene is not None and file_schedule is None:
+            file_schedule = Schedule(())  # contacts only
         self.timeline = Timeline(config.dt_s, file_schedule, config.seed, config.rest_s,
                                  config.schedule_mode, model.size)
+        self._start_scene(config.schedule_mode, 0.0)
         self.scoreboard = DecisionScoreboard(config.response_window_s,
                                              lambda sid: sid in self.timeline.catalog)
         """The decoder under test's DECISIONs scored against the onsets the board sent."""
@@ -335,6 +352,8 @@ class Board:
             elif op == codes.SET_SCHEDULE:
                 if not self.timeline.start_schedule(int(cmd.arg), now_s):
                     reason = why.UNKNOWN_SCHEDULE
+                else:
+                    self._start_scene(int(cmd.arg), now_s)
             elif op == codes.SET_SNR:
                 snr = float(cmd.arg)
                 if math.isnan(snr) or snr == -math.inf:
@@ -357,6 +376,14 @@ class Board:
             self.counters.rx_errors += 1  # a refused command shows in the next STATUS
         return protocols.Ack(token=cmd.token, opcode=op, ok=ok, reason=reason)
 
+    def _start_scene(self, mode: int, now_s: float) -> None:
+        """The contacts play from ``now_s`` (s) with the schedule file (mode 2), else none."""
+        if self.touch is not None:
+            if mode == Timeline.SCHEDULE_FILE:
+                self.touch.start(now_s)
+            else:
+                self.touch.stop()
+
     def _score(self, decision: Any) -> Any:
         """Stamp a DECISION with the board time and score it; its NACK reason (NONE when
         scored, NOT_RUNNING while stopped, UNKNOWN_STIMULUS for an id the board does not
@@ -372,7 +399,11 @@ class Board:
         cfg = self.config
         first = self.sensor.step_index
         n = cfg.steps_per_tick
-        if self.pipeline is None:  # the schedule's forces made inside the compiled step
+        if self.touch is not None:  # the schedule's and the contacts' forces, compiled
+            schedule = self.timeline.schedule_for(first * cfg.dt_s, (first + n - 1) * cfg.dt_s)
+            _, spikes, raw = self.touch.advance_schedule(schedule, n)
+            self.truth.add_raw(first * self._dt_us, raw[0])
+        elif self.pipeline is None:  # the schedule's forces made inside the compiled step
             schedule = self.timeline.schedule_for(first * cfg.dt_s, (first + n - 1) * cfg.dt_s)
             _, spikes = self.sensor.advance_schedule(schedule, n)
         else:
@@ -525,7 +556,10 @@ class Board:
         streams = self.sensor.neurons.noise_streams()
         n = self.config.steps_per_tick
         t_s = np.arange(n) * self.config.dt_s
-        if self.pipeline is None:
+        if self.touch is not None:  # the contact kernel compiled or loaded
+            self.touch.start(0.0)
+            self.touch.advance_schedule(self.timeline.schedule_for(t_s[0], t_s[-1]), n)
+        elif self.pipeline is None:
             self.sensor.advance_schedule(self.timeline.schedule_for(t_s[0], t_s[-1]), n)
         else:
             for _ in range(2):  # the second call starts the neurons on the first block
@@ -536,6 +570,9 @@ class Board:
         self.sensor.events(np.zeros((n, self.sensor.model.n_springs), dtype=bool), 0)
         (self.sensor if self.pipeline is None else self.pipeline).reset()  # waits for them
         self.sensor.neurons.restore_noise_streams(streams)
+        if self.touch is not None:
+            self.truth = TruthLog()
+            self._start_scene(self.timeline.mode, 0.0)
         if self.link is not None:
             self.link.warm_up(self.status())
 

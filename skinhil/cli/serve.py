@@ -20,7 +20,7 @@ from firmware_sim.clock import pin_to_cores, request_realtime
 from protocols.versions import wire_version
 from skinhil.cli import signals
 from skinhil.cli.kernel_notice import announce_cold_cache
-from skinhil.cli.options import SCHEDULE_HELP, add_model_options, noise_from_args, read_schedule
+from skinhil.cli.options import SCHEDULE_HELP, add_model_options, noise_from_args, read_scenario
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.cli.values import MAX_DURATION_S, MAX_REST_S, cores_value, integer, real
 from skinhil.errors import ConfigError
@@ -313,8 +313,10 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
               ) -> int:
     """Run the board over the links ``open_link()`` opens; ``made`` receives the board."""
     config = _config(args)
-    schedule = (read_schedule(args.schedule, args.size) if args.schedule is not None
+    scenario = (read_scenario(args.schedule, args.size) if args.schedule is not None
                 else None)
+    schedule = scenario.schedule if scenario is not None else None
+    scene = scenario.scene if scenario is not None else None
     tty = sys.stderr.isatty() and not args.quiet and not args.json
     where = describe_transport(args)
 
@@ -325,7 +327,7 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
             print(("\n" if tty else "") + f"skinhil serve: {msg}", file=sys.stderr, flush=True)
 
     score_path = check_output_path(args.score) if args.score is not None else None
-    board = Board(config, open_link, schedule, on_link)
+    board = Board(config, open_link, schedule, on_link, scene)
     if made is not None:
         made.append(board)
     _claim_cpu(args)
@@ -367,4 +369,12 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
     elif not args.quiet:
         print(_summary_text(summary), flush=True)
         print(scoreboard_text(summary.scoreboard), flush=True)
+    if board.touch is not None and not args.quiet:
+        truth = board.truth.records()
+        text = (f"contact truth kept on the board (never sent): {board.truth.ticks} ticks of "
+                f"{len(board.touch.scene.contacts)} contact(s), peak normal force "
+                f"{truth['normal_n'].max(initial=0.0):.3g} N")
+        print(json.dumps({"type": "truth", "ticks": board.truth.ticks,
+                          "peak_normal_n": float(truth["normal_n"].max(initial=0.0))})
+              if args.json else text, flush=True)
     return 0

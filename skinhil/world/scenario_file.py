@@ -219,12 +219,12 @@ def parse_scenario(text: str, where: str, size: MeshSize = PAPER_SIZE) -> Scenar
     """The scenario of TOML ``text`` (named ``where`` in errors) for a skin of ``size``."""
     doc = parse_toml(text, where)
     contacts_in = _list(doc, "contact", MAX_CONTACTS, where)
-    schedule = schedule_from_doc(doc, where, size, ("indenter", "contact"),
-                                 events_required=not contacts_in)
     indenters: dict[str, Indenter] = {}
     for i, table in enumerate(_list(doc, "indenter", MAX_INDENTERS, where)):
         name, ind = _indenter(table, f"{where}: [[indenter]] #{i + 1}")
         indenters[name] = ind
+    schedule = schedule_from_doc(doc, where, size, ("indenter", "contact"),
+                                 events_required=not contacts_in)
     contacts = tuple(_contact(t, f"{where}: [[contact]] #{i + 1}", indenters, i)
                      for i, t in enumerate(contacts_in))
     return Scenario(schedule, Scene(contacts) if contacts else None)

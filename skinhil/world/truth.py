@@ -70,24 +70,31 @@ def truth_records(raw: np.ndarray, t_us: np.ndarray) -> np.ndarray:
 
 
 class TruthLog:
-    """The latest truth records, a bounded ring of ticks (``capacity_ticks``), as the board
-    keeps them; ``total`` counts every record ever added."""
+    """The latest ticks' truth, a bounded ring of ``capacity_ticks`` (60 s of 1 ms ticks by
+    default), as the board keeps it: each tick's kernel rows are copied (a few µs) and
+    turned into records only when read; ``ticks`` counts every tick ever added."""
 
     def __init__(self, capacity_ticks: int = 60_000) -> None:
-        self._ticks: deque[np.ndarray] = deque(maxlen=capacity_ticks)
-        self.total = 0
+        self._ticks: deque[tuple[int, np.ndarray]] = deque(maxlen=capacity_ticks)
+        self.ticks = 0
 
-    def add(self, records: np.ndarray) -> None:
-        """Keep one tick's records (:data:`TRUTH_DTYPE`)."""
-        self._ticks.append(records)
-        self.total += len(records)
+    def add_raw(self, t_us: int, raw: np.ndarray) -> None:
+        """Keep one tick's truth: the kernel's rows (n_contacts, :data:`RAW_FIELDS`) for
+        board time ``t_us`` (µs); a row-less tick is ignored."""
+        if raw.size:
+            self._ticks.append((int(t_us), raw.copy()))
+            self.ticks += 1
 
     def records(self) -> np.ndarray:
-        """Every kept record, in time order (:data:`TRUTH_DTYPE`)."""
+        """Every kept tick's records, in time order (:data:`TRUTH_DTYPE`)."""
         if not self._ticks:
             return np.zeros(0, dtype=TRUTH_DTYPE)
-        return np.concatenate(list(self._ticks))
+        t_us = np.array([t for t, _ in self._ticks], dtype=np.int64)
+        return truth_records(np.stack([r for _, r in self._ticks]), t_us)
 
     def latest(self) -> np.ndarray:
         """The last tick's records (one per contact), or none."""
-        return self._ticks[-1] if self._ticks else np.zeros(0, dtype=TRUTH_DTYPE)
+        if not self._ticks:
+            return np.zeros(0, dtype=TRUTH_DTYPE)
+        t_us, raw = self._ticks[-1]
+        return truth_records(raw[None], np.array([t_us]))

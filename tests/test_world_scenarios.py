@@ -1,0 +1,107 @@
+"""Every example scenario (examples/scenarios) plays through ``simulate`` and through
+``serve`` on a real pty; the contacts' truth stays on the board; bad contact tables are
+refused in one line."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from harness.peers import PtyPeer
+
+import protocols
+from skinhil.cli import main
+from skinhil.world import TRUTH_DTYPE
+from skinhil.world.scenario_file import load_scenario
+
+SCENARIOS = sorted((Path(__file__).resolve().parents[1] / "examples" / "scenarios").glob(
+    "*.toml"))
+
+
+def test_the_examples_hold_the_cases_the_docs_name() -> None:
+    names = {p.stem for p in SCENARIOS}
+    assert {"press", "slide", "vibrate_100hz", "vibrate_250hz", "tap", "slip"} <= names
+    shapes = {c.indenter.shape for p in SCENARIOS
+              for c in (load_scenario(p).scene or ()).contacts}  # type: ignore[union-attr]
+    assert shapes == {"sphere", "flat", "edge", "pins"}
+
+
+@pytest.mark.parametrize("path", SCENARIOS, ids=lambda p: p.stem)
+def test_a_scenario_plays_through_simulate(path: Path, tmp_path: Path,
+                                           capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "run.npz"
+    assert main(["simulate", "--schedule", str(path), "--out", str(out), "--no-progress"]) == 0
+    said = capsys.readouterr().out
+    strain = float(said.split("max strain ")[1].split(" %")[0])
+    assert 0 < strain < (200 if path.stem == "edge_and_pins" else 100)  # tens of percent
+    data = np.load(out)
+    truth, meta = data["truth"], json.loads(str(data["meta"]))
+    scenario = load_scenario(path)
+    n_contacts = len(scenario.scene.contacts)  # type: ignore[union-attr]
+    assert truth.dtype == TRUTH_DTYPE and meta["max_strain"] == pytest.approx(strain / 100, 1e-2)
+    assert len(truth) == n_contacts * round(meta["duration_s"] / 1e-3)
+    assert np.all(np.diff(truth["t_us"].reshape(-1, n_contacts)[:, 0]) == 1000)
+    touching = truth[truth["nodes"] > 0]
+    assert len(touching) and np.all(touching["normal_n"] > 0)
+    assert np.allclose(touching["area_mm2"], touching["nodes"] * 1.0)  # 1 mm² per mass
+    if path.stem == "slip":  # stick, then slip at the edge, then gross slip
+        slip = touching["slip"]
+        assert slip[0] == 1 and 2 in slip and 3 in slip
+        assert np.flatnonzero(slip == 2)[0] < np.flatnonzero(slip == 3)[0]
+    if path.stem.startswith("vibrate"):
+        hz = float(path.stem.split("_")[1][:-2])
+        depth = touching["indenter_depth_mm"]
+        spectrum = np.abs(np.fft.rfft(depth - depth.mean()))
+        assert np.fft.rfftfreq(len(depth), 1e-3)[np.argmax(spectrum)] == pytest.approx(hz, 0.05)
+    assert len(data["events"]) > 0
+
+
+@pytest.mark.parametrize("path", SCENARIOS, ids=lambda p: p.stem)
+def test_a_scenario_plays_through_serve_on_a_pty(path: Path, pty_pair,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    peer = PtyPeer(pty_pair.master)
+    try:
+        code = main(["serve", "--port", pty_pair.path, "--schedule", str(path), "--duration",
+                     "0.6", "--seed", "1", "--snr-db", "10", "--json"])
+        assert code == 0
+        assert peer.wait_for(lambda p: p.of(protocols.Status), 5)
+    finally:
+        peer.close()
+    lines = [json.loads(x) for x in capsys.readouterr().out.splitlines() if x.startswith("{")]
+    summary = next(x for x in lines if x["type"] == "summary")
+    truth = next(x for x in lines if x["type"] == "truth")
+    assert truth["ticks"] >= 550 and truth["peak_normal_n"] > 0  # kept by the board
+    assert summary["sent"] == len(peer.events) > 0
+    # the link carries events, status and the stimuli's markers only: no contact truth
+    kinds = {type(r).__name__ for r in peer.records}
+    assert kinds <= {"Sync", "Status", "Marker", "Ack"}
+    markers = {m.stimulus_id for m in peer.of(protocols.Marker)}
+    assert markers == ({10} if path.stem == "edge_and_pins" else set())
+
+
+BAD = {
+    "unknown key": ('[[contact]]\nindenter = "p"\nmotion = "press"\ndepth_mm = 0.5\n'
+                    'speed = 3\n', "unknown key(s) speed"),
+    "too deep": ('[[contact]]\nindenter = "p"\nmotion = "press"\ndepth_mm = 9.0\n',
+                 "depth_mm = 9.0"),
+    "no indenter": ('[[contact]]\nindenter = "q"\nmotion = "press"\ndepth_mm = 0.5\n',
+                    "indenter = 'q'"),
+    "depth and load": ('[[contact]]\nindenter = "p"\nmotion = "press"\ndepth_mm = 0.5\n'
+                       'load_n = 0.2\n', "one of them"),
+    "bad shape": ('[[indenter]]\nname = "r"\nshape = "cube"\n', "shape = 'cube'"),
+    "friction": ('[[contact]]\nindenter = "p"\nmotion = "press"\ndepth_mm = 0.5\n'
+                 'mu_static = 0.2\nmu_kinetic = 0.5\n', "mu_kinetic <= mu_static"),
+}
+
+
+@pytest.mark.parametrize("case", BAD, ids=list(BAD))
+def test_bad_contact_tables_are_refused_in_one_line(case: str, tmp_path: Path,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    text, says = BAD[case]
+    path = tmp_path / "bad.toml"
+    path.write_text('[[indenter]]\nname = "p"\nshape = "sphere"\nradius_mm = 2.0\n\n' + text)
+    assert main(["simulate", "--schedule", str(path), "--out", str(tmp_path / "x.npz")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("skinhil: error:") and says in err[0], err
