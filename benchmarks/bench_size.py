@@ -21,6 +21,13 @@ default 10 dB), spikes to events, and the events encoded for the wire
 - the growth: the time per step of the whole loop against the springs, as the exponent of a
   least-squares fit of log(time) on log(springs) over the leapfrog sizes (1 = linear).
 
+With ``--contact slide,vibrate`` it also steps the loop with a contact touching the skin
+all the time (:mod:`skinhil.world`, inside the compiled step, as the board's tick does with a
+scenario): a 3 mm sphere 0.8 mm deep sliding back and forth across the skin at 20 mm/s, and a
+flat 1.5 mm pad 0.8 mm deep vibrating 0.2 mm at 100 Hz; it prints the loop per step without
+the contact (the same empty schedule) and with it, what the contact adds (%), the real-time
+factor with it, and the skin's max strain.
+
 With ``--find-largest`` it then bisects the square sizes for the largest that keeps real
 time (factor >= 1, or >= ``--min-rtf``: 1.2 leaves a fifth of each tick for the link and the
 host) on one thread and on two. ``--cpu N`` runs it on core N alone.
@@ -29,7 +36,7 @@ Usage::
 
     python benchmarks/bench_size.py [--sizes 6,16,26,32,48] [--threads 1,2] [--snr-db 10]
                                     [--seconds 2] [--find-largest] [--min-rtf 1.0]
-                                    [--clock wall|cpu] [--cpu N]
+                                    [--clock wall|cpu] [--cpu N] [--contact slide,vibrate [--contact-only]]
 
 Every figure is the best of ``--repeats`` runs (the machine is shared): the load average is
 printed before and after. ``--clock cpu`` (one thread only) times this process's CPU time
@@ -59,7 +66,10 @@ from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, leapfrog_kernel 
 from skinhil.model.pipeline import SensorPipeline  # noqa: E402
 from skinhil.model.sensor import SkinSensor  # noqa: E402
 from skinhil.model.skin import SkinModel, SkinParams  # noqa: E402
+from skinhil.model.stimuli import Schedule  # noqa: E402
+from skinhil.model.strain import max_strain  # noqa: E402
 from skinhil.model.timeline import Timeline  # noqa: E402
+from skinhil.world import Contact, Indenter, Scene, TouchSensor, Trajectory  # noqa: E402
 
 DT_S = 1e-4
 STEPS_PER_TICK = 10
@@ -181,6 +191,86 @@ def measure(size: tuple[int, int], threads: int, snr_db: float, seconds: float,
                       loop_us, memory / 1e6, events_per_s)
 
 
+CONTACT_S = 600.0
+"""How long the benchmark's contacts last (s of board time): longer than any run."""
+
+
+def contact_scene(kind: str, size: tuple[int, int]) -> Scene:
+    """The benchmark's contact ``kind`` ("slide" or "vibrate") on a skin of ``size``: a
+    sliding sphere back and forth over the middle 60 % of the skin along x at 20 mm/s, or a
+    vibrating pad at the centre (module docstring)."""
+    depth = 0.8e-3
+    if kind == "vibrate":
+        path = Trajectory(np.array([(0, 0, 0, 0), (0.02, 0, 0, depth),
+                                    (CONTACT_S, 0, 0, depth)])).with_vibration(0.2e-3, 100.0)
+        return Scene((Contact(Indenter("flat", radius_m=1.5e-3), path),))
+    if kind != "slide":
+        raise SystemExit(f"bench_size: unknown contact {kind!r}: give slide or vibrate")
+    half = 0.3 * (size[1] - 1) * 1e-3
+    crossing = 2 * half / 20e-3
+    keys = [(0.0, -half, 0.0, 0.0), (0.02, -half, 0.0, depth)]
+    t, x = 0.02, -half
+    while t < CONTACT_S:
+        t, x = t + crossing, -x
+        keys.append((t, x, 0.0, depth))
+    return Scene((Contact(Indenter("sphere", radius_m=3e-3), Trajectory(np.array(keys))),))
+
+
+@dataclass
+class ContactResult:
+    size: tuple[int, int]
+    kind: str
+    stepper: str
+    plain_us: float
+    """Loop per step without the contact (µs)."""
+    touch_us: float
+    """Loop per step with it (µs)."""
+    strain: float
+
+    @property
+    def added(self) -> float:
+        return self.touch_us / self.plain_us - 1.0
+
+
+def measure_contact(size: tuple[int, int], kind: str, snr_db: float, seconds: float,
+                    repeats: int) -> ContactResult:
+    """The board's loop (one thread) on an empty schedule, without and with contact
+    ``kind`` (:func:`contact_scene`), per step."""
+    model = SkinModel(SkinParams(size=size))
+    encoders = [protocols.SerialEncoder(step_us=int(round(DT_S * 1e6)),
+                                        n_channels=model.n_springs) for _ in range(2)]
+    schedule = Schedule(())
+    plain = SkinSensor(model, DT_S, snr_db=snr_db, seed=0, state_forces=True)
+    touch = TouchSensor(SkinSensor(model, DT_S, snr_db=snr_db, seed=0, state_forces=True),
+                        contact_scene(kind, size))
+    touch.start(0.0)
+    strain = [0.0]
+
+    def plain_tick() -> None:
+        first = plain.step_index
+        _, spikes = plain.advance_schedule(schedule, STEPS_PER_TICK)
+        encoders[0].events(plain.events(spikes, first), (first + STEPS_PER_TICK) * 100)
+
+    def touch_tick() -> None:
+        first = touch.sensor.step_index
+        _, spikes, _ = touch.advance_schedule(schedule, STEPS_PER_TICK)
+        encoders[1].events(touch.sensor.events(spikes, first),
+                           (first + STEPS_PER_TICK) * 100)
+
+    for _ in range(50):  # compile, and press in
+        plain_tick()
+        touch_tick()
+    for _ in range(500):
+        first = touch.sensor.step_index
+        springs, spikes, _ = touch.advance_schedule(schedule, STEPS_PER_TICK)
+        encoders[1].events(touch.sensor.events(spikes, first), (first + STEPS_PER_TICK) * 100)
+        strain[0] = max(strain[0], max_strain(springs, model))
+    plain_us = _best_per_tick(plain_tick, seconds, repeats) / STEPS_PER_TICK
+    touch_us = _best_per_tick(touch_tick, seconds, repeats) / STEPS_PER_TICK
+    return ContactResult(size, kind, type(plain.stepper).__name__.replace("Mechanics", ""),
+                         plain_us, touch_us, strain[0])
+
+
 def _row(r: SizeResult) -> str:
     return (f"{format_size(r.size):>6} {r.threads:>2} {r.springs:>7} {r.regime:>9} "
             f"{r.mech_us:8.1f} {1e3 * r.mech_us / r.springs:6.2f} "
@@ -239,6 +329,11 @@ def main() -> None:
     ap.add_argument("--clock", choices=("wall", "cpu"), default="wall",
                     help="time wall clock, or this process's CPU time (one thread: what a "
                          "dedicated core would take, whatever else the machine runs)")
+    ap.add_argument("--contact", default="",
+                    help="contact scenarios to time, comma-separated: slide, vibrate "
+                         "(module docstring)")
+    ap.add_argument("--contact-only", action="store_true",
+                    help="with --contact: only the contact table")
     args = ap.parse_args()
     if args.cpu is not None:
         os.sched_setaffinity(0, {args.cpu})  # before any thread starts: all on that core
@@ -251,6 +346,19 @@ def main() -> None:
         ap.error("--clock cpu times one thread: CPU time of several threads is not wall time")
     print(f"noise {args.snr_db:g} dB (diffusion), dt 0.1 ms, 1 ms ticks; {args.clock} time, "
           f"best of {args.repeats} runs of >= {args.seconds:g} s; {load_average()}", flush=True)
+    if args.contact:
+        print(f"{'size':>6} {'contact':>8} {'stepper':>9} {'plain µs':>9} {'touch µs':>9} "
+              f"{'added':>7} {'RTF':>6} {'strain':>7}\n(loop per 0.1 ms step on one thread, "
+              "the empty schedule without and with the contact; RTF with it)", flush=True)
+        for size in sizes:
+            for kind in args.contact.split(","):
+                c = measure_contact(size, kind, args.snr_db, args.seconds, args.repeats)
+                print(f"{format_size(size):>6} {kind:>8} {c.stepper:>9} {c.plain_us:9.2f} "
+                      f"{c.touch_us:9.2f} {100 * c.added:6.1f}% "
+                      f"{DT_S * 1e6 / c.touch_us:6.2f} {100 * c.strain:6.1f}%", flush=True)
+        if args.contact_only:
+            print(load_average())
+            return
     print(HEADER, flush=True)
     for threads in thread_counts:
         results = []
