@@ -20,7 +20,7 @@ import numba
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.model.mechanics.geometric import GeometricMechanics, _rk4_kernel
+from skinhil.model.mechanics.geometric import GeometricMechanics, rk4_steps
 from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, leapfrog_kernel
 from skinhil.model.neurons import _izhikevich_kernel
 from skinhil.model.sensor import SkinSensor
@@ -69,6 +69,11 @@ def _geometric_touch_kernel(first_step, dt, t_offset, scene_offset, n_masses, sp
      live) = mechanics
     q_t = np.zeros((3, n_masses))
     v_t = np.zeros((3, n_masses))
+    fbuf = np.empty((n_masses, 3))
+    kp = np.zeros((4, n_masses, 3))
+    kv = np.zeros((4, n_masses, 3))
+    ps = p.copy()
+    vs = v.copy()
     for s in range(n_steps):
         for m in range(n_masses):
             for a in range(3):
@@ -76,8 +81,9 @@ def _geometric_touch_kernel(first_step, dt, t_offset, scene_offset, n_masses, sp
                 v_t[a, m] = v[m, a]
         contact_forces(t[s] - scene_offset, dt, q_t, v_t, forces[s].T, operands, state,
                        truth[s])
-        _rk4_kernel(p, v, links, rest, k, c, tension, preload, free, inv_m, dt_,
-                    forces[s:s + 1], springs[s:s + 1], rest_p, ke, length, live)
+        rk4_steps(p, v, links, rest, k, c, tension, preload, free, inv_m, dt_,
+                  forces[s:s + 1], springs[s:s + 1], rest_p, ke, length, live, fbuf, kp, kv,
+                  ps, vs)
 
 
 class TouchSensor:

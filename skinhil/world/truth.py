@@ -39,7 +39,9 @@ TRUTH_DTYPE = np.dtype([
 ])
 """One contact at one tick. ``active``: its trajectory is running; ``nodes``: top-layer
 masses touching; ``x_mm``, ``y_mm``: centroid (NaN when nothing touches); ``slip``: a code of
-:data:`SLIP_STATES`; ``indenter_depth_mm``: the tip below the rest surface."""
+:data:`SLIP_STATES`; ``indenter_*``: the axis and the tip's depth below the rest surface
+(NaN while not active); ``load_n``: the normal load set-point (NaN under position
+control)."""
 
 
 def truth_records(raw: np.ndarray, t_us: np.ndarray) -> np.ndarray:
@@ -62,9 +64,10 @@ def truth_records(raw: np.ndarray, t_us: np.ndarray) -> np.ndarray:
     out["tangential_n"] = np.hypot(r[:, T_FX], r[:, T_FY])
     out["slip"] = r[:, T_SLIP]
     out["slip_speed_mm_per_s"] = r[:, T_SLIP_SPEED] * 1e3
-    out["indenter_x_mm"] = r[:, T_IX] * 1e3
-    out["indenter_y_mm"] = r[:, T_IY] * 1e3
-    out["indenter_depth_mm"] = r[:, T_DEPTH] * 1e3
+    active = r[:, T_ACTIVE] > 0
+    out["indenter_x_mm"] = np.where(active, r[:, T_IX] * 1e3, np.nan)
+    out["indenter_y_mm"] = np.where(active, r[:, T_IY] * 1e3, np.nan)
+    out["indenter_depth_mm"] = np.where(active, r[:, T_DEPTH] * 1e3, np.nan)
     out["load_n"] = r[:, T_LOAD]
     return out
 

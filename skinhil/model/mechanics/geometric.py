@@ -81,11 +81,20 @@ def _rk4_kernel(p: np.ndarray, v: np.ndarray, springs: np.ndarray, rest: np.ndar
                 rest_p: np.ndarray, ke: np.ndarray, length: bool,
                 live: np.ndarray) -> None:  # pragma: no cover - compiled
     n = p.shape[0]
-    fbuf = np.empty((n, 3))
-    kp = np.zeros((4, n, 3))
-    kv = np.zeros((4, n, 3))
-    ps = p.copy()
-    vs = v.copy()
+    rk4_steps(p, v, springs, rest, k, c, t, preload, free, inv_m, dt, f_ext, out, rest_p, ke,
+              length, live, np.empty((n, 3)), np.zeros((4, n, 3)), np.zeros((4, n, 3)),
+              p.copy(), v.copy())
+
+
+@numba.njit(cache=True, fastmath=True, nogil=True)
+def rk4_steps(p: np.ndarray, v: np.ndarray, springs: np.ndarray, rest: np.ndarray,
+              k: float, c: float, t: float, preload: np.ndarray, free: np.ndarray,
+              inv_m: float, dt: float, f_ext: np.ndarray, out: np.ndarray,
+              rest_p: np.ndarray, ke: np.ndarray, length: bool, live: np.ndarray,
+              fbuf: np.ndarray, kp: np.ndarray, kv: np.ndarray, ps: np.ndarray,
+              vs: np.ndarray) -> None:  # pragma: no cover - compiled
+    """:func:`_rk4_kernel`'s steps with its scratch given (fbuf (n, 3), kp and kv (4, n, 3),
+    ps and vs (n, 3)): a caller stepping one step at a time allocates it once."""
     weights = (0.5, 0.5, 1.0)
     for step in range(f_ext.shape[0]):
         for s in range(springs.shape[0]):  # the readout of d = q_j − q_i, q = p − rest_p
