@@ -105,3 +105,24 @@ def test_bad_contact_tables_are_refused_in_one_line(case: str, tmp_path: Path,
     assert main(["simulate", "--schedule", str(path), "--out", str(tmp_path / "x.npz")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("skinhil: error:") and says in err[0], err
+
+
+def test_simulate_writes_the_truth_to_nwb(tmp_path: Path) -> None:
+    from pynwb import NWBHDF5IO
+
+    path = next(p for p in SCENARIOS if p.stem == "slip")
+    out = tmp_path / "slip.nwb"
+    assert main(["simulate", "--schedule", str(path), "--out", str(out), "--no-progress",
+                 "--no-forces"]) == 0
+    npz = tmp_path / "slip.npz"
+    assert main(["simulate", "--schedule", str(path), "--out", str(npz), "--no-progress",
+                 "--no-forces"]) == 0
+    truth = np.load(npz)["truth"]
+    with NWBHDF5IO(str(out), "r") as io:
+        module = io.read().processing["contact"]
+        normal = module["normal_force"]
+        assert normal.unit == "N" and np.array_equal(normal.data[:, 0], truth["normal_n"])
+        assert np.allclose(module["centroid_x"].timestamps[:], truth["t_us"] * 1e-6)
+        centroid = module["centroid_x"]
+        assert centroid.unit == "m" and centroid.conversion == 1e-3
+        assert np.array_equal(module["slip_state"].data[:, 0], truth["slip"])

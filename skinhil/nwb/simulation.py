@@ -152,7 +152,8 @@ def write_simulation(path: Path, *, mesh: Mesh, schedule: Schedule, events: np.n
                    experiment="an offline simulation of the skin under scheduled touch "
                               "stimuli (skinhil simulate)")
     add_units(nwb, mesh, events, dt_s)
-    _add_trials(nwb, schedule)
+    if schedule.entries:  # a scenario of contacts alone has no stimulus trials
+        _add_trials(nwb, schedule)
     if forces_n is not None and forces_n.size:
         nwb.add_acquisition(TimeSeries(
             name="spring_forces", data=forces_n, unit="N", rate=1.0 / dt_s,
