@@ -36,7 +36,8 @@ Usage::
 
     python benchmarks/bench_size.py [--sizes 6,16,26,32,48] [--threads 1,2] [--snr-db 10]
                                     [--seconds 2] [--find-largest] [--min-rtf 1.0]
-                                    [--clock wall|cpu] [--cpu N] [--contact slide,vibrate [--contact-only]]
+                                    [--clock wall|cpu] [--cpu N]
+                                    [--contact slide,vibrate [--contact-only]]
 
 Every figure is the best of ``--repeats`` runs (the machine is shared): the load average is
 printed before and after. ``--clock cpu`` (one thread only) times this process's CPU time

@@ -7,7 +7,7 @@ import time
 from pathlib import Path
 
 from skinhil.cli.kernel_notice import announce_cold_cache
-from skinhil.cli.options import DECODE_SNR_DB, add_size_option
+from skinhil.cli.options import DECODE_SNR_DB, SCHEDULE_HELP, add_size_option, read_scenario
 from skinhil.cli.values import MAX_REST_S, integer, real, seed_value, snr_value
 from skinhil.model.timeline import DEFAULT_REST_S
 from skinhil.output_files import check_output_path
@@ -43,6 +43,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                                            f"(default: {DEFAULT_REST_S:g})")
     p.add_argument("--seed", type=seed_value, default=0,
                    help="noise and schedule seed, 0..2^63-1 (default: 0)")
+    p.add_argument("--schedule", type=Path, metavar="TOML",
+                   help=f"train on this {SCHEDULE_HELP} played once, as serve --schedule "
+                        "plays it (its stimuli are the classes, its contacts touch the skin "
+                        "meanwhile), instead of the random direction conditions; --reps and "
+                        "--rest then do not apply")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     add_size_option(p)
 
@@ -55,7 +60,7 @@ def print_report(report: TrainingReport, names: dict[int, str]) -> None:
           f"{100 * report.window_accuracy_std:.1f} on {report.decodable_windows} of "
           f"{report.windows} detected windows; "
           f"{report.misses} onsets missed, {report.false_alarms} false alarms; chance "
-          f"{100 / 9:.1f}%)")
+          f"{100 / max(1, len(report.classes)):.1f}%)")
     width = max(len(names.get(c, str(c))) for c in report.classes)
     print("confusion of the windows (rows: true, columns: predicted, summed over folds and "
           "repeats):")
@@ -68,11 +73,16 @@ def run(args: argparse.Namespace) -> int:
     from skinhil.cli.listen import class_names
 
     out = check_output_path(args.out, (".npz",))  # before minutes of training
+    scenario = None
+    if args.schedule is not None:
+        played = read_scenario(args.schedule, args.size)
+        scenario = (played.schedule, played.scene)
     announce_cold_cache("train")
     t0 = time.monotonic()
     try:
         decoder, report = train_decoder(args.snr_db, args.reps, args.seed, rest_s=args.rest_s,
-                                        progress=not args.no_progress, size=args.size)
+                                        progress=not args.no_progress, size=args.size,
+                                        scenario=scenario)
     except KeyboardInterrupt:
         kept = "the previous file kept" if out.exists() else "nothing written"
         print(f"train: stopped after {time.monotonic() - t0:.1f} s of training; {kept} "

@@ -44,6 +44,7 @@ from skinhil.model.timeline import DEFAULT_REST_S, MarkerEvent, Timeline
 from skinhil.receiver.online import OnsetWindows
 from skinhil.receiver.params import ReceiverParams
 from skinhil.receiver.scoring import scoreboard_for
+from skinhil.world import Scene, TouchSensor
 
 log = logging.getLogger(__name__)
 
@@ -145,15 +146,21 @@ def balanced_schedule(reps: int, rest_s: float, seed: int,
 
 def board_stream(duration_s: float, snr_db: float, rest_s: float, seed: int,
                  dt_s: float = 1e-4, schedule: Schedule | None = None,
-                 size: MeshSize = PAPER_SIZE
+                 size: MeshSize = PAPER_SIZE, scene: Scene | None = None
                  ) -> Iterator[tuple[np.ndarray, list[MarkerEvent], int]]:
     """The board's stream simulated offline: per block (events, markers, block end µs).
 
     Same schedule (the board's :class:`Timeline`: its random one for ``seed`` and
-    ``rest_s``, or ``schedule`` played once) and same sensor (:class:`SkinSensor` seeded
-    ``seed``) as ``skinhil serve --seed seed --rest rest_s --size size [--schedule ...]``.
+    ``rest_s``, or ``schedule`` played once, with the contacts of ``scene`` touching the skin
+    from the start) and same sensor (:class:`SkinSensor` seeded ``seed``) as ``skinhil serve
+    --seed seed --rest rest_s --size size [--schedule ...]``.
     """
-    sensor = SkinSensor(SkinModel(SkinParams(size=size)), dt_s=dt_s, snr_db=snr_db, seed=seed)
+    sensor = SkinSensor(SkinModel(SkinParams(size=size)), dt_s=dt_s, snr_db=snr_db, seed=seed,
+                        state_forces=scene is not None)
+    touch = TouchSensor(sensor, scene) if scene is not None else None
+    if touch is not None:
+        touch.start(0.0)
+        schedule = schedule or Schedule(())
     timeline = Timeline(dt_s, schedule, seed=seed, rest_s=rest_s,
                         mode=Timeline.SCHEDULE_RANDOM if schedule is None
                         else Timeline.SCHEDULE_FILE, size=size)
@@ -162,8 +169,11 @@ def board_stream(duration_s: float, snr_db: float, rest_s: float, seed: int,
     block = max(1, int(round(BLOCK_S / dt_s)))
     for first in range(0, n_total, block):
         n = min(block, n_total - first)
-        _, spikes = sensor.advance_schedule(
-            timeline.schedule_for(first * dt_s, (first + n - 1) * dt_s), n)
+        playing = timeline.schedule_for(first * dt_s, (first + n - 1) * dt_s)
+        if touch is None:
+            _, spikes = sensor.advance_schedule(playing, n)
+        else:
+            _, spikes, _ = touch.advance_schedule(playing, n)
         end_us = (first + n) * dt_us
         yield sensor.events(spikes, first), timeline.markers_before(end_us), end_us
 
@@ -172,13 +182,16 @@ def stream_windows(n_stimuli: int, snr_db: float, rest_s: float, seed: int,
                    dt_s: float = 1e-4, params: ReceiverParams | None = None,
                    progress: bool = False, balanced: bool = True,
                    board_seed: int | None = None,
-                   size: MeshSize = PAPER_SIZE) -> StreamWindows:
+                   size: MeshSize = PAPER_SIZE,
+                   scenario: tuple[Schedule, Scene | None] | None = None) -> StreamWindows:
     """Cut a simulated board stream into the receiver's windows and label them.
 
     ``balanced``: the stimuli are :func:`balanced_schedule` (``n_stimuli`` a multiple of 9),
     else the board's own random schedule for the stream seed. The stream seed is
     ``TRAIN_SEED_BASE + seed``, or ``board_seed`` to replay exactly what ``skinhil serve
-    --seed board_seed --rest rest_s`` plays (with ``balanced=False``).
+    --seed board_seed --rest rest_s`` plays (with ``balanced=False``). A ``scenario`` (a
+    schedule file's stimuli and contacts) is played once instead, as ``skinhil serve
+    --schedule FILE`` plays it: its stimuli are the classes.
     """
     p = params or ReceiverParams()
     spec = feature_spec(dt_s, size)
@@ -195,7 +208,14 @@ def stream_windows(n_stimuli: int, snr_db: float, rest_s: float, seed: int,
                           f"got {n_stimuli}")
     schedule = (balanced_schedule(n_stimuli // n_cond, rest_s, stream_seed, size) if balanced
                 else None)
-    blocks = board_stream(duration, snr_db, rest_s, stream_seed, dt_s, schedule, size)
+    scene = None
+    if scenario is not None:
+        schedule, scene = scenario
+        classes = tuple(sorted({e.stimulus_id for e in schedule.entries}))
+        board = scoreboard_for(classes, windows, p.match_window_s)
+        duration = max(schedule.duration_s, scene.duration_s if scene else 0.0) + WINDOW_S
+        n_stimuli = len(schedule.entries)
+    blocks = board_stream(duration, snr_db, rest_s, stream_seed, dt_s, schedule, size, scene)
     bar = tqdm(total=round(duration, 1), desc="simulating the board stream", unit="s",
                disable=not progress, bar_format="{l_bar}{bar}| {n:.1f}/{total:.1f} s board time")
     for events, markers, end_us in blocks:
@@ -264,14 +284,22 @@ def fit_windows(sw: StreamWindows, cross_validation: bool = True
 def train_decoder(snr_db: float = 10.0, reps: int = 50, seed: int = 0, dt_s: float = 1e-4,
                   rest_s: float = DEFAULT_REST_S, progress: bool = False,
                   cross_validation: bool = True,
-                  size: MeshSize = PAPER_SIZE) -> tuple[DirectionDecoder, TrainingReport]:
+                  size: MeshSize = PAPER_SIZE,
+                  scenario: tuple[Schedule, Scene | None] | None = None
+                  ) -> tuple[DirectionDecoder, TrainingReport]:
     """Simulate ``9·reps`` board stimuli (each condition ``reps`` times) on a skin of
-    top-layer ``size``, cut and label windows, cross-validate and fit (:func:`fit_windows`).
+    top-layer ``size``, or a ``scenario`` file's stimuli and contacts played once
+    (:func:`stream_windows`), cut and label windows, cross-validate and fit
+    (:func:`fit_windows`).
 
     Raises ConfigError when the onset detector matched too few windows to fit a decoder (at
     such a noise level nothing can be decoded online either).
     """
-    sw = stream_windows(9 * reps, snr_db, rest_s, seed, dt_s, progress=progress, size=size)
+    if scenario is not None and not scenario[0].entries:
+        raise ConfigError("the scenario has no stimuli ([[event]] tables) to learn: train "
+                          "needs stimuli to label its windows")
+    sw = stream_windows(9 * reps, snr_db, rest_s, seed, dt_s, progress=progress, size=size,
+                        balanced=scenario is None, scenario=scenario)
     decoder, report = fit_windows(sw, cross_validation)
     if decoder is None:
         classes, counts = np.unique(sw.labels, return_counts=True)
@@ -279,5 +307,6 @@ def train_decoder(snr_db: float = 10.0, reps: int = 50, seed: int = 0, dt_s: flo
             f"at {snr_db:g} dB the onset detector matched only {sw.labels.size} of "
             f"{sw.markers} stimuli ({dict(zip(classes.tolist(), counts.tolist(), strict=True))}"
             f" windows per class); need {CV_FOLDS} windows for each of at least two classes: "
-            "raise --reps or the SNR")
+            + ("give the schedule more stimuli or raise the SNR" if scenario is not None
+               else "raise --reps or the SNR"))
     return decoder, report
