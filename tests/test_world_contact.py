@@ -155,3 +155,19 @@ def test_the_exact_linear_stepper_refuses_contact_and_auto_picks_the_leapfrog() 
         SkinSensor(exact, DT, state_forces=True)
     auto = SkinSensor(SkinModel(SkinParams(mechanics="linear")), DT, state_forces=True)
     assert type(auto.stepper).__name__ == "LeapfrogMechanics"
+
+
+def test_a_force_controlled_load_follows_its_set_point_changed_at_run_time() -> None:
+    sensor = SkinSensor(SkinModel(LEAPFROG), DT, state_forces=True)
+    press = Trajectory.press(*AT, 0.1, ramp_s=0.0, hold_s=1.0, load=True)  # 0.1 N
+    touch = TouchSensor(sensor, Scene((Contact(PAD, press),)))
+    touch.start(0.0)
+    _, _, raw = touch.advance_schedule(Schedule(()), 1500)
+    assert truth_records(raw[-1:], [0])["normal_n"][0] == pytest.approx(0.1, rel=1e-3)
+    touch.world.set_load(0, 0.25)  # a grip set-point
+    _, _, raw = touch.advance_schedule(Schedule(()), 1500)
+    last = truth_records(raw[-1:], [0])[0]
+    assert last["normal_n"] == pytest.approx(0.25, rel=1e-3) and last["load_n"] == 0.25
+    with pytest.raises(ConfigError, match="no load to set"):
+        TouchSensor(SkinSensor(SkinModel(LEAPFROG), DT, state_forces=True),
+                    Scene((Contact(PAD, Trajectory.press(*AT, 1e-4)),))).world.set_load(0, 1.0)
