@@ -59,12 +59,12 @@ def test_a_scenario_plays_through_simulate(path: Path, tmp_path: Path,
 
 
 @pytest.mark.parametrize("path", SCENARIOS, ids=lambda p: p.stem)
-def test_a_scenario_plays_through_serve_on_a_pty(path: Path, pty_pair,
+def test_a_scenario_plays_through_serve_on_a_pty(path: Path, pty_pair, tmp_path: Path,
                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    common = ["--schedule", str(path), "--duration", "0.3", "--seed", "1", "--snr-db", "10"]
     peer = PtyPeer(pty_pair.master)
     try:
-        code = main(["serve", "--port", pty_pair.path, "--schedule", str(path), "--duration",
-                     "0.3", "--seed", "1", "--snr-db", "10", "--json"])
+        code = main(["serve", "--port", pty_pair.path, *common, "--json"])
         assert code == 0
         assert peer.wait_for(lambda p: p.of(protocols.Status), 5)
     finally:
@@ -79,6 +79,12 @@ def test_a_scenario_plays_through_serve_on_a_pty(path: Path, pty_pair,
     assert kinds <= {"Sync", "Status", "Marker", "Ack"}
     markers = {m.stimulus_id for m in peer.of(protocols.Marker)}
     assert markers == ({10} if path.stem == "edge_and_pins" else set())
+    # the board plays what simulate computes offline for the same seed, event for event
+    out = tmp_path / "run.npz"
+    assert main(["simulate", *common, "--out", str(out), "--no-progress"]) == 0
+    expected = np.load(out)["events"]
+    assert np.array_equal(peer.events["t"], expected["t"])
+    assert np.array_equal(peer.events["addr"], expected["addr"])
 
 
 BAD = {
