@@ -126,9 +126,11 @@ def _add_truth(nwb: Any, truth: np.ndarray, n_contacts: int) -> None:
                                           "(skinhil.world.truth; docs/contact.md)")
     rows = truth.reshape(-1, n_contacts)
     times = rows["t_us"][:, 0] * 1e-6
+    period = float(times[1] - times[0]) if len(times) > 1 else 1e-3  # one record per tick
     for name, field, unit, conversion, text in TRUTH_SERIES:
         module.add(TimeSeries(name=name, data=rows[field], unit=unit, conversion=conversion,
-                              timestamps=times, description=f"{text}; one column per contact"))
+                              starting_time=float(times[0]), rate=1.0 / period,
+                              description=f"{text}; one column per contact"))
 
 
 def write_simulation(path: Path, *, mesh: Mesh, schedule: Schedule, events: np.ndarray,
