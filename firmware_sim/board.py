@@ -49,6 +49,7 @@ from firmware_sim.clock import TickClock, tighten_timer_slack
 from firmware_sim.counters import BoardCounters
 from firmware_sim.fifo import EventFifo
 from firmware_sim.link import BoardLink
+from protocols.versions import wire_version
 from skinhil.errors import ConfigError, TransportError
 from skinhil.model.geometry import PAPER_SIZE, MeshSize
 from skinhil.model.neurons import NoiseParams, check_threads
@@ -56,6 +57,7 @@ from skinhil.model.pipeline import SensorPipeline
 from skinhil.model.sensor import SkinSensor
 from skinhil.model.skin import SkinModel, SkinParams
 from skinhil.model.stimuli import Schedule, ScheduledStimulus
+from skinhil.model.stimulus_table import stimulus_table
 from skinhil.model.timeline import MarkerEvent, Timeline
 from skinhil.scoring import DecisionScoreboard, answer_reason
 from skinhil.transports import Transport
@@ -250,6 +252,11 @@ class Board:
         self._status_every_us = int(round(config.status_period_s * 1e6))
         self._wire_busy_s = 0.0
         self._units_sent = 0
+        self.snr_db = float(config.snr_db)
+        """The neuron noise level now (dB; SET_SNR changes it): what SESSION records say."""
+        self.end_reason = protocols.RunEndReason.STOP
+        """What the RUN_END record says when :meth:`run` ends on its ``stop`` event (the CLI
+        sets SIGNAL when a signal set it)."""
         self.link = self._make_link(open_link())
 
     # -- link ---------------------------------------------------------------------------
@@ -287,6 +294,7 @@ class Board:
             return
         self.link = self._make_link(transport)
         self._next_status_us = 0
+        self.queue_session(self.link, protocols.SessionReason.RECONNECT)
         self.on_link(f"link back: {transport.name}")
 
     # -- records ------------------------------------------------------------------------
@@ -309,6 +317,33 @@ class Board:
             values[f"dropped_{reason}"] = n
         return protocols.Status(**values, markers_sent=c.markers_sent,
                                 markers_dropped=c.markers_dropped)
+
+    def stimulus_table(self) -> list[Any]:
+        """The stimulus table (:class:`protocols.StimulusEntry`, ascending ids): every id a
+        MARKER or a SET_STIMULUS may carry, with its name."""
+        return stimulus_table(self.timeline.catalog)
+
+    def session(self, reason: Any) -> Any:
+        """The :class:`protocols.Session` record of this board now, sent for ``reason``."""
+        table = self.stimulus_table()
+        size = self.sensor.model.size
+        link = self.link
+        return protocols.Session(
+            t_us=self.board_time_us(), reason=reason,
+            version=link.encoder.version if link is not None else wire_version(
+                self.sensor.model.n_springs),
+            board_id=self.config.board_id, running=self.running,
+            n_channels=self.sensor.model.n_springs, rows=size[0], cols=size[1],
+            step_us=self._dt_us, tick_us=int(round(self.config.tick_s * 1e6)),
+            snr_db=self.snr_db,
+            response_window_us=int(round(self.config.response_window_s * 1e6)),
+            n_stimuli=len(table), table_digest=protocols.table_digest(table))
+
+    def queue_session(self, link: BoardLink, reason: Any) -> None:
+        """Queue a SESSION record and the stimulus table's STIMULUS records (SPEC.md §3.7)."""
+        link.queue_record(self.session(reason))
+        for entry in self.stimulus_table():
+            link.queue_record(entry)
 
     def _send_markers(self, link: BoardLink, before_us: int | None) -> None:
         """Queue the due ground-truth markers with ``t_us <= before_us`` (all if None): every
@@ -360,8 +395,9 @@ class Board:
                     reason = why.BAD_ARGUMENT
                 else:
                     (self.sensor if self.pipeline is None else self.pipeline).set_snr(snr)
-            elif op in (codes.QUERY_STATUS, codes.PING):
-                pass  # QUERY_STATUS: the status follows the ACK
+                    self.snr_db = snr
+            elif op in (codes.QUERY_STATUS, codes.QUERY_SESSION, codes.PING):
+                pass  # QUERY_STATUS / QUERY_SESSION: the record follows the ACK
             else:
                 reason = why.UNKNOWN_COMMAND
         except (ValueError, TypeError, OverflowError) as exc:
@@ -456,6 +492,8 @@ class Board:
             if cmd.opcode == protocols.CommandCode.QUERY_STATUS:
                 self._fill(link, t_end_us)
                 link.queue_record(self.status())
+            elif cmd.opcode == protocols.CommandCode.QUERY_SESSION:
+                self.queue_session(link, protocols.SessionReason.REQUEST)
         if t_end_us >= self._next_status_us and link.backlog_s() < self.config.tx_target_s:
             # the heartbeat waits while the link is saturated: it never piles up
             self._fill(link, t_end_us)
@@ -520,6 +558,9 @@ class Board:
         cpu0, wall0 = time.process_time(), time.monotonic()
         n_ticks = None if duration_s is None else int(round(duration_s / self.config.tick_s))
         next_report = wall0 + report_period_s
+        if self.link is not None:
+            self.queue_session(self.link, protocols.SessionReason.START)
+        reason = protocols.RunEndReason.DURATION
         self.clock.start()
         try:
             while not stop.is_set() and (n_ticks is None or self.clock.index < n_ticks):
@@ -535,7 +576,14 @@ class Board:
                     if overdue or self.clock.slack_s() > HOUSEKEEPING_SLACK_S:
                         next_report = (now if overdue else next_report) + report_period_s
                         on_second(self)
-            self._finish()
+            if stop.is_set():
+                reason = self.end_reason
+            self._finish(reason)
+        except TransportError:
+            raise
+        except Exception:
+            self._finish_after_error()
+            raise
         finally:
             sys.setswitchinterval(switch_interval)
             if self.link is not None:
@@ -544,6 +592,14 @@ class Board:
                 self.link.shutdown()
                 self.link = None
         return self.summary(time.monotonic() - wall0, time.process_time() - cpu0)
+
+    def _finish_after_error(self) -> None:
+        """After an internal error: still try to close the account and say ERROR on the
+        wire (RUN_END), so a receiver does not take the silence for a dead link."""
+        try:
+            self._finish(protocols.RunEndReason.ERROR)
+        except Exception as exc:  # the error being raised is the one to report
+            log.warning("could not finish the run after an error: %s", exc)
 
     def warm_up(self) -> None:
         """Run the model and every link code path once off the clock (compiles or loads the
@@ -576,10 +632,11 @@ class Board:
         if self.link is not None:
             self.link.warm_up(self.status())
 
-    def _finish(self) -> None:
+    def _finish(self, reason: Any = protocols.RunEndReason.DURATION) -> None:
         """Publish the spikes still in the pipeline (``threads`` > 1), then drain the FIFO
         for at most ``drain_timeout_s``, count what is left as dropped at
-        ``shutdown``, queue the markers still due and a final status, and send the whole
+        ``shutdown``, queue the markers still due, a final status and the RUN_END record
+        saying ``reason``, and send the whole
         transmit queue (it holds at most ``tx_target_s`` and one frame more, plus these
         records: events counted as sent always reach the wire)."""
         if self.pipeline is not None and self.pipeline.in_flight:
@@ -597,6 +654,7 @@ class Board:
             self.counters.drop("shutdown", self.fifo.clear())
             self._send_markers(link, None)  # ground truth is never left behind with events
             link.queue_record(self.status())
+            link.queue_record(protocols.RunEnd(t_us=self.board_time_us(), reason=reason))
             link.drain(max(0.5, end - time.monotonic(), 2 * link.backlog_s() + 0.5))
             link.wait_wire_idle(1.0)
         except TransportError as exc:

@@ -3,7 +3,8 @@
 - Serial: :class:`SerialEncoder` / :class:`SerialDecoder` (COBS-framed packets, CRC-16).
 - CAN and CAN FD: :class:`CanEncoder` / :class:`CanDecoder` over :class:`CanFrame`.
 - Records: :class:`Status`, :class:`Marker`, :class:`Command`, :class:`Decision` (the
-  decoder under test's answer), :class:`Ack`.
+  decoder under test's answer), :class:`Ack`; the session records :class:`Session`,
+  :class:`StimulusEntry` (one row of the stimulus table) and :class:`RunEnd`.
 - Wire time: :func:`serial_seconds`, :func:`can_frame_seconds`.
 
 The normative layout is ``protocols/SPEC.md``; the CAN databases are ``protocols/skinhil.dbc``
@@ -30,9 +31,15 @@ from protocols.records import (
     MarkerPhase,
     NackReason,
     Record,
+    RunEnd,
+    RunEndReason,
+    Session,
+    SessionReason,
     Status,
+    StimulusEntry,
 )
 from protocols.serial_codec import MAX_PACKET_BYTES, SerialDecoder, SerialEncoder
+from protocols.session_layout import table_digest
 
 DBC_PATH = Path(__file__).with_name("skinhil.dbc")
 """The CAN database (DBC) of the classic CAN layout, for board id 0."""
@@ -43,9 +50,14 @@ DBC_FD_PATH = Path(__file__).with_name("skinhil_fd.dbc")
 SPEC_PATH = Path(__file__).with_name("SPEC.md")
 """The normative protocol specification."""
 
+CONFORMANCE_PATH = Path(__file__).with_name("conformance.json")
+"""The conformance vectors of the serial stream (SPEC.md §11): input bytes and what a decoder
+must output."""
+
 __all__ = [
-    "DBC_FD_PATH", "DBC_PATH", "N_CHANNELS", "SPEC_PATH", "Ack", "CanDecoder", "CanEncoder",
-    "CanFrame",
+    "CONFORMANCE_PATH", "DBC_FD_PATH", "DBC_PATH", "N_CHANNELS", "SPEC_PATH", "Ack",
+    "CanDecoder", "CanEncoder", "CanFrame", "RunEnd", "RunEndReason", "Session",
+    "SessionReason", "StimulusEntry", "table_digest",
     "Command", "CommandCode", "DecodeResult", "Decision", "LinkCounters", "Marker", "MarkerPhase",
     "MAX_PACKET_BYTES", "NackReason", "Record", "SerialDecoder", "SerialEncoder", "Status",
     "can_frame_seconds", "full_events_frame", "serial_seconds",

@@ -43,8 +43,12 @@ from protocols.records import (
     MarkerPhase,
     NackReason,
     Record,
+    RunEnd,
+    Session,
     Status,
+    StimulusEntry,
 )
+from protocols.session_layout import CLASS_OF_KIND, Reassembly, chunks, payload_of
 from protocols.status_layout import (
     CLASSIC_STATUS_MUX,
     CLASSIC_WIDTHS,
@@ -73,7 +77,7 @@ STATUS_LEN_FD = _STATUS_FD.size
 
 
 def can_id(frame_class: int, board_id: int) -> int:
-    """The 11-bit arbitration ID of ``frame_class`` (1..6) for board ``board_id`` (0..15)."""
+    """The 11-bit arbitration ID of ``frame_class`` (1..10) for board ``board_id`` (0..15)."""
     return (frame_class << 4) | board_id
 
 
@@ -232,6 +236,18 @@ class CanEncoder:
         data = _COMMAND.pack(seq, opcode, token, arg)
         return [CanFrame(self._ids[k.CLS_COMMAND], data, self.fd)]
 
+    def session_record(self, record: Session | StimulusEntry | RunEnd) -> list[CanFrame]:
+        """The frames of a session record (SPEC.md §5.8): its payload in chunks, one per
+        frame with consecutive sequence numbers (classic: chunk index in byte 0 bits 7..4)."""
+        kind, payload = payload_of(record)
+        ident = can_id(CLASS_OF_KIND[kind], self.board_id)
+        frames = []
+        for i, part in enumerate(chunks(payload, self.fd)):
+            seq = self._next_seq()
+            head = bytes([seq]) if self.fd else bytes([seq | i << 4])
+            frames.append(CanFrame(ident, head + part, self.fd))
+        return frames
+
     def ack(self, ack: Ack) -> list[CanFrame]:
         """An ACK frame (board→host answer to a command)."""
         data = _ACK.pack(self._next_seq(), int(bool(ack.ok)),
@@ -260,6 +276,7 @@ class CanDecoder:
         self._status = StatusTracker()
         self._group: list[bytes] = []
         self._group_seq = -1
+        self._session = Reassembly(k.FD_SEQ_MOD if self.fd else k.CLASSIC_SEQ_MOD)
 
     def feed(self, frames: Iterable[CanFrame]) -> DecodeResult:
         """Decode a batch of received frames (in bus order)."""
@@ -299,6 +316,11 @@ class CanDecoder:
         if cls == k.CLS_COMMAND:
             _, op, token, bits = _COMMAND.unpack(data[:8])
             return command_record(token, op, bits)
+        if cls >= k.CLS_SESSION:
+            kind = cls - k.CLS_SESSION
+            if self.fd:
+                return self._session.add(kind, data[1], data[0], data[2:64])
+            return self._session.add(kind, data[0] >> 4, data[0] & 0xF, data[1:8])
         _, ok, op, reason, token = _ACK.unpack(data[:6])
         return Ack(token, enum_or_int(CommandCode, op), bool(ok & 1),
                    enum_or_int(NackReason, reason))

@@ -47,6 +47,11 @@ from protocols.versions import MAX_CHANNELS
 CLS_COMMAND, CLS_ACK, CLS_SYNC, CLS_STATUS, CLS_MARKER, CLS_EVENTS, CLS_WIDE = range(1, 8)
 """Frame classes: the 11-bit ID is ``class << 4 | board_id``. CLS_WIDE (wide events) belongs
 to a board only once it announced version 4 (a version-4 SYNC)."""
+CLS_SESSION, CLS_STIMULUS, CLS_RUN_END = 8, 9, 10
+"""Session-record classes (SPEC.md §5.8): each record's payload in chunks, one per frame;
+classes 11..15 are reserved for future records (foreign frames here)."""
+MAX_CHUNKS = 16
+"""Most frames of one session record (the classic chunk index has 4 bits)."""
 
 CLASSIC_MAX_EVENTS = 4
 FD_MAX_EVENTS = 40
@@ -265,6 +270,8 @@ def _layout_ok(cls: int, blob: np.ndarray, o: int, ln: int, fd: bool) -> bool:
         return ln == 8 and (blob[o] >> 4) <= 1
     if cls == CLS_ACK:
         return ln == 6
+    if cls >= CLS_SESSION:  # chunk index: classic byte 0 bits 7..4, FD byte 1
+        return ln == 64 and blob[o + 1] < MAX_CHUNKS if fd else ln == 8
     return ln == 8  # COMMAND
 
 
@@ -325,8 +332,9 @@ def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: in
         o += ln
         ident = ids[f]
         cls = ident >> 4
-        top = CLS_WIDE if st[D_VERSION] == WIDE_VERSION else CLS_EVENTS
-        if ident < 0 or ident > 0x7FF or (ident & 0xF) != board or cls < 1 or cls > top:
+        wide_ok = st[D_VERSION] == WIDE_VERSION
+        if ident < 0 or ident > 0x7FF or (ident & 0xF) != board or cls < 1 or (
+                cls > CLS_RUN_END or (cls == CLS_WIDE and not wide_ok)):
             c[C_FOREIGN] += 1
             continue
         if ln < 1 or (not fd and ln > 8):

@@ -33,6 +33,8 @@ class CommandCode(enum.IntEnum):
     """Do nothing but acknowledge (link check)."""
     DECISION = 8
     """The decoder under test's answer: a :class:`Decision` (stimulus id, confidence)."""
+    QUERY_SESSION = 9
+    """Ask for the session record and the stimulus table now (sent right after the ACK)."""
 
 
 class NackReason(enum.IntEnum):
@@ -58,6 +60,74 @@ class MarkerPhase(enum.IntEnum):
     END = 1
     """The indentation phase ends (the force starts decaying)."""
     INDENTATION_END = 1
+
+
+class SessionReason(enum.IntEnum):
+    """Why the board sent a :class:`Session` record (one byte on the wire)."""
+
+    START = 0
+    """The run starts (the first record of a run)."""
+    RECONNECT = 1
+    """The link came back after it was lost (the receiver may have restarted)."""
+    REQUEST = 2
+    """A host asked for it (``QUERY_SESSION``)."""
+
+
+class RunEndReason(enum.IntEnum):
+    """Why a run ended (one byte of the :class:`RunEnd` record)."""
+
+    DURATION = 0
+    """The run's set duration of board time elapsed."""
+    STOP = 1
+    """The program running the board was asked to stop."""
+    SIGNAL = 2
+    """The operator stopped it with a signal (SIGINT: Ctrl-C, or SIGTERM)."""
+    ERROR = 3
+    """An internal error ended it."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Session:
+    """What a receiver needs to know about the board and the run (SPEC.md §3.7).
+
+    ``t_us`` board time when sent (µs); ``step_us`` the event time step (µs); ``tick_us``
+    the publish tick (µs); ``snr_db`` the neuron noise level (dB, ``inf``: none);
+    ``response_window_us`` how long after an onset a DECISION is scored (µs);
+    ``n_stimuli`` and ``table_digest`` describe the stimulus table whose
+    :class:`StimulusEntry` records follow this one (CRC-32 of their payloads).
+    """
+
+    t_us: int
+    reason: SessionReason | int
+    version: int
+    board_id: int
+    running: bool
+    n_channels: int
+    rows: int
+    cols: int
+    step_us: int
+    tick_us: int
+    snr_db: float
+    response_window_us: int
+    n_stimuli: int
+    table_digest: int
+
+
+@dataclasses.dataclass(frozen=True)
+class StimulusEntry:
+    """One row of the stimulus table: the MARKERs' ``stimulus_id`` and its name (UTF-8,
+    1..64 bytes on the wire)."""
+
+    stimulus_id: int
+    name: str
+
+
+@dataclasses.dataclass(frozen=True)
+class RunEnd:
+    """The last record of a run: it ended at board time ``t_us`` (µs) for ``reason``."""
+
+    t_us: int
+    reason: RunEndReason | int
 
 
 @dataclasses.dataclass(frozen=True)
@@ -154,7 +224,7 @@ class Decision:
         return CommandCode.DECISION
 
 
-Record = Status | Marker | Command | Decision | Ack
+Record = Status | Marker | Command | Decision | Ack | Session | StimulusEntry | RunEnd
 """Any non-event record a decoder returns."""
 
 

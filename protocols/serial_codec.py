@@ -39,8 +39,12 @@ from protocols.records import (
     MarkerPhase,
     NackReason,
     Record,
+    RunEnd,
+    Session,
     Status,
+    StimulusEntry,
 )
+from protocols.session_layout import parse, payload_of
 from protocols.status_layout import STATUS_WORDS, WORD_WIDTHS, status_from_words, status_words
 from protocols.versions import check_versions, refuse_version, wire_version
 
@@ -162,6 +166,12 @@ class SerialEncoder:
         body = _COMMAND.pack(k.T_COMMAND << 5, 0, token, opcode, arg)
         return self._packet(body)
 
+    def session_record(self, record: Session | StimulusEntry | RunEnd) -> bytes:
+        """A session-record packet (type 7, SPEC.md §3.7): the session, one row of the
+        stimulus table, or the end of the run."""
+        kind, payload = payload_of(record)
+        return self._packet(bytes([(k.T_SESSION << 5) | kind, 0]) + payload)
+
     def ack(self, ack: Ack) -> bytes:
         """An ACK packet (board→host answer to a command)."""
         body = _ACK.pack((k.T_ACK << 5) | int(bool(ack.ok)), 0,
@@ -228,6 +238,8 @@ class SerialDecoder:
         if typ == k.T_COMMAND:
             _, _, token, op, bits = _COMMAND.unpack(body)
             return command_record(token, op, bits)
+        if typ == k.T_SESSION:  # fields checked by the layout check
+            return parse(low, body[2:])
         _, _, token, op, reason = _ACK.unpack(body)
         return Ack(token, enum_or_int(CommandCode, op), bool(low & 1),
                    enum_or_int(NackReason, reason))

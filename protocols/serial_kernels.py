@@ -24,8 +24,20 @@ from protocols.event_input import (
 from protocols.framing import CRC_RESIDUE, cobs_decode, crc16, frame_into, suffix_checks
 from protocols.versions import MAX_CHANNELS
 
-T_EVENTS, T_SYNC, T_STATUS, T_MARKER, T_COMMAND, T_ACK, T_WIDE = 0, 1, 2, 3, 4, 5, 6
-"""Packet types (high three bits of byte 0); T_WIDE carries wide (version 4) events."""
+T_EVENTS, T_SYNC, T_STATUS, T_MARKER, T_COMMAND, T_ACK, T_WIDE, T_SESSION = range(8)
+"""Packet types (high three bits of byte 0); T_WIDE carries wide (version 4) events;
+T_SESSION the session records (SPEC.md §3.7), their kind in byte 0 bits 4..0."""
+
+K_SESSION, K_STIMULUS, K_RUN_END = 0, 1, 2
+"""Kinds of a T_SESSION packet (byte 0 bits 4..0); 3..31 are reserved (malformed here)."""
+SESSION_BODY = 2 + 36
+"""Body length of a SESSION packet (header and the 36-byte payload)."""
+RUN_END_BODY = 2 + 7
+"""Body length of a RUN_END packet."""
+MAX_NAME_BYTES = 64
+"""Longest stimulus name of a STIMULUS packet (bytes)."""
+MAX_RUN_END_REASON = 3
+"""Largest RUN_END reason (0 DURATION, 1 STOP, 2 SIGNAL, 3 ERROR)."""
 
 WIDE_ITEM_BYTES = 3
 """A wide event word: 24 bits, little-endian: bits 3..0 delta, bits 23..4 address."""
@@ -329,6 +341,21 @@ def is_known_version(v: int) -> bool:
 
 
 @numba.njit(cache=True, nogil=True)
+def session_ok(dec: np.ndarray, m: int) -> bool:
+    """Whether ``dec[:m]`` is a valid session-record body (type 7, SPEC.md §3.7)."""
+    kind = dec[0] & 0x1F
+    if kind == K_SESSION:
+        if m != SESSION_BODY or not is_known_version(dec[2]) or get_le(dec, 18, 2) == 0:
+            return False
+        return (get_le(dec, 24, 4) & 0x7FFFFFFF) <= 0x7F800000  # the SNR is not a NaN
+    if kind == K_STIMULUS:
+        return m >= 8 and 1 <= dec[6] <= MAX_NAME_BYTES and m == 7 + dec[6]
+    if kind == K_RUN_END:
+        return m == RUN_END_BODY and dec[8] <= MAX_RUN_END_REASON
+    return False
+
+
+@numba.njit(cache=True, nogil=True)
 def check_body(dec: np.ndarray, m: int) -> int:
     """Number of events in a valid body ``dec[:m]`` (0 for record packets), -1 if invalid."""
     if m < 2:
@@ -345,6 +372,8 @@ def check_body(dec: np.ndarray, m: int) -> int:
                 return -1
             last = a
         return (m - 4) // WIDE_ITEM_BYTES
+    if typ == T_SESSION:
+        return 0 if session_ok(dec, m) else -1
     if typ != T_EVENTS:
         if BODY_LEN[typ] != m:
             return -1

@@ -8,12 +8,21 @@ from typing import Any
 import numpy as np
 
 from protocols.events import make_events
-from protocols.records import Ack, Command, CommandCode, Marker, MarkerPhase, NackReason
+from protocols.records import (
+    Ack,
+    Command,
+    CommandCode,
+    Marker,
+    MarkerPhase,
+    NackReason,
+    RunEnd,
+    RunEndReason,
+)
 
 
 def exercise_codecs(encoder: Any, decoder: Any, step_us: int, status: Any) -> list[Any]:
-    """Encode a status, one-event and several-event blocks, an idle span, markers, an ACK
-    and a command with fresh ``encoder``, decode them all with fresh ``decoder``; return
+    """Encode a status, one-event and several-event blocks, an idle span, markers, an ACK,
+    a command and a session record with fresh ``encoder``, decode them all with fresh ``decoder``; return
     the payloads.
 
     The protocol kernels are compiled (or loaded from numba's cache) on first use: that
@@ -33,7 +42,8 @@ def exercise_codecs(encoder: Any, decoder: Any, step_us: int, status: Any) -> li
            encoder.marker(Marker(t_us=step_us, stimulus_id=1, phase=MarkerPhase.END)),
            encoder.ack(Ack(token=1, opcode=CommandCode.PING, ok=True,
                            reason=NackReason.NONE)),
-           encoder.command(Command(token=1, opcode=CommandCode.SET_SNR, arg=20.0))]
+           encoder.command(Command(token=1, opcode=CommandCode.SET_SNR, arg=20.0)),
+           encoder.session_record(RunEnd(t_us=0, reason=RunEndReason.DURATION))]
     for payload in out:
         decoder.feed(payload)
     return out

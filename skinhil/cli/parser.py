@@ -16,6 +16,8 @@ SUBCOMMANDS: tuple[str, ...] = (
     "simulate",
     "reproduce",
     "dbc",
+    "stimuli",
+    "pty",
     "compile",
 )
 

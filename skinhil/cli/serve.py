@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import protocols
 from firmware_sim.board import (
     DEFAULT_RESPONSE_WINDOW_S,
     REALTIME_SPIN_S,
@@ -20,7 +21,13 @@ from firmware_sim.clock import pin_to_cores, request_realtime
 from protocols.versions import wire_version
 from skinhil.cli import signals
 from skinhil.cli.kernel_notice import announce_cold_cache
-from skinhil.cli.options import SCHEDULE_HELP, add_model_options, noise_from_args, read_scenario
+from skinhil.cli.options import (
+    DECODE_SNR_DB,
+    SCHEDULE_HELP,
+    add_model_options,
+    noise_from_args,
+    read_scenario,
+)
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.cli.values import MAX_DURATION_S, MAX_REST_S, cores_value, integer, real
 from skinhil.errors import ConfigError
@@ -123,7 +130,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     out.add_argument("--quiet", action="store_true", help="print nothing but errors")
     out.add_argument("--json", action="store_true",
                      help="machine-readable output: one JSON object per line on stdout")
-    add_model_options(p)
+    add_model_options(p, snr_default=DECODE_SNR_DB)  # the paper's 10 dB, as train and demo
 
 
 def _config(args: argparse.Namespace) -> BoardConfig:
@@ -290,6 +297,13 @@ def write_score(path: Path, scoreboard: DecisionScoreboard) -> None:
                        encoding="utf-8")
 
 
+def _snr_text(snr_db: float) -> str:
+    """The banner's noise level: the SNR, and that inf means none."""
+    if math.isinf(snr_db):
+        return "SNR inf: NO neuron noise (deterministic)"
+    return f"SNR {snr_db:g} dB neuron noise (--snr-db inf for none)"
+
+
 def run(args: argparse.Namespace) -> int:
     if args.replay is not None:
         return run_replay(args)
@@ -352,11 +366,14 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
         print(f"skinhil serve: board {args.board_id} on {where}; skin {format_size(model.size)}"
               f" ({model.n_springs} channels), model on {board.config.threads} thread"
               f"{'s' if board.config.threads > 1 else ''}; mechanics "
-              f"{model.params.describe_mechanics()}; Ctrl-C stops",
+              f"{model.params.describe_mechanics()}; {_snr_text(args.snr_db)}; Ctrl-C stops",
               file=sys.stderr, flush=True)
     try:
-        with signals.stop_event(lambda: _drain_notice(board),
-                                lambda: _undrained(board)) as stop:
+        def on_signal() -> str | None:
+            board.end_reason = protocols.RunEndReason.SIGNAL  # what RUN_END says
+            return _drain_notice(board)
+
+        with signals.stop_event(on_signal, lambda: _undrained(board)) as stop:
             summary = board.run(args.duration_s, stop,
                                 on_second if (args.json or tty) else None)
     finally:

@@ -25,10 +25,10 @@ from skinhil.model.stimuli import (
     ScheduledStimulus,
     Stimulus,
     at_size,
-    builtin_catalog,
     direction_conditions,
     random_schedule,
 )
+from skinhil.model.stimulus_table import catalog
 
 DEFAULT_REST_S = 0.25
 """Rest (s) after each stimulus of the default random schedule."""
@@ -71,13 +71,10 @@ class Timeline:
         self.seed = int(seed)
         self.rest_s = float(rest_s)
         self.size = size
-        self.catalog: dict[int, Stimulus] = {
-            sid: s for sid, s in builtin_catalog(size).values()}
-        self._conditions = [at_size(s, size) for s in direction_conditions()]
         if file_schedule is not None:
             file_schedule.check_size(size)
-            for e in file_schedule.entries:
-                self.catalog.setdefault(e.stimulus_id, e.stimulus)
+        self.catalog: dict[int, Stimulus] = catalog(size, file_schedule)
+        self._conditions = [at_size(s, size) for s in direction_conditions()]
         self._entries: list[ScheduledStimulus] = []
         self._schedule = Schedule(())
         self._random_block = 0
