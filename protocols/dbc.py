@@ -18,7 +18,22 @@ from protocols import can_kernels as k
 from protocols.can_codec import STATUS_LEN_FD, can_id
 from protocols.constants import PROTOCOL_VERSION
 from protocols.errors import ProtocolError
-from protocols.records import CONFIDENCE_STEPS, CommandCode, MarkerPhase, NackReason
+from protocols.records import (
+    CONFIDENCE_STEPS,
+    CommandCode,
+    MarkerPhase,
+    NackReason,
+    RunEndReason,
+    SessionReason,
+)
+from protocols.session_layout import (
+    CLASSIC_CHUNK,
+    FD_FRAME_BYTES,
+    MAX_NAME_BYTES,
+    RUN_END_FIELDS,
+    SESSION_FIELDS,
+    STIMULUS_HEAD,
+)
 from protocols.status_layout import CLASSIC_STATUS_MUX, STATUS_WORDS
 
 BOARD, HOST = "BOARD", "HOST"
@@ -40,6 +55,8 @@ class Signal:
     """Mux values ``(first, last)`` of a field present for several (DBC extended
     multiplexing, ``SG_MUL_VAL_``); its ``mux`` names the first."""
     choices: tuple[tuple[int, str], ...] = ()
+    float32: bool = False
+    """An IEEE-754 binary32 (``SIG_VALTYPE_`` 1), not an unsigned integer."""
 
 
 @dataclass(frozen=True)
@@ -58,7 +75,7 @@ def _camel(name: str) -> str:
 
 
 def _enum_choices(enum: type[CommandCode] | type[NackReason] | type[MarkerPhase]
-                  ) -> tuple[tuple[int, str], ...]:
+                  | type[SessionReason] | type[RunEndReason]) -> tuple[tuple[int, str], ...]:
     return tuple(sorted({int(m): m.name for m in enum}.items()))
 
 
@@ -73,6 +90,42 @@ def _event_slots(header_bits: int, slots: int, wide: bool = False) -> tuple[Sign
                 Signal(f"{name}{i}Addr", at + delta, width - delta,
                        choices=((empty >> delta, "NONE"),))]
     return tuple(out)
+
+
+def _payload_signals(fields: tuple[tuple[str, int, int], ...], fd: bool,
+                     reasons: tuple[tuple[int, str], ...]) -> list[Signal]:
+    """Signals of a session-record payload's fields: FD from bit 16 (after the sequence and
+    chunk bytes); classic in the chunk (mux value) holding each field, from bit 8."""
+    out = []
+    for name, off, n in fields:
+        choices = reasons if name == "Reason" else ()
+        start = 16 + 8 * off if fd else 8 + 8 * (off % CLASSIC_CHUNK)
+        out.append(Signal(name, start, 8 * n, mux="m0" if fd else f"m{off // CLASSIC_CHUNK}",
+                          choices=choices, float32=name == "SnrDb"))
+    return out
+
+
+def _session_messages(fd: bool, seq: Signal) -> tuple[Message, ...]:
+    """SKIN_SESSION, SKIN_STIMULUS and SKIN_RUN_END (SPEC.md §5.8): a session record's
+    payload in chunks, multiplexed by ``Chunk`` (classic byte 0 bits 7..4, FD byte 1). A
+    name's bytes are shown raw (``NameBytes``): a DBC has no string signals."""
+    length = FD_FRAME_BYTES if fd else 8
+    chunk = Signal("Chunk", 8, 8, mux="M") if fd else Signal("Chunk", 4, 4, mux="M")
+    session = Message(k.CLS_SESSION, "SKIN_SESSION", length, BOARD, (
+        seq, chunk, *_payload_signals(SESSION_FIELDS, fd, _enum_choices(SessionReason))))
+    run_end = Message(k.CLS_RUN_END, "SKIN_RUN_END", length, BOARD, (
+        seq, chunk, *_payload_signals(RUN_END_FIELDS, fd, _enum_choices(RunEndReason))))
+    head = _payload_signals((("StimulusId", 0, 4), ("NameLength", 4, 1)), fd, ())
+
+    last = -(-(STIMULUS_HEAD + MAX_NAME_BYTES) // (62 if fd else CLASSIC_CHUNK)) - 1
+    first_bits = (62 - STIMULUS_HEAD) * 8 if fd else (CLASSIC_CHUNK - STIMULUS_HEAD) * 8
+    names = [Signal("NameBytes0", 16 + 8 * STIMULUS_HEAD if fd else 8 + 8 * STIMULUS_HEAD,
+                    min(first_bits, 64), mux="m0"),
+             Signal("NameBytes", 16 if fd else 8, 64 if fd else 8 * CLASSIC_CHUNK, mux="m1",
+                    mux_range=(1, last))]
+    stimulus = Message(k.CLS_STIMULUS, "SKIN_STIMULUS", length, BOARD, (
+        seq, chunk, *head, *names))
+    return session, stimulus, run_end
 
 
 def messages(fd: bool) -> tuple[Message, ...]:
@@ -129,7 +182,8 @@ def messages(fd: bool) -> tuple[Message, ...]:
         wide = Message(k.CLS_WIDE, "SKIN_WIDE_EVENTS", k.EVENTS_LEN_CLASSIC, BOARD, (
             seq, Signal("Epoch", 4, 3), Signal("Offset", 7, 9),
             *_event_slots(16, k.CLASSIC_MAX_WIDE, wide=True)))
-    return command, ack, sync, status, marker, events, wide
+    return (command, ack, sync, status, marker, events, wide,
+            *_session_messages(fd, seq))
 
 
 def dbc_text(board_id: int = 0, fd: bool = False) -> str:
@@ -141,6 +195,7 @@ def dbc_text(board_id: int = 0, fd: bool = False) -> str:
              "NS_ :", "", "BS_:", "", f"BU_: {BOARD} {HOST}", ""]
     values: list[str] = []
     mux_ranges: list[str] = []
+    value_types: list[str] = []
     msgs = messages(fd)
     for m in msgs:
         ident = can_id(m.frame_class, board_id)
@@ -148,8 +203,12 @@ def dbc_text(board_id: int = 0, fd: bool = False) -> str:
         receiver = HOST if m.sender == BOARD else BOARD
         for s in m.signals:
             mux = f" {s.mux}" if s.mux else ""
+            top = "3.4e+38" if s.float32 else (1 << s.bits) - 1
+            low = "-3.4e+38" if s.float32 else 0
             lines.append(f" SG_ {s.name}{mux} : {s.start}|{s.bits}@1+ (1,0) "
-                         f'[0|{(1 << s.bits) - 1}] "{s.unit}" {receiver}')
+                         f'[{low}|{top}] "{s.unit}" {receiver}')
+            if s.float32:
+                value_types.append(f"SIG_VALTYPE_ {ident} {s.name} : 1;")
             if s.mux_range is not None:
                 mux_name = next(x.name for x in m.signals if x.mux == "M")
                 mux_ranges.append(f"SG_MUL_VAL_ {ident} {s.name} {mux_name} "
@@ -171,5 +230,6 @@ def dbc_text(board_id: int = 0, fd: bool = False) -> str:
         lines += [f'BA_ "VFrameFormat" BO_ {can_id(m.frame_class, board_id)} {_FD_FORMAT};'
                   for m in msgs]
     lines += values
+    lines += value_types
     lines += mux_ranges
     return "\n".join(lines) + "\n"

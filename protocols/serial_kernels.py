@@ -30,8 +30,8 @@ T_SESSION the session records (SPEC.md §3.7), their kind in byte 0 bits 4..0.""
 
 K_SESSION, K_STIMULUS, K_RUN_END = 0, 1, 2
 """Kinds of a T_SESSION packet (byte 0 bits 4..0); 3..31 are reserved (malformed here)."""
-SESSION_BODY = 2 + 36
-"""Body length of a SESSION packet (header and the 36-byte payload)."""
+SESSION_BODY = 2 + 39
+"""Body length of a SESSION packet (header and the 39-byte payload)."""
 RUN_END_BODY = 2 + 7
 """Body length of a RUN_END packet."""
 MAX_NAME_BYTES = 64
@@ -345,9 +345,9 @@ def session_ok(dec: np.ndarray, m: int) -> bool:
     """Whether ``dec[:m]`` is a valid session-record body (type 7, SPEC.md §3.7)."""
     kind = dec[0] & 0x1F
     if kind == K_SESSION:
-        if m != SESSION_BODY or not is_known_version(dec[2]) or get_le(dec, 18, 2) == 0:
+        if m != SESSION_BODY or not is_known_version(dec[8]) or get_le(dec, 13, 2) == 0:
             return False
-        return (get_le(dec, 24, 4) & 0x7FFFFFFF) <= 0x7F800000  # the SNR is not a NaN
+        return (get_le(dec, 23, 4) & 0x7FFFFFFF) <= 0x7F800000  # the SNR is not a NaN
     if kind == K_STIMULUS:
         return m >= 8 and 1 <= dec[6] <= MAX_NAME_BYTES and m == 7 + dec[6]
     if kind == K_RUN_END:

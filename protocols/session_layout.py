@@ -31,9 +31,18 @@ KIND_SESSION, KIND_STIMULUS, KIND_RUN_END = 0, 1, 2
 CLASS_OF_KIND = {KIND_SESSION: 8, KIND_STIMULUS: 9, KIND_RUN_END: 10}
 """CAN frame class of each kind (ID = class << 4 | board id); classes 11..15 are reserved."""
 
-_SESSION = struct.Struct("<BBBB6sIBBHIfIHI")
+SESSION_FIELDS: tuple[tuple[str, int, int], ...] = (
+    ("TimeUs", 0, 6), ("Version", 6, 1), ("NChannels", 7, 4), ("StepUs", 11, 2),
+    ("BoardId", 13, 1), ("TickUs", 14, 4), ("NStimuli", 18, 2), ("Reason", 20, 1),
+    ("SnrDb", 21, 4), ("Rows", 25, 1), ("Cols", 26, 1), ("Flags", 27, 1),
+    ("ResponseWindowUs", 28, 4), ("TableDigest", 35, 4))
+"""(DBC signal name, payload offset, bytes) of every SESSION field (bytes 32..34 reserved);
+the layout :data:`_SESSION` packs."""
+RUN_END_FIELDS: tuple[tuple[str, int, int], ...] = (("TimeUs", 0, 6), ("Reason", 6, 1))
+"""(DBC signal name, payload offset, bytes) of the RUN_END fields."""
+_SESSION = struct.Struct("<6sBIHBIHBfBBBI3sI")
 SESSION_BYTES = _SESSION.size
-"""Length of a SESSION payload (36 bytes)."""
+"""Length of a SESSION payload (39 bytes; no field straddles a 7-byte classic CAN chunk)."""
 _RUN_END = struct.Struct("<6sB")
 RUN_END_BYTES = _RUN_END.size
 """Length of a RUN_END payload (7 bytes)."""
@@ -48,20 +57,19 @@ FD_FRAME_BYTES = 64
 
 
 def session_payload(s: Session) -> bytes:
-    """The 36-byte SESSION payload of ``s``."""
+    """The 39-byte SESSION payload of ``s``."""
     if int(s.version) not in KNOWN_VERSIONS:
         raise ProtocolError(f"session version {s.version}: choose among {KNOWN_VERSIONS}")
     if math.isnan(float(s.snr_db)):
         raise ProtocolError("session SNR is NaN; give a level in dB or inf")
     return _SESSION.pack(
-        int(s.version), check_uint(s.board_id, 8, "board id"),
-        check_uint(int(s.reason), 8, "session reason"), int(bool(s.running)),
-        check_uint(s.t_us, 48, "session time (µs)").to_bytes(6, "little"),
-        check_uint(s.n_channels, 32, "channel count"), check_uint(s.rows, 8, "rows"),
-        check_uint(s.cols, 8, "cols"), check_uint(s.step_us, 16, "step_us"),
-        check_uint(s.tick_us, 32, "tick_us"), float(s.snr_db),
-        check_uint(s.response_window_us, 32, "response window (µs)"),
+        check_uint(s.t_us, 48, "session time (µs)").to_bytes(6, "little"), int(s.version),
+        check_uint(s.n_channels, 32, "channel count"), check_uint(s.step_us, 16, "step_us"),
+        check_uint(s.board_id, 8, "board id"), check_uint(s.tick_us, 32, "tick_us"),
         check_uint(s.n_stimuli, 16, "stimulus count"),
+        check_uint(int(s.reason), 8, "session reason"), float(s.snr_db),
+        check_uint(s.rows, 8, "rows"), check_uint(s.cols, 8, "cols"), int(bool(s.running)),
+        check_uint(s.response_window_us, 32, "response window (µs)"), bytes(3),
         check_uint(s.table_digest, 32, "table digest"))
 
 
@@ -107,8 +115,8 @@ def parse(kind: int, p: bytes) -> Session | StimulusEntry | RunEnd | None:
     if payload_length(kind, p) != len(p):
         return None
     if kind == KIND_SESSION:
-        (version, board, reason, flags, t, n_ch, rows, cols, step, tick, snr, window, n_stim,
-         digest) = _SESSION.unpack(p)
+        (t, version, n_ch, step, board, tick, n_stim, reason, snr, rows, cols, flags, window,
+         _, digest) = _SESSION.unpack(p)
         if version not in KNOWN_VERSIONS or step == 0 or math.isnan(snr):
             return None
         return Session(int.from_bytes(t, "little"), enum_or_int(SessionReason, reason),

@@ -22,8 +22,8 @@ from protocols.records import (
 
 def exercise_codecs(encoder: Any, decoder: Any, step_us: int, status: Any) -> list[Any]:
     """Encode a status, one-event and several-event blocks, an idle span, markers, an ACK,
-    a command and a session record with fresh ``encoder``, decode them all with fresh ``decoder``; return
-    the payloads.
+    a command and a session record with fresh ``encoder``, decode them all with fresh
+    ``decoder``; return the payloads.
 
     The protocol kernels are compiled (or loaded from numba's cache) on first use: that
     takes milliseconds from a warm cache and about a second from a cold one, so it must

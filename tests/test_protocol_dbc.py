@@ -26,8 +26,9 @@ from skinhil.transports import CanTransport
 
 NAMES = {1: "SKIN_COMMAND", 2: "SKIN_ACK", 3: "SKIN_SYNC", 4: "SKIN_STATUS", 5: "SKIN_MARKER",
          6: "SKIN_EVENTS"}
-"""What a board of at most 338 channels sends (and a host); SKIN_WIDE_EVENTS is a larger
-skin's."""
+"""The frames of the stream proper (and a host's); SKIN_WIDE_EVENTS is a larger skin's."""
+SESSION_NAMES = {8: "SKIN_SESSION", 9: "SKIN_STIMULUS", 10: "SKIN_RUN_END"}
+"""The session records a running board sends at its start and end (SPEC.md §5.8)."""
 
 
 def _camel(name: str) -> str:
@@ -46,7 +47,11 @@ class DbcReader:
         self.names: set[str] = set()
         self.statuses: list[dict[str, Any]] = []
         self.markers: list[dict[str, Any]] = []
+        self.sessions: list[dict[str, Any]] = []
+        self.stimuli: list[dict[str, Any]] = []
+        self.run_ends: list[dict[str, Any]] = []
         self._mux: dict[str, Any] = {}
+        self._session: dict[str, Any] = {}
 
     def feed(self, frame: Any) -> None:
         msg = self.db.get_message_by_frame_id(frame.arbitration_id)
@@ -79,6 +84,15 @@ class DbcReader:
                     self.statuses.append(dict(self._mux))
         elif msg.name == "SKIN_MARKER":
             self.markers.append(d)
+        elif msg.name == "SKIN_SESSION":  # classic: chunks 0..5, FD: one frame
+            self._session = {} if d["Chunk"] == 0 else self._session
+            self._session.update(d)
+            if "TableDigest" in d:
+                self.sessions.append(dict(self._session))
+        elif msg.name == "SKIN_STIMULUS" and d["Chunk"] == 0:
+            self.stimuli.append(d)
+        elif msg.name == "SKIN_RUN_END":
+            self.run_ends.append(d)
 
 
 def _protocol_events(frames: list[Any], board_id: int, fd: bool) -> tuple[list[Any], Any]:
@@ -176,16 +190,30 @@ def test_cantools_decodes_a_live_board(board_id: int, fd: bool) -> None:
     reader = DbcReader(board_id, fd)
     for f in frames:
         reader.feed(f)
-    assert reader.names == set(NAMES.values())
+    assert reader.names == set((NAMES | SESSION_NAMES).values())
     board_frames = [f for f in frames if f.arbitration_id >> 4 != 1]
     want, res = _protocol_events(board_frames, board_id, fd)
     assert len(want) > 100 and reader.events == want
     final = [r for r in res.records if isinstance(r, protocols.Status)][-1]
     _check_status(reader.statuses[-1], final)
     assert final.events_sent == len(want)
+    # the session records: the DBC user reads what the protocol decoder does
+    session = next(r for r in res.records if isinstance(r, protocols.Session))
+    got = reader.sessions[0]
+    assert (got["NChannels"], got["StepUs"], got["BoardId"], got["TickUs"], got["SnrDb"],
+            got["ResponseWindowUs"], got["NStimuli"], got["TableDigest"], got["Reason"]) == (
+        338, 100, board_id, 1000, 0.0, 500_000, session.n_stimuli, session.table_digest, "START")
+    stimuli = [r for r in res.records if isinstance(r, protocols.StimulusEntry)]
+    assert [d["StimulusId"] for d in reader.stimuli] == [e.stimulus_id for e in stimuli]
+    assert len(stimuli) == session.n_stimuli == 14
+    assert protocols.table_digest(stimuli) == session.table_digest
+    assert board_frames[-1].arbitration_id >> 4 == 10  # RUN_END is the last frame
+    assert [d["Reason"] for d in reader.run_ends] == ["DURATION"]
+    assert isinstance(res.records[-1], protocols.RunEnd)
     # one length per frame type, the DBC's
     assert {(f.arbitration_id, len(f.data)) for f in frames} == {
-        (m.frame_id, m.length) for m in reader.db.messages if m.name in NAMES.values()}
+        (m.frame_id, m.length) for m in reader.db.messages
+        if m.name in (NAMES | SESSION_NAMES).values()}
     assert np.all(np.diff([t for t, _ in want]) >= 0)
 
 
