@@ -38,8 +38,7 @@ def test_every_status_closes_the_account_through_stop_overload_and_shutdown(pty_
         board = Board(config, lambda: SerialTransport(pty_pair.path, baud=115200))
         threading.Thread(target=host, daemon=True).start()
         summary = board.run(duration_s)
-        assert peer.wait_for(lambda p: any(
-            s.t_us >= duration_s * 1e6 for s in p.of(protocols.Status)), 10)
+        assert peer.wait_for(lambda p: p.of(protocols.RunEnd), 10)
     finally:
         peer.close()
     statuses = peer.of(protocols.Status)
@@ -47,7 +46,8 @@ def test_every_status_closes_the_account_through_stop_overload_and_shutdown(pty_
     for s in statuses:
         _check_account(s)
     final = statuses[-1]
-    assert peer.records[-1] == final  # the account closes the stream
+    assert peer.records[-2] == final  # the account closes the stream, then the run ends
+    assert peer.records[-1] == protocols.RunEnd(final.t_us, protocols.RunEndReason.DURATION)
     # the run went through each loss: an overloaded link, a STOP, a shutdown with a backlog
     assert final.dropped_fifo_full > 0 and final.dropped_stopped > 0
     assert final.dropped_shutdown > 0 and final.events_queued == 0
