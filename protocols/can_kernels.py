@@ -10,7 +10,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from protocols.constants import N_CHANNELS, PROTOCOL_VERSION, WIDE_VERSION
+from protocols.constants import MAX_CAN_CLASS, N_CHANNELS, PROTOCOL_VERSION, WIDE_VERSION
 from protocols.event_input import (
     E_EPOCH,
     E_EVENTS,
@@ -334,7 +334,7 @@ def decode_frames(ids: np.ndarray, lens: np.ndarray, blob: np.ndarray, board: in
         cls = ident >> 4
         wide_ok = st[D_VERSION] == WIDE_VERSION
         if ident < 0 or ident > 0x7FF or (ident & 0xF) != board or cls < 1 or (
-                cls > CLS_RUN_END or (cls == CLS_WIDE and not wide_ok)):
+                cls > MAX_CAN_CLASS or (cls == CLS_WIDE and not wide_ok)):
             c[C_FOREIGN] += 1
             continue
         if ln < 1 or (not fd and ln > 8):

@@ -17,6 +17,7 @@ import time
 from collections.abc import Callable, Iterable
 from typing import Any
 
+from protocols.constants import MAX_CAN_CLASS
 from skinhil.errors import ConfigError, TransportError
 from skinhil.receiver.decoder_adapter import WindowDecoder
 from skinhil.receiver.params import ReceiverParams
@@ -28,9 +29,6 @@ log = logging.getLogger(__name__)
 
 BoardKey = int | str
 """A board on the link: its CAN board id (int) or its UDP source ``"host:port"`` (str)."""
-
-MAX_CAN_CLASS = 7
-"""Highest frame class of a board's CAN IDs (class << 4 | board id, SPEC.md §5.1, §9.2)."""
 
 MAX_UDP_SOURCES = 16
 """Most UDP sources (boards) a bus receiver decodes by default; datagrams of further sources
