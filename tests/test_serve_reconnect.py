@@ -48,7 +48,7 @@ def test_serve_reconnects_when_the_port_returns(tmp_path) -> None:
         assert any("back" in m for m in _link_messages(serve))
         serve.interrupt()
         assert serve.wait(20) == 130, serve.stderr  # stopped cleanly by Ctrl-C
-        peer2.wait_for(lambda p: p.of(protocols.Status)[-1].events_queued == 0, 2)
+        peer2.wait_for(lambda p: p.of(protocols.RunEnd), 2)
         peer2.close()
     finally:
         serve.kill()
@@ -58,7 +58,19 @@ def test_serve_reconnects_when_the_port_returns(tmp_path) -> None:
     assert s["link_losses"] == 1
     assert s["generated"] == s["sent"] + s["dropped"] + s["queued"]
     last = peer2.of(protocols.Status)[-1]
+    assert last.events_queued == 0
     assert last.events_generated == s["generated"]
+    # each link opens with the session: at the start, then after the reconnection; the run's
+    # end is on the wire with its reason (SIGINT)
+    first_session, session = peer1.records[0], peer2.records[0]
+    assert isinstance(first_session, protocols.Session) and isinstance(session, protocols.Session)
+    assert first_session.reason == protocols.SessionReason.START
+    assert session.reason == protocols.SessionReason.RECONNECT
+    assert (session.snr_db, session.n_channels, session.step_us, session.n_stimuli) == (
+        30.0, 338, 100, 14)
+    table = peer2.records[1:1 + session.n_stimuli]
+    assert protocols.table_digest(table) == session.table_digest
+    assert peer2.records[-1] == protocols.RunEnd(last.t_us, protocols.RunEndReason.SIGNAL)
     assert last.dropped_link_down == s["dropped_by"]["link_down"]
 
 

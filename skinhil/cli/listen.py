@@ -109,7 +109,10 @@ class LivePrinter(ReceiverListener):
         self.board = board
 
     def _name(self, label: int | None) -> str:
-        return "-" if label is None else self.names.get(label, str(label))
+        """The stimulus's name: the board's table (its SESSION) first, else the built-ins."""
+        if label is None:
+            return "-"
+        return self.receiver.stimuli.get(label) or self.names.get(label, str(label))
 
     def on_decision(self, decision: ScoredDecision) -> None:
         p = decision.prediction
@@ -159,7 +162,10 @@ def summary(receiver: Receiver, wall_s: float) -> dict[str, Any]:
             "classes": list(sb.classes), "confusion": sb.confusion.tolist(),
             "decision_latency_board_ms": {"p50": pct(lat_b, 50), "p99": pct(lat_b, 99)},
             "decision_latency_host_ms": {"p50": pct(lat_h, 50), "p99": pct(lat_h, 99)},
-            "link": receiver.link_report().as_dict()}
+            "link": receiver.link_report().as_dict(),
+            "run_end": None if receiver.run_end is None else {
+                "t_s": receiver.run_end.t_us * 1e-6,
+                "reason": getattr(receiver.run_end.reason, "name", receiver.run_end.reason)}}
 
 
 def print_summary(info: dict[str, Any], names: dict[int, str]) -> None:
@@ -182,6 +188,9 @@ def print_summary(info: dict[str, Any], names: dict[int, str]) -> None:
         if d["p50"] is not None:
             print(f"{label}: p50 {d['p50']:.1f} ms, p99 {d['p99']:.1f} ms")
     print_link(info["link"])
+    end = info.get("run_end")
+    if end is not None:
+        print(f"the board's run ended at {end['t_s']:.3f} s board time ({end['reason']})")
 
 
 def print_link(link: dict[str, Any]) -> None:
@@ -316,7 +325,7 @@ def listen_one(args: argparse.Namespace, receiver: Receiver, names: dict[int, st
                      answerer.as_dict if answerer is not None else None,
                      provenance(describe_transport(args), args.model)):
         listen_until_stopped(args, receiver, lambda: receiver.link_report().as_dict(),
-                             lambda: False)
+                             lambda: receiver.run_end is not None)  # the board finished
     info = summary(receiver, time.monotonic() - t0)
     if answerer is not None:
         info["answers"] = answerer.as_dict()

@@ -8,6 +8,10 @@ Listeners (python-can Notifier style) hear about events, decisions, markers, sta
 records, acknowledgements and link errors. Corrupted or lost data never stop it: the decoder
 counts them, and a link that goes away is reported and, with ``reopen``, reopened.
 
+The board's SESSION record configures what the stream says (its stimulus table names the
+decisions; a decoder made for another channel count or step is reported) and its RUN_END
+record ends :meth:`Receiver.run`: the board finished, not the link.
+
 Board time is followed as the newest event's time (the stream is in time order), else the
 newest marker time (or status time, when the board had no events queued) minus
 ``guard_s``; only while the stream has been silent for ``silence_s`` of host time (1 s,
@@ -30,7 +34,7 @@ from typing import Any
 import numpy as np
 
 import protocols
-from skinhil.errors import TransportError
+from skinhil.errors import SkinhilError, TransportError
 from skinhil.model.stimuli import direction_conditions
 from skinhil.receiver.clock import BoardClock
 from skinhil.receiver.decoder_adapter import WindowDecoder
@@ -59,6 +63,13 @@ class ReceiverListener:
 
     def on_ack(self, ack: Any) -> None:
         """A command acknowledgement (``protocols.Ack``)."""
+
+    def on_session(self, session: Any) -> None:
+        """The board's session record (``protocols.Session``): at its start, after a
+        reconnect, on request."""
+
+    def on_run_end(self, run_end: Any) -> None:
+        """The board's run ended (``protocols.RunEnd``: when and why); no more data follows."""
 
     def on_link_error(self, message: str) -> None:
         """The link failed (message says how); the receiver goes on if it can."""
@@ -146,6 +157,14 @@ class Receiver:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.link_down = False
+        self.session: Any = None
+        """The board's last SESSION record (``protocols.Session``), or None."""
+        self.stimuli: dict[int, str] = {}
+        """The board's stimulus table (id → name) from the STIMULUS records after it."""
+        self.run_end: Any = None
+        """The RUN_END record (``protocols.RunEnd``) once the board's run ended, else None."""
+        self.run_ends = 0
+        """RUN_END records received (a board restarted on the same link sends another)."""
 
     def add_listener(self, listener: ReceiverListener) -> None:
         self.listeners.append(listener)
@@ -186,6 +205,31 @@ class Receiver:
         elif isinstance(rec, protocols.Ack):
             for listener in self.listeners:
                 listener.on_ack(rec)
+        elif isinstance(rec, protocols.Session):
+            self._take_session(rec)
+        elif isinstance(rec, protocols.StimulusEntry):
+            self.stimuli[int(rec.stimulus_id)] = rec.name
+        elif isinstance(rec, protocols.RunEnd):
+            self.run_end = rec
+            self.run_ends += 1
+            for listener in self.listeners:
+                listener.on_run_end(rec)
+
+    def _take_session(self, session: Any) -> None:
+        """A SESSION: the stimulus table starts again; a decoder made for another stream
+        is reported (the receiver goes on: its decisions are then meaningless)."""
+        self.session = session
+        self.stimuli = {}
+        self.run_end = None
+        decoder = self.classifier.decoder
+        check = getattr(getattr(decoder, "decoder", None), "check_stream", None)
+        if check is not None:
+            try:
+                check(int(session.n_channels), int(session.step_us) * 1e-6)
+            except SkinhilError as exc:
+                self._report(f"session: {exc}")
+        for listener in self.listeners:
+            listener.on_session(session)
 
     def known_board_time_us(self, host_s: float | None = None) -> int:
         """Board time (µs) before which the stream is taken as complete."""
@@ -256,12 +300,15 @@ class Receiver:
             out += self.feed(payload, time.monotonic())
         return out
 
-    def _link_error(self, message: str) -> None:
-        self.link_errors += 1
-        self.link_down = True
+    def _report(self, message: str) -> None:
         log.warning("link error: %s", message)
         for listener in self.listeners:
             listener.on_link_error(message)
+
+    def _link_error(self, message: str) -> None:
+        self.link_errors += 1
+        self.link_down = True
+        self._report(message)
         if self.reopen is None:
             self._stop.set()
 
@@ -278,9 +325,12 @@ class Receiver:
 
     def run(self, duration_s: float | None = None, stop: threading.Event | None = None,
             until: Callable[[Receiver], bool] | None = None) -> None:
-        """Poll until ``duration_s`` (s of wall time), ``stop`` is set or ``until(self)``."""
+        """Poll until ``duration_s`` (s of wall time), ``stop`` is set, ``until(self)`` or
+        the board's RUN_END record arrives."""
         end = None if duration_s is None else time.monotonic() + duration_s
         while not self._stop.is_set() and not (stop is not None and stop.is_set()):
+            if self.run_end is not None:
+                break
             if end is not None and time.monotonic() >= end:
                 break
             if until is not None and until(self):
