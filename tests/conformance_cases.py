@@ -16,7 +16,18 @@ import struct
 from typing import Any
 
 import numpy as np
-from protocol_examples import ACK, BURST, COMMAND, DECISION, EVENTS, MARKER, STATUS, framed
+from protocol_examples import (
+    ACK,
+    BURST,
+    COMMAND,
+    DECISION,
+    EVENTS,
+    MARKER,
+    SESSION,
+    STATUS,
+    TABLE,
+    framed,
+)
 
 from protocols import (
     Command,
@@ -25,11 +36,7 @@ from protocols import (
     RunEnd,
     RunEndReason,
     SerialEncoder,
-    Session,
-    SessionReason,
     Status,
-    StimulusEntry,
-    table_digest,
 )
 from skinhil.events import make_events
 
@@ -37,11 +44,6 @@ COUNTERS = ("frames_ok", "crc_errors", "malformed", "resyncs", "bytes_discarded"
             "frames_lost", "duplicates", "late_frames", "events_decoded", "events_untimed",
             "events_lost", "events_lost_reported", "syncs", "command_seq_gaps", "commands_lost")
 """The counters of SPEC.md §7 a serial decoder keeps, in the file's order."""
-
-TABLE = [StimulusEntry(0, "0deg_0.1N"), StimulusEntry(10, "A")]
-SESSION = Session(t_us=0, reason=SessionReason.START, version=3, board_id=0, running=True,
-                  n_channels=338, rows=6, cols=6, step_us=100, tick_us=1000, snr_db=10.0,
-                  response_window_us=500_000, n_stimuli=2, table_digest=table_digest(TABLE))
 
 
 def record_json(rec: Any) -> dict[str, Any]:
@@ -258,6 +260,12 @@ def cases() -> list[dict[str, Any]]:
         _status(0, 1000, 2**32 - 5, 2**32 - 5, 0) + _status(1, 2000, 5, 5, 0), [],
         [_status_json(1000, 2**32 - 5, 2**32 - 5), _status_json(2000, 2**32 + 5, 2**32 + 5)],
         frames_ok=2))
+    marker = _pkt(3 << 5 | 0x1F, 0, (250_000).to_bytes(6, "little") + struct.pack("<IB", 3, 0))
+    ack = _pkt(5 << 5 | 0x1E, 1, struct.pack("<HBB", 0x1234, 3, 3))
+    out.append(_case(
+        "reserved-bits-ignored", "§1, §3", "A MARKER with byte 0 bits 4..0 set and an ACK "
+        "with bits 4..1 set (reserved: ignored, the packets decode; the ACK's ok bit is 0).",
+        marker + ack, [], [record_json(MARKER), record_json(ACK)], frames_ok=2))
     host = SerialEncoder()
     mixed = (sync + host.command(Command(1, CommandCode.PING)) + events_pkt
              + _pkt(4 << 5, 5, struct.pack("<HBI", 3, 7, 0)))

@@ -22,8 +22,14 @@ from protocols import (
     Marker,
     MarkerPhase,
     NackReason,
+    RunEnd,
+    RunEndReason,
     SerialEncoder,
+    Session,
+    SessionReason,
     Status,
+    StimulusEntry,
+    table_digest,
 )
 from skinhil.events import make_events
 
@@ -47,6 +53,20 @@ WIDE_CHANNELS = 15_730
 """A 32x32 skin's channel count: its stream uses the wide format (version 4)."""
 WIDE_EVENTS = make_events([0, 0, 300, 900], [5, 15_000, 337, 12_810])
 """Four events of a wide stream: channels 5 and 15000 at 0 µs, 337 at 300 µs, 12810 at 900 µs."""
+
+
+TABLE = [StimulusEntry(0, "0deg_0.1N"), StimulusEntry(10, "A")]
+"""A stimulus table of two rows (a direction condition and the paper's stimulus A)."""
+SESSION = Session(t_us=0, reason=SessionReason.START, version=3, board_id=1, running=True,
+                  n_channels=338, rows=6, cols=6, step_us=100, tick_us=1000, snr_db=10.0,
+                  response_window_us=500_000, n_stimuli=len(TABLE),
+                  table_digest=table_digest(TABLE))
+"""The session of a run's start: board 1, the 6x6 skin, 100 µs steps, 1 ms ticks, 10 dB,
+0.5 s response window, the two-row table :data:`TABLE`."""
+RUN_END = RunEnd(t_us=60_000_000, reason=RunEndReason.DURATION)
+"""The run ended after its 60 s."""
+SESSION_RECORDS = (SESSION, *TABLE)
+"""A SESSION and the STIMULUS records that follow it."""
 
 
 def distinct_events(t_us: object, addr: object) -> np.ndarray:
@@ -100,6 +120,8 @@ EXAMPLES: dict[str, Callable[[], str]] = {
     "serial-command": _serial(lambda e: e.command(COMMAND)),
     "serial-ack": _serial(lambda e: e.ack(ACK)),
     "serial-decision": _serial(lambda e: e.command(DECISION)),
+    "serial-session": _serial(lambda e: b"".join(e.session_record(r) for r in SESSION_RECORDS)),
+    "serial-run-end": _serial(lambda e: e.session_record(RUN_END)),
 }
 for _fd, _tag in ((False, "can"), (True, "canfd")):
     EXAMPLES[f"{_tag}-events"] = _can(_fd, lambda e: e.events(EVENTS, 1000))
@@ -109,5 +131,8 @@ for _fd, _tag in ((False, "can"), (True, "canfd")):
     EXAMPLES[f"{_tag}-command"] = _can(_fd, lambda e: e.command(COMMAND))
     EXAMPLES[f"{_tag}-ack"] = _can(_fd, lambda e: e.ack(ACK))
     EXAMPLES[f"{_tag}-decision"] = _can(_fd, lambda e: e.command(DECISION))
+    EXAMPLES[f"{_tag}-session"] = _can(_fd, lambda e: [
+        f for r in SESSION_RECORDS for f in e.session_record(r)])
+    EXAMPLES[f"{_tag}-run-end"] = _can(_fd, lambda e: e.session_record(RUN_END))
     EXAMPLES[f"{_tag}-wide-events"] = (lambda fd: lambda: _frames(
         CanEncoder(board_id=1, fd=fd, n_channels=WIDE_CHANNELS).events(WIDE_EVENTS, 1000)))(_fd)

@@ -5,9 +5,16 @@ from __future__ import annotations
 import re
 
 import pytest
-from protocol_examples import EXAMPLES
+from protocol_examples import EXAMPLES, RUN_END, SESSION_RECORDS
 
-from protocols import SPEC_PATH, CanFrame, can_frame_seconds, serial_seconds
+from protocols import (
+    SPEC_PATH,
+    CanDecoder,
+    CanFrame,
+    SerialDecoder,
+    can_frame_seconds,
+    serial_seconds,
+)
 from skinhil.errors import ProtocolError
 
 BLOCK = re.compile(r"<!-- example (\S+) -->\n```text\n(.*?)\n```", re.S)
@@ -18,6 +25,30 @@ def test_every_spec_example_matches_the_encoder() -> None:
     assert set(blocks) == set(EXAMPLES)
     for name, make in EXAMPLES.items():
         assert blocks[name].strip().upper() == make().strip().upper(), name
+
+
+def _spec_frames(text: str) -> list[CanFrame]:
+    """candump lines (``ID#DATA``, ``ID##<flags>DATA``) as frames."""
+    out = []
+    for line in text.split():
+        ident, data = line.split("#", 1)
+        fd = data.startswith("#")
+        out.append(CanFrame(int(ident, 16), bytes.fromhex(data[2:] if fd else data), fd))
+    return out
+
+
+def test_session_examples_decode_to_their_records() -> None:
+    """The SPEC's SESSION, STIMULUS and RUN_END hex decodes (as written there) to the
+    records, on the serial layout and both CAN layouts."""
+    blocks = dict(BLOCK.findall(SPEC_PATH.read_text(encoding="utf-8")))
+    for records, name in ((list(SESSION_RECORDS), "session"), ([RUN_END], "run-end")):
+        serial = SerialDecoder()
+        assert serial.feed(bytes.fromhex(blocks[f"serial-{name}"])).records == records
+        assert serial.counters.frames_ok == len(records)
+        for tag, fd in (("can", False), ("canfd", True)):
+            dec = CanDecoder(board_id=1, fd=fd)
+            assert dec.feed(_spec_frames(blocks[f"{tag}-{name}"])).records == records, tag
+            assert dec.counters.malformed == dec.counters.foreign_frames == 0
 
 
 def test_wire_time() -> None:
