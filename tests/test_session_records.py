@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 from harness.peers import PtyPeer
-from harness.serve import RUN_DIR, serve_env
+from harness.serve import RUN_DIR, run_serve, serve_env
 from protocol_examples import RUN_END, SESSION, SESSION_RECORDS, framed
 
 import protocols
@@ -160,3 +160,11 @@ def test_pty_command_links_two_devices_both_ways() -> None:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
+
+
+def test_serve_banner_states_its_snr() -> None:
+    """serve's default is the paper's 10 dB, as train and demo; its banner says so."""
+    res = run_serve("--port", "loop://", "--duration", "0.05")
+    assert res.returncode == 0, res.stderr
+    banner = res.stderr.splitlines()[0]
+    assert "SNR 10 dB neuron noise" in banner, banner
