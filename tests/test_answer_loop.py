@@ -195,7 +195,8 @@ def test_listen_answer_on_the_command_line(tmp_path: Path) -> None:
         ["--duration", "5", "--snr-db", "inf", "--score", str(tmp_path / "score.json"),
          "--json"])
     assert board.returncode == 0, board.stderr
-    assert listen.returncode == 130, listen.stderr  # stopped cleanly by Ctrl-C
+    # it ends by itself at the board's RUN_END record (130: Ctrl-C came first, a loaded host)
+    assert listen.returncode in (0, 130), listen.stderr
     lines = [json.loads(line) for line in listen.stdout.splitlines() if line.startswith("{")]
     decisions = [x for x in lines if x["type"] == "decision"]
     answers = [x for x in lines if x["type"] == "summary"][-1]["answers"]

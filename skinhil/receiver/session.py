@@ -25,7 +25,8 @@ def serve_command(link_args: Sequence[str], duration_s: float, snr_db: float, se
 
 def run_against_board(receiver: Receiver, command: Sequence[str], idle_s: float = 0.3,
                       timeout_s: float = 600.0) -> tuple[int, str, str]:
-    """Start ``command`` and feed ``receiver`` until the board ends; (status, stdout, stderr)."""
+    """Start ``command`` and feed ``receiver`` until the board's RUN_END record (or, if it
+    never comes, ``idle_s`` of silence after the board exited); (status, stdout, stderr)."""
     board = subprocess.Popen(list(command), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                              stderr=subprocess.PIPE, text=True)
     end = time.monotonic() + timeout_s
@@ -37,6 +38,8 @@ def run_against_board(receiver: Receiver, command: Sequence[str], idle_s: float 
             except TransportError:
                 payload = receiver.transport.empty()
             receiver.feed(payload, time.monotonic())
+            if receiver.run_end is not None:  # the board's last record: nothing follows
+                break
             if board.poll() is None:
                 continue
             if payload:
