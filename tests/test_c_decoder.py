@@ -7,13 +7,17 @@ from __future__ import annotations
 
 import json
 import shutil
+import socket
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 from harness.serve import REPO, RUN_DIR, run_serve, serve_env
+from protocol_examples import RUN_END, SESSION_RECORDS, distinct_events
 
 import protocols
 
@@ -87,3 +91,51 @@ def test_c_decoder_against_serve_on_a_pty(decoder: Path, tmp_path: Path) -> None
     assert got["decisions"] == s["decisions"] >= 20
     assert s["matched"] + s["late"] + s["false_alarms"] + s["duplicates"] == s["decisions"]
     assert s["right"] > s["decisions"] / 9  # above chance (1 in 9)
+
+
+def test_c_decoder_over_udp_learns_decides_and_answers_the_sender(decoder: Path) -> None:
+    """UDP (SPEC §10): a stream of two touches of the same channels in datagrams of whole
+    packets; a MARKER labels the first (id 3), so the second is answered with a DECISION
+    for stimulus 3, sent back to the datagrams' source; the RUN_END ends the decoder."""
+    rng = np.random.default_rng(0)
+    t = [*range(0, 600_000, 10_000)]  # a quiet background: one event every 10 ms
+    a = [int(x) for x in rng.integers(200, 338, len(t))]
+    for onset in (100_000, 400_000):  # two touches: 30 events on channels 0..29 in 3 ms
+        t += [onset + 100 * (i % 30) for i in range(30)]
+        a += list(range(30))
+    ev = distinct_events(t, a)
+    enc = protocols.SerialEncoder()
+    first = ev["t"] < 100_000
+    stream = (b"".join(enc.session_record(r) for r in SESSION_RECORDS)
+              + enc.events(ev[first], 100_000)
+              + enc.marker(protocols.Marker(100_000, 3, protocols.MarkerPhase.ONSET))
+              + enc.events(ev[~first], 600_000) + enc.session_record(RUN_END))
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    port_probe = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    port_probe.bind(("127.0.0.1", 0))
+    port = port_probe.getsockname()[1]
+    port_probe.close()
+    dut = subprocess.Popen([str(decoder), "--udp", f"127.0.0.1:{port}"],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        time.sleep(0.3)  # bound
+        sock.bind(("127.0.0.1", 0))
+        sock.settimeout(10)
+        packets = [p + b"\0" for p in stream.split(b"\0")[:-1]]
+        for i in range(0, len(packets), 8):  # datagrams of whole packets
+            sock.sendto(b"".join(packets[i:i + 8]), ("127.0.0.1", port))
+            time.sleep(0.002)
+        answer = protocols.SerialDecoder().feed(sock.recv(2048)).records
+        out, err = dut.communicate(timeout=10)
+    finally:
+        sock.close()
+        if dut.poll() is None:
+            dut.kill()
+            dut.wait()
+    assert len(answer) == 1 and isinstance(answer[0], protocols.Decision), answer
+    assert answer[0].stimulus_id == 3 and answer[0].confidence is not None
+    assert answer[0].confidence > 0.9
+    got = _lines(out)[-1]
+    assert got["counters"]["events_decoded"] == len(ev) and got["decisions"] == 1
+    assert got["counters"]["seq_gaps"] == got["counters"]["crc_errors"] == 0
+    assert got["run_end"] == 1 and got["session"]["n_stimuli"] == 2, err
