@@ -155,3 +155,43 @@ def test_drain_decodes_what_the_link_already_received(small_decoder: WindowDecod
     finally:
         board.shutdown()
         host.shutdown()
+
+
+def test_receiver_takes_the_session_and_stops_at_the_run_end(
+        small_decoder: WindowDecoder) -> None:
+    """One board's receiver: the SESSION and its table are kept (a new SESSION starts the
+    table again), a SESSION of another channel count is reported, and RUN_END ends run()."""
+    from protocol_examples import RUN_END, SESSION, TABLE
+
+    import protocols
+    from skinhil.receiver import Receiver, ReceiverListener
+
+    class Heard(ReceiverListener):
+        def __init__(self) -> None:
+            self.items: list[object] = []
+
+        def on_session(self, session: object) -> None:
+            self.items.append(session)
+
+        def on_run_end(self, run_end: object) -> None:
+            self.items.append(run_end)
+
+        def on_link_error(self, message: str) -> None:
+            self.items.append(message)
+
+    heard = Heard()
+    rx = Receiver(UdpTransport("127.0.0.1", 0, listen=True), small_decoder, listeners=[heard])
+    try:
+        enc = protocols.SerialEncoder()
+        other = protocols.Session(**{**vars(SESSION), "n_channels": 100, "n_stimuli": 1})
+        rx.feed(b"".join(enc.session_record(r) for r in (other, TABLE[1], SESSION, *TABLE)))
+        assert rx.session == SESSION and rx.stimuli == {0: "0deg_0.1N", 10: "A"}
+        assert "decoder expects 338 channels but the stream has 100" in str(heard.items[0])
+        assert heard.items[1:] == [other, SESSION]
+        rx.feed(enc.session_record(RUN_END))
+        assert rx.run_end == RUN_END and rx.run_ends == 1 and heard.items[-1] == RUN_END
+        t0 = time.monotonic()
+        rx.run(duration_s=5.0)  # returns at once: the board finished
+        assert time.monotonic() - t0 < 1.0
+    finally:
+        rx.transport.shutdown()
