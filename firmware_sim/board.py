@@ -544,8 +544,10 @@ class Board:
         ``on_second(board)`` is called every ``report_period_s`` of wall time (for live
         status), in a tick's spare time; when the board is overloaded and no tick has spare
         time it is called anyway once a call is one period overdue, so at least every
-        ``2 * report_period_s``. At the end the FIFO drains onto the wire (at most
-        ``drain_timeout_s``), a final status is sent and the link is closed. Raises
+        ``2 * report_period_s``. The run opens with the SESSION record and the stimulus
+        table; at the end the FIFO drains onto the wire (at most ``drain_timeout_s``), a
+        final status and the RUN_END record (DURATION, or :attr:`end_reason` when ``stop``
+        ended it; ERROR after an internal error) are sent and the link is closed. Raises
         :class:`TransportError` when the link goes away without ``reconnect``.
         """
         stop = stop or threading.Event()
