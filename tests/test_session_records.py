@@ -168,3 +168,28 @@ def test_serve_banner_states_its_snr() -> None:
     assert res.returncode == 0, res.stderr
     banner = res.stderr.splitlines()[0]
     assert "SNR 10 dB neuron noise" in banner, banner
+
+
+def test_an_internal_error_ends_the_run_with_run_end_error(pty_pair) -> None:
+    """A board whose tick fails still closes the account and says ERROR on the wire (a
+    receiver does not take the silence for a dead link), then raises the error."""
+
+    class FailingBoard(Board):
+        def tick(self) -> None:
+            if self.clock.index == 200:
+                raise RuntimeError("model blew up")
+            super().tick()
+
+    peer = PtyPeer(pty_pair.master)
+    try:
+        board = FailingBoard(BoardConfig(seed=2, rest_s=0.05),
+                             lambda: SerialTransport(pty_pair.path, baud=921600))
+        with pytest.raises(RuntimeError, match="model blew up"):
+            board.run(1.0)
+        assert peer.wait_for(lambda p: p.of(protocols.RunEnd), 10)
+    finally:
+        peer.close()
+    final = peer.of(protocols.Status)[-1]
+    assert peer.records[-2:] == [final, protocols.RunEnd(final.t_us,
+                                                        protocols.RunEndReason.ERROR)]
+    assert final.t_us == 200_000 and final.events_queued == 0
