@@ -16,7 +16,7 @@ from typing import Any
 import protocols
 from protocols import can_kernels as ck
 from protocols.capture import read_header, read_units
-from protocols.constants import KNOWN_VERSIONS
+from protocols.constants import KNOWN_VERSIONS, MAX_CAN_CLASS
 from skinhil.errors import ConfigError, ProtocolError
 from skinhil.recording.formats import recording_format
 
@@ -77,7 +77,7 @@ def _check_can_log(path: Path) -> Recording:
     n = 0
     first = last = 0.0
     for msg in _can_messages(path):
-        if msg.is_extended_id or not ck.CLS_ACK <= msg.arbitration_id >> 4 <= ck.CLS_WIDE:
+        if msg.is_extended_id or not ck.CLS_ACK <= msg.arbitration_id >> 4 <= MAX_CAN_CLASS:
             raise ProtocolError(f"CAN log '{path}' holds frame 0x{msg.arbitration_id:X}, "
                                 "which no skinhil board sends: record it with skinhil serve "
                                 "--record")
