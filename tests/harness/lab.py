@@ -70,9 +70,14 @@ def wait_for_stderr(proc: ServeProcess, text: str, timeout_s: float = 60.0) -> s
     raise AssertionError(f"no {text!r} on stderr:\n{proc.stderr}")
 
 
-def stop(listen: ServeProcess) -> None:
-    """Interrupt ``listen`` (Ctrl-C) if it runs; it must end cleanly: 130 after Ctrl-C (its
-    summary printed), 0 if it had ended by itself (or 130 if an earlier call stopped it)."""
+def stop(listen: ServeProcess, own_end_s: float = 10.0) -> None:
+    """Let ``listen`` end by itself, as it does at the board's RUN_END record (status 0), for
+    up to ``own_end_s``; else interrupt it (Ctrl-C): it must end cleanly, 130 with its
+    summary printed. (A Ctrl-C that lands while it is already exiting would find the
+    interpreter's default handler: waiting first keeps the two apart.)"""
+    end = time.monotonic() + own_end_s
+    while not listen.exited and time.monotonic() < end:
+        time.sleep(0.05)
     expected = (0, 130) if listen.exited else (130,)
     if not listen.exited:
         listen.interrupt()
