@@ -40,10 +40,12 @@ Finished = subprocess.CompletedProcess[str]
 
 
 def host_beside_serve(folder: Path, host_argv: Sequence[str], serve_args: Sequence[str],
-                      timeout_s: float = 120.0) -> tuple[Finished, Finished]:
+                      timeout_s: float = 120.0, own_end_s: float = 0.0
+                      ) -> tuple[Finished, Finished]:
     """Run ``host_argv`` on the host end (``{HOST}`` in it is replaced by the path) and
-    ``skinhil serve --port <board end> serve_args`` to completion, then stop the host with
-    SIGINT; (serve's result, the host's result), output as text."""
+    ``skinhil serve --port <board end> serve_args`` to completion, then give the host up to
+    ``own_end_s`` to end by itself (``skinhil listen`` does at the board's RUN_END record)
+    before stopping it with SIGINT; (serve's result, the host's result), output as text."""
     with linked_ptys(folder) as (board_end, host_end):
         argv = [str(host_end) if a == "{HOST}" else a for a in host_argv]
         host = subprocess.Popen(argv, cwd=RUN_DIR, env=serve_env(), stdout=subprocess.PIPE,
@@ -51,7 +53,10 @@ def host_beside_serve(folder: Path, host_argv: Sequence[str], serve_args: Sequen
         try:
             board = run_serve("--port", str(board_end), *serve_args, timeout_s=timeout_s)
             time.sleep(0.5)  # the host reads and answers what is left on the link
-            host.send_signal(signal.SIGINT)
+            try:
+                host.wait(timeout=own_end_s)
+            except subprocess.TimeoutExpired:
+                host.send_signal(signal.SIGINT)
             out, err = host.communicate(timeout=30)
         finally:
             if host.poll() is None:
