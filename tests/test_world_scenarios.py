@@ -74,9 +74,10 @@ def test_a_scenario_plays_through_serve_on_a_pty(path: Path, pty_pair, tmp_path:
     truth = next(x for x in lines if x["type"] == "truth")
     assert truth["ticks"] >= 250 and truth["peak_normal_n"] > 0  # kept by the board
     assert summary["sent"] == len(peer.events) > 0
-    # the link carries events, status and the stimuli's markers only: no contact truth
+    # the link carries events, status, the stimuli's markers and the session records (the
+    # stimulus table, the run's end) only: no contact truth
     kinds = {type(r).__name__ for r in peer.records}
-    assert kinds <= {"Sync", "Status", "Marker", "Ack"}
+    assert kinds <= {"Sync", "Status", "Marker", "Ack", "Session", "StimulusEntry", "RunEnd"}
     markers = {m.stimulus_id for m in peer.of(protocols.Marker)}
     assert markers == ({10} if path.stem == "edge_and_pins" else set())
     # the board plays what simulate computes offline for the same seed, event for event
