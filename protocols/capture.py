@@ -16,6 +16,7 @@ A file without its end record, or whose last record is cut short, is truncated.
 from __future__ import annotations
 
 import struct
+import zlib
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import BinaryIO
@@ -25,8 +26,10 @@ from protocols.errors import ProtocolError
 
 MAGIC = b"SKHLCAP\n"
 """First 8 bytes of every capture file."""
-FORMAT_VERSION = 1
-"""Version of the capture layout itself (not of the wire stream it holds)."""
+FORMAT_VERSION = 2
+"""Version of the capture layout itself (not of the wire stream it holds) that is written."""
+READ_FORMAT_VERSIONS = (1, 2)
+"""Versions read: 1 without a per-record check, 2 with a CRC-32 per record."""
 LINK_KINDS = {"serial": 1, "udp": 2}
 """Link kind codes of the header."""
 MAX_UNIT_BYTES = 1 << 20
@@ -36,8 +39,10 @@ END_LENGTH = 0xFFFFFFFF
 
 _HEADER = struct.Struct("<8sHBBIqQ")
 _RECORD = struct.Struct("<qqI")
+_CRC = struct.Struct("<I")
 HEADER_BYTES = _HEADER.size
-RECORD_HEADER_BYTES = _RECORD.size
+RECORD_HEADER_BYTES = _RECORD.size + _CRC.size
+"""Bytes of a record before its payload (format version 2)."""
 
 
 @dataclass(frozen=True)
@@ -50,6 +55,11 @@ class CaptureHeader:
     step_us: int
     start_ns: int
     format_version: int = FORMAT_VERSION
+
+    @property
+    def checked(self) -> bool:
+        """Whether each record carries a CRC-32 (format version 2 on)."""
+        return self.format_version >= 2
 
 
 @dataclass(frozen=True)
@@ -87,15 +97,17 @@ class CaptureWriter:
         if len(payload) > MAX_UNIT_BYTES:
             raise ProtocolError(f"a capture unit holds at most {MAX_UNIT_BYTES} bytes, "
                                 f"got {len(payload)}: write it in parts")
-        self._f.write(_RECORD.pack(host_ns, board_us, len(payload)))
+        head = _RECORD.pack(host_ns, board_us, len(payload))
+        self._f.write(head + _CRC.pack(zlib.crc32(payload, zlib.crc32(head))))
         self._f.write(payload)
         self.records += 1
         self._last_ns = host_ns
 
     def close(self, host_ns: int | None = None) -> None:
         """Write the end record (host time ``host_ns``, default the last unit's)."""
-        self._f.write(_RECORD.pack(self._last_ns if host_ns is None else host_ns,
-                                   self.records, END_LENGTH))
+        head = _RECORD.pack(self._last_ns if host_ns is None else host_ns, self.records,
+                            END_LENGTH)
+        self._f.write(head + _CRC.pack(zlib.crc32(head)))
         self._f.flush()
 
 
@@ -106,9 +118,10 @@ def read_header(f: BinaryIO) -> CaptureHeader:
         raise ProtocolError("not a skinhil capture file (no SKHLCAP header): give a file "
                             "written by skinhil serve --record")
     _, fmt, wire, link, step_us, start_ns, _ = _HEADER.unpack(raw)
-    if fmt != FORMAT_VERSION:
-        raise ProtocolError(f"capture format version {fmt}: this skinhil reads version "
-                            f"{FORMAT_VERSION}; use the skinhil that wrote it")
+    if fmt not in READ_FORMAT_VERSIONS:
+        raise ProtocolError(f"capture format version {fmt}: this skinhil reads versions "
+                            f"{', '.join(map(str, READ_FORMAT_VERSIONS))}; use the skinhil "
+                            "that wrote it")
     if wire not in KNOWN_VERSIONS:
         raise ProtocolError(f"capture of wire version {wire}: this skinhil reads versions "
                             f"{', '.join(map(str, KNOWN_VERSIONS))}; use the skinhil that "
@@ -121,20 +134,31 @@ def read_header(f: BinaryIO) -> CaptureHeader:
     return CaptureHeader(wire, kinds[link], step_us, start_ns, fmt)
 
 
-def read_units(f: BinaryIO) -> Iterator[CaptureUnit]:
-    """The units of ``f`` (positioned after the header), one at a time.
+def _damaged(count: int) -> ProtocolError:
+    return ProtocolError(f"capture damaged in record {count}: its CRC-32 does not match (the "
+                         "file changed since it was written); record it again")
+
+
+def read_units(f: BinaryIO, format_version: int = FORMAT_VERSION) -> Iterator[CaptureUnit]:
+    """The units of ``f`` (positioned after the header), one at a time; ``format_version``
+    as :func:`read_header` returned it (version 2 records carry a CRC-32, checked).
 
     Raises ProtocolError at a truncated or damaged record, when the end record is missing,
     or when data follow it (after yielding every whole unit before it).
     """
+    checked = format_version >= 2
+    head_bytes = RECORD_HEADER_BYTES if checked else _RECORD.size
     count = 0
     while True:
-        raw = f.read(RECORD_HEADER_BYTES)
-        if len(raw) < RECORD_HEADER_BYTES:
+        raw = f.read(head_bytes)
+        if len(raw) < head_bytes:
             raise ProtocolError(f"capture truncated after {count} records (no end record): "
                                 "the recording was cut short; record it again")
-        host_ns, board_us, n = _RECORD.unpack(raw)
+        host_ns, board_us, n = _RECORD.unpack(raw[:_RECORD.size])
+        crc = zlib.crc32(raw[:_RECORD.size])
         if n == END_LENGTH:
+            if checked and crc != _CRC.unpack(raw[_RECORD.size:])[0]:
+                raise _damaged(count)
             if board_us != count or f.read(1):
                 raise ProtocolError(f"capture damaged: its end record (counting {board_us} "
                                     f"records, {count} read) does not close the file")
@@ -145,6 +169,8 @@ def read_units(f: BinaryIO) -> Iterator[CaptureUnit]:
         if len(payload) < n:
             raise ProtocolError(f"capture truncated in record {count}: the recording was "
                                 "cut short; record it again")
+        if checked and zlib.crc32(payload, crc) != _CRC.unpack(raw[_RECORD.size:])[0]:
+            raise _damaged(count)
         count += 1
         yield CaptureUnit(host_ns, board_us, payload)
 

@@ -20,10 +20,14 @@ CLASSIC_SEQ_MOD = 16
 
 
 def _body(packet: bytes) -> np.ndarray | None:
+    """The body of ``packet`` without its CRC, or None if it does not COBS-decode to 4 to
+    ``MAX_BODY + 2`` bytes (a longer run is no packet, SPEC.md §6 rule 3)."""
     raw = np.frombuffer(packet.rstrip(b"\0"), dtype=np.uint8)
-    out = np.empty(raw.shape[0] + 8, dtype=np.uint8)
+    if raw.shape[0] > k.MAX_WIRE:
+        return None
+    out = np.empty(raw.shape[0] + 8, dtype=np.uint8)  # COBS decodes to fewer bytes
     n = cobs_decode(raw, 0, raw.shape[0], out)
-    return None if n < 4 else out[:n - 2]  # the body, without its CRC
+    return None if n < 4 or n - 2 > k.MAX_BODY else out[:n - 2]
 
 
 def serial_packet_seq(packet: bytes) -> int | None:
@@ -42,7 +46,8 @@ def serial_packet_with_seq(packet: bytes, seq: int) -> bytes:
     buf = np.empty(body.shape[0] + 2, dtype=np.uint8)
     buf[:body.shape[0]] = body
     buf[1] = seq % SERIAL_SEQ_MOD
-    out = np.empty(2 * k.MAX_WIRE, dtype=np.uint8)
+    m = body.shape[0] + 2
+    out = np.empty(m + m // 254 + 2, dtype=np.uint8)  # what frame_into needs at most
     n = frame_into(buf, body.shape[0], out, 0)
     return out[:n].tobytes()
 

@@ -37,7 +37,7 @@ SERVE_ARGS = ("--duration", "1.5", "--rest", "0.05", "--seed", "3", "--json")
 def capture_units(path: Path) -> tuple[CaptureHeader, list[bytes]]:
     with open(path, "rb") as f:
         header = read_header(f)
-        return header, [u.payload for u in read_units(f)]
+        return header, [u.payload for u in read_units(f, header.format_version)]
 
 
 def replay_json(proc: subprocess.CompletedProcess[str]) -> dict[str, Any]:
@@ -81,6 +81,37 @@ def test_capture_round_trip_and_every_truncation_is_refused() -> None:
         list(read_units(f))
     with pytest.raises(ProtocolError, match="wire version 5"):
         read_header(io.BytesIO(_capture_bytes(units, wire=5)))
+
+
+def test_every_bit_flip_in_a_capture_is_refused_as_damaged() -> None:
+    """Format version 2 carries a CRC-32 per record: a flipped bit anywhere after the header
+    (a payload, a record header, the end record) is refused, never replayed."""
+    raw = _capture_bytes([b"\x01\x02\x00", b"abc" * 20])
+    header = read_header(io.BytesIO(raw))
+    assert header.format_version == 2 and header.checked
+    for pos in range(32, len(raw)):
+        for bit in (0, 3, 7):
+            damaged = bytearray(raw)
+            damaged[pos] ^= 1 << bit
+            f = io.BytesIO(bytes(damaged))
+            read_header(f)
+            with pytest.raises(ProtocolError):
+                list(read_units(f, header.format_version))
+
+
+def test_a_version_1_capture_is_read_without_its_check() -> None:
+    """Captures of format version 1 (no CRC-32) are still read, and say they are unchecked."""
+    import struct
+
+    units = [b"\x01\x02\x00", b"xyz"]
+    raw = struct.pack("<8sHBBIqQ", b"SKHLCAP\n", 1, 3, 1, 100, 1_000, 0)
+    for k, u in enumerate(units):
+        raw += struct.pack("<qqI", 2_000 + k, 10 * k, len(u)) + u
+    raw += struct.pack("<qqI", 9_999, len(units), 0xFFFFFFFF)
+    f = io.BytesIO(raw)
+    header = read_header(f)
+    assert header.format_version == 1 and not header.checked
+    assert [u.payload for u in read_units(f, header.format_version)] == units
 
 
 # -- serial: a pty -------------------------------------------------------------------------

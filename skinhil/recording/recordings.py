@@ -8,6 +8,7 @@ version this skinhil does not read, or that mixes boards or CAN and CAN FD frame
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,6 +20,8 @@ from protocols.capture import read_header, read_units
 from protocols.constants import KNOWN_VERSIONS, MAX_CAN_CLASS
 from skinhil.errors import ConfigError, ProtocolError
 from skinhil.recording.formats import recording_format
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -48,8 +51,8 @@ class Recording:
                                                         bool(msg.is_fd))
             return
         with open(self.path, "rb") as f:
-            read_header(f)
-            for unit in read_units(f):
+            header = read_header(f)
+            for unit in read_units(f, header.format_version):
                 yield unit.host_ns * 1e-9, unit.payload
 
 
@@ -107,7 +110,7 @@ def _check_capture(path: Path) -> Recording:
     try:
         with open(path, "rb") as f:
             header = read_header(f)
-            for unit in read_units(f):
+            for unit in read_units(f, header.format_version):
                 first = unit.host_ns if count == 0 else first
                 last = unit.host_ns
                 count += 1
@@ -115,6 +118,10 @@ def _check_capture(path: Path) -> Recording:
         raise ProtocolError(f"'{path}': {exc}") from None
     if count == 0:
         raise ProtocolError(f"capture '{path}' holds no data: record a longer session")
+    if not header.checked:
+        log.warning("capture '%s' is of format version %d: its records carry no CRC-32, so "
+                    "damage to it is found only where the wire's own CRC finds it",
+                    path, header.format_version)
     return Recording(path, header.link, header.wire_version, count, (last - first) * 1e-9)
 
 
