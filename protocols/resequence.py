@@ -58,13 +58,16 @@ def can_seq_mod(frame: CanFrame) -> int:
 
 
 def can_frame_seq(frame: CanFrame) -> int:
-    """The sequence number of a board frame (byte 0: all of it on FD, bits 3..0 classic)."""
-    return frame.data[0] % can_seq_mod(frame)
+    """The sequence number of a board frame (byte 0: all of it on FD, bits 3..0 classic);
+    0 for a frame without data (no board frame: :func:`can_frame_with_seq` leaves it)."""
+    return frame.data[0] % can_seq_mod(frame) if frame.data else 0
 
 
 def can_frame_with_seq(frame: CanFrame, seq: int) -> CanFrame:
     """``frame`` with sequence number ``seq`` (modulo 256 FD, 16 classic); its other bits
-    unchanged."""
+    unchanged. A frame without data (no board frame) is returned as it is."""
+    if not frame.data:
+        return frame
     mod = can_seq_mod(frame)
     first = (frame.data[0] - frame.data[0] % mod) | (seq % mod)
     return CanFrame(frame.arbitration_id, bytes([first]) + frame.data[1:], frame.is_fd)

@@ -205,6 +205,44 @@ def test_commands_during_a_replay_are_nacked_and_the_stream_stays_whole(tmp_path
     assert '"commands": 3' in out
 
 
+def test_a_crafted_capture_with_an_overlong_run_replays_and_answers_a_ping(tmp_path) -> None:
+    """A capture holding a 2,295-byte COBS run (longer than any packet) between real packets:
+    the run is played as recorded (it is no packet, so it is not renumbered) and a PING
+    during the replay is answered. The run once overflowed the re-framing buffer of
+    protocols/resequence.py (the board aborted with ``malloc(): invalid size``)."""
+    enc = protocols.SerialEncoder()
+    crafted = (bytes([255] + [7] * 254) * 10)[:2_295] + b"\x00"
+    units = [enc.events(make_events(np.array([k * 10_000]), np.array([k])), (k + 1) * 10_000)
+             for k in range(30)]
+    units[3:3] = [crafted]
+    rec = tmp_path / "crafted.skcap"
+    rec.write_bytes(_capture_bytes(units, spacing_ns=20_000_000))
+    pair = PtyPair()
+    reader = PtyReader(pair.master)
+    host = protocols.SerialEncoder()
+    try:
+        proc = subprocess.Popen(serve_argv("--port", pair.path, "--replay", str(rec),
+                                           "--json"), cwd=RUN_DIR, env=serve_env(),
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        got = bytearray()
+        deadline = time.monotonic() + 60
+        while crafted not in got and time.monotonic() < deadline:
+            got += reader.take()
+            time.sleep(0.01)
+        pair.write(host.command(protocols.Command(token=77, opcode=protocols.CommandCode.PING)))
+        out, err = proc.communicate(timeout=60)
+        time.sleep(0.2)
+        got += reader.take()
+    finally:
+        reader.stop()
+        pair.close()
+    assert proc.returncode == 0, err
+    assert crafted in got
+    acks = [r for r in protocols.SerialDecoder().feed(bytes(got)).records
+            if isinstance(r, protocols.Ack)]
+    assert [(a.token, a.reason) for a in acks] == [(77, protocols.NackReason.REPLAYING)]
+
+
 def test_decisions_during_a_replay_are_scored_against_the_recorded_markers(tmp_path) -> None:
     """A decoder under test answers a replayed recording: its DECISIONs are stamped with the
     board time played so far and scored against the MARKERs played (right, duplicate and
