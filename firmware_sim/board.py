@@ -46,13 +46,14 @@ import numpy as np
 
 import protocols
 from firmware_sim.clock import TickClock, tighten_timer_slack
+from firmware_sim.command_budget import ANSWER_BURST, RECORDS_PER_TICK, CommandBudget
 from firmware_sim.counters import BoardCounters
 from firmware_sim.fifo import EventFifo
 from firmware_sim.link import BoardLink
 from protocols.versions import wire_version
 from skinhil.errors import ConfigError, TransportError
 from skinhil.model.geometry import PAPER_SIZE, MeshSize
-from skinhil.model.neurons import NoiseParams, check_threads
+from skinhil.model.neurons import MAX_SNR_DB, MIN_SNR_DB, NoiseParams, check_threads
 from skinhil.model.pipeline import SensorPipeline
 from skinhil.model.sensor import SkinSensor
 from skinhil.model.skin import SkinModel, SkinParams
@@ -188,6 +189,9 @@ class BoardSummary:
     """Bytes (serial) or frames (CAN) handed to the link."""
     wire_busy_s: float
     """Wire time (s) used."""
+    busy: int = 0
+    """Host commands refused BUSY, beyond the tick's budget
+    (:mod:`firmware_sim.command_budget`)."""
     scoreboard: dict[str, Any] = field(default_factory=dict)
     """The decoder under test's scoreboard (:meth:`DecisionScoreboard.summary`)."""
 
@@ -257,14 +261,18 @@ class Board:
         self.end_reason = protocols.RunEndReason.STOP
         """What the RUN_END record says when :meth:`run` ends on its ``stop`` event (the CLI
         sets SIGNAL when a signal set it)."""
+        self._statuses_owed = 0
+        """QUERY_STATUS answered this tick (their STATUS: after the first, at the end)."""
         self.link = self._make_link(open_link())
 
     # -- link ---------------------------------------------------------------------------
     def _make_link(self, transport: Transport[Any]) -> BoardLink:
-        return BoardLink(transport, self.config.board_id,
+        link = BoardLink(transport, self.config.board_id,
                          fd=bool(getattr(transport, "fd", False)),
                          allowance_s=self.config.tick_s, step_us=self._dt_us,
                          n_channels=self.sensor.model.n_springs)
+        self._budget = CommandBudget(self.config.tick_s, link.answer_wire_s)
+        return link
 
     def _lose_link(self, exc: Exception) -> None:
         self.link_losses += 1
@@ -391,8 +399,8 @@ class Board:
                     self._start_scene(int(cmd.arg), now_s)
             elif op == codes.SET_SNR:
                 snr = float(cmd.arg)
-                if math.isnan(snr) or snr == -math.inf:
-                    reason = why.BAD_ARGUMENT
+                if not (snr == math.inf or MIN_SNR_DB <= snr <= MAX_SNR_DB):
+                    reason = why.BAD_ARGUMENT  # documented range: SPEC.md §3.6
                 else:
                     (self.sensor if self.pipeline is None else self.pipeline).set_snr(snr)
                     self.snr_db = snr
@@ -419,6 +427,49 @@ class Board:
                 self.touch.start(now_s)
             else:
                 self.touch.stop()
+
+    def _execute(self, link: BoardLink, cmd: Any, arrival_us: int | None = None) -> None:
+        """Execute a host command and queue its ACK (a QUERY_SESSION's SESSION after it)."""
+        link.queue_record(self.handle(cmd))
+        if (not isinstance(cmd, protocols.Decision)
+                and cmd.opcode == protocols.CommandCode.QUERY_SESSION):
+            self.queue_session(link, protocols.SessionReason.REQUEST)
+
+    def _refuse_busy(self, link: BoardLink, keys: list[tuple[int, int]], n: int) -> None:
+        """``n`` commands beyond the tick's budget (:mod:`firmware_sim.command_budget`), the
+        first of them (token, opcode) ``keys``: not executed, counted (``busy``, ``nacks``,
+        ``rx_errors``); NACKed BUSY in order while the answer bucket has room."""
+        c = self.counters
+        c.commands += n
+        c.busy += n
+        c.nacks += n
+        c.rx_errors += n
+        for token, opcode in keys:
+            if not self._budget.answer_busy():
+                return
+            link.queue_record(protocols.Ack(token=token, opcode=opcode, ok=False,
+                                            reason=protocols.NackReason.BUSY))
+
+    def _answer_query(self, link: BoardLink, cmd: Any, t_end_us: int) -> None:
+        """Execute and ACK a QUERY_STATUS (never refused): the tick's first is followed by a
+        STATUS at once, any later one by a STATUS at the end of the tick (two at most)."""
+        self._budget.admit_query()
+        link.queue_record(self.handle(cmd))
+        self._statuses_owed += 1
+        if self._statuses_owed == 1:
+            self._fill(link, t_end_us)
+            link.queue_record(self.status())
+
+    def _refuse_excess(self, link: BoardLink, excess: np.ndarray, t_end_us: int) -> None:
+        """The commands the link did not build into records (past :data:`RECORDS_PER_TICK`):
+        each QUERY_STATUS answered, the others refused BUSY."""
+        query = excess["opcode"] == protocols.CommandCode.QUERY_STATUS
+        for token in excess["token"][query].tolist():
+            self._answer_query(link, protocols.Command(token, protocols.CommandCode.QUERY_STATUS),
+                               t_end_us)
+        rest = excess[~query]
+        if rest.shape[0]:
+            self._refuse_busy(link, rest[:int(ANSWER_BURST)].tolist(), rest.shape[0])
 
     def _score(self, decision: Any) -> Any:
         """Stamp a DECISION with the board time and score it; its NACK reason (NONE when
@@ -484,16 +535,24 @@ class Board:
     def _serve_link(self, t_end_us: int) -> None:
         link = self.link
         assert link is not None
-        commands = link.poll_commands()
+        commands, excess = link.poll_commands(RECORDS_PER_TICK)
         self.counters.rx_errors += link.take_rx_errors()
+        budget = self._budget
+        budget.new_tick()
+        self._statuses_owed = 0
         for cmd in commands:
-            ack = self.handle(cmd)
-            link.queue_record(ack)
-            if cmd.opcode == protocols.CommandCode.QUERY_STATUS:
-                self._fill(link, t_end_us)
-                link.queue_record(self.status())
-            elif cmd.opcode == protocols.CommandCode.QUERY_SESSION:
-                self.queue_session(link, protocols.SessionReason.REQUEST)
+            if (not isinstance(cmd, protocols.Decision)
+                    and cmd.opcode == protocols.CommandCode.QUERY_STATUS):
+                self._answer_query(link, cmd, t_end_us)
+            elif budget.admit():
+                self._execute(link, cmd)
+            else:
+                self._refuse_busy(link, [(cmd.token, int(cmd.opcode))], 1)
+        if excess.shape[0]:
+            self._refuse_excess(link, excess, t_end_us)
+        if self._statuses_owed > 1:  # one more STATUS answers the later QUERY_STATUS
+            self._fill(link, t_end_us)
+            link.queue_record(self.status())
         if t_end_us >= self._next_status_us and link.backlog_s() < self.config.tx_target_s:
             # the heartbeat waits while the link is saturated: it never piles up
             self._fill(link, t_end_us)
@@ -676,4 +735,4 @@ class Board:
             markers_sent=c.markers_sent, markers_dropped=c.markers_dropped,
             units_sent=self._units_sent + (link.units_sent if link else 0),
             wire_busy_s=self._wire_busy_s + (link.pacer.busy_s if link else 0.0),
-            scoreboard=self.scoreboard.summary())
+            busy=c.busy, scoreboard=self.scoreboard.summary())

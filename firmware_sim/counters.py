@@ -41,6 +41,9 @@ class BoardCounters:
     the host's previous sequence number, or not commands at all."""
     commands: int = 0
     nacks: int = 0
+    busy: int = 0
+    """Host commands refused as BUSY, beyond the tick's budget (also in ``nacks`` and
+    ``rx_errors``; :mod:`firmware_sim.command_budget`)."""
     markers_sent: int = 0
     """Ground-truth markers encoded into the transmit queue."""
     markers_dropped: int = 0

@@ -20,6 +20,7 @@ import numpy as np
 
 import protocols
 from firmware_sim.pacing import WirePacer
+from protocols.records import COMMAND_KEY_DTYPE
 from protocols.warm_up import exercise_codecs
 from skinhil.transports import Transport
 
@@ -66,10 +67,17 @@ class BoardLink:
         self.rx_errors = 0
         """Host units refused so far (SPEC.md §3.3, ``rx_errors``): packets or frames that fail
         the CRC or the layout (``crc_errors`` + ``malformed``), repeated host sequence numbers
-        (``duplicates``: dropped unanswered), records that are not commands, and data the
-        decoder rejected by raising (a correct decoder never does). NACKs are the board's."""
+        (``duplicates``: dropped unanswered), good packets or frames that are not commands (a
+        host's SYNC or EVENTS), and data the decoder rejected by raising (a correct decoder
+        never does). NACKs are the board's."""
         self._rx_reported = 0
         self._rx_taken = 0
+        self._rx_units = 0
+        sample = type(self.encoder)(**self._codec_args).ack(
+            protocols.Ack(token=0xFFFF, opcode=0xFF, ok=False, reason=0xFF))
+        self.answer_wire_s: float = (transport.wire_seconds(sample) if self.is_can
+                                     else len(sample) * self._byte_s)
+        """Wire time (s) of one ACK on this link (:mod:`firmware_sim.command_budget`)."""
 
     def warm_up(self, status: Any) -> None:
         """Run every encode and decode path once on throwaway codecs, off the clock
@@ -198,26 +206,32 @@ class BoardLink:
             time.sleep(left)
 
     # -- receive ------------------------------------------------------------------------
-    def poll_commands(self) -> list[Any]:
+    def poll_commands(self, max_commands: int | None = None) -> tuple[list[Any], np.ndarray]:
         """Host commands and decisions (:class:`protocols.Command`, :class:`protocols.Decision`)
-        received since the last call (never blocks)."""
+        received since the last call (never blocks), at most ``max_commands`` of them as
+        records; the commands past them as token and opcode only
+        (:data:`protocols.records.COMMAND_KEY_DTYPE`, see :class:`protocols.DecodeResult`)."""
+        none = np.empty(0, dtype=COMMAND_KEY_DTYPE)
         data = self.transport.recv(timeout=0)
         if not data:
-            return []
+            return [], none
         try:
-            res = self.decoder.feed(data)
+            res = self.decoder.feed(data, max_commands)
         except (ValueError, TypeError, KeyError) as exc:  # a decoder must not raise; be safe
             log.warning("undecodable host data dropped: %s", exc)
             self.rx_errors += 1
-            return []
+            return [], none
         c = self.decoder.counters
         refused = c.crc_errors + c.malformed + c.duplicates
         self.rx_errors += refused - self._rx_reported
         self._rx_reported = refused
         commands = [r for r in res.records
                     if isinstance(r, (protocols.Command, protocols.Decision))]
-        self.rx_errors += len(res.records) - len(commands)
-        return commands
+        # every good unit that is no command (a host's SYNC, EVENTS, STATUS, ...) is refused
+        n_commands = len(commands) + res.excess_commands.shape[0]
+        self.rx_errors += max(0, c.frames_ok - self._rx_units - n_commands)
+        self._rx_units = c.frames_ok
+        return commands, res.excess_commands
 
     def take_rx_errors(self) -> int:
         """Host units refused since the last call (see :attr:`rx_errors`)."""

@@ -32,6 +32,7 @@ from protocols.event_input import E_SIZE, check_step_us, event_steps, idle_sync_
 from protocols.events import make_events
 from protocols.record_fields import check_uint, command_fields, command_record, enum_or_int
 from protocols.records import (
+    COMMAND_KEY_DTYPE,
     Ack,
     CanFrame,
     Command,
@@ -278,8 +279,9 @@ class CanDecoder:
         self._group_seq = -1
         self._session = Reassembly(k.FD_SEQ_MOD if self.fd else k.CLASSIC_SEQ_MOD)
 
-    def feed(self, frames: Iterable[CanFrame]) -> DecodeResult:
-        """Decode a batch of received frames (in bus order)."""
+    def feed(self, frames: Iterable[CanFrame], max_records: int | None = None) -> DecodeResult:
+        """Decode a batch of received frames (in bus order); with ``max_records``, build at
+        most that many records (the rest as :class:`DecodeResult` says)."""
         frames = list(frames)
         if not frames:
             return DecodeResult.empty()
@@ -292,13 +294,21 @@ class CanDecoder:
         refuse_version(int(self._st[k.D_VERSIONS]), self.versions)
         events = make_events(t[:ne], a[:ne])
         records: list[Record] = []
-        for r in range(nr):
-            f, cls, decoded, ref_us = (int(v) for v in rec_ix[r])
+        built = nr if max_records is None else min(nr, max(0, int(max_records)))
+        for f, cls, decoded, ref_us in rec_ix[:built].tolist():
             record = self._record(cls, datas[f], decoded, ref_us)
             if record is not None:
                 records.append(record)
         self._sync_counters()
-        return DecodeResult(events, records)
+        if built == nr:
+            return DecodeResult(events, records)
+        rest = rec_ix[built:nr]
+        command = rest[:, 1] == k.CLS_COMMAND
+        at = (np.cumsum(lens) - lens)[rest[command, 0]]  # each frame's first byte in blob
+        keys = np.empty(at.shape[0], dtype=COMMAND_KEY_DTYPE)
+        keys["token"] = blob[at + 2] | blob[at + 3].astype(np.uint16) << 8  # _COMMAND's layout
+        keys["opcode"] = blob[at + 1]
+        return DecodeResult(events, records, keys, int(command.shape[0] - at.shape[0]))
 
     def _record(self, cls: int, data: bytes, decoded: int, ref_us: int) -> Record | None:
         if cls == k.CLS_STATUS:

@@ -227,6 +227,9 @@ class Decision:
 Record = Status | Marker | Command | Decision | Ack | Session | StimulusEntry | RunEnd
 """Any non-event record a decoder returns."""
 
+COMMAND_KEY_DTYPE = np.dtype([("token", "<u2"), ("opcode", "u1")])
+"""Token and opcode of a COMMAND unit not built into a record (:class:`DecodeResult`)."""
+
 
 @dataclasses.dataclass
 class LinkCounters:
@@ -280,10 +283,20 @@ class LinkCounters:
 
 @dataclasses.dataclass(frozen=True)
 class DecodeResult:
-    """What one ``feed`` call produced: events (``EVENT_DTYPE``, time order) and records."""
+    """What one ``feed`` call produced: events (``EVENT_DTYPE``, time order) and records.
+
+    A ``feed`` given ``max_records`` builds at most that many records; the COMMAND units past
+    them come back in ``excess_commands`` only as their token and opcode
+    (:data:`COMMAND_KEY_DTYPE`, stream order), and other records past them are counted in
+    ``records_skipped``: a receiver flooded with units pays a compiled pass for them, not a
+    Python object each.
+    """
 
     events: np.ndarray
     records: list[Record]
+    excess_commands: np.ndarray = dataclasses.field(
+        default_factory=lambda: np.empty(0, dtype=COMMAND_KEY_DTYPE))
+    records_skipped: int = 0
 
     @staticmethod
     def empty() -> DecodeResult:

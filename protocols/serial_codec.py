@@ -29,6 +29,7 @@ from protocols.events import make_events
 from protocols.framing import frame_into
 from protocols.record_fields import check_uint, command_fields, command_record, enum_or_int
 from protocols.records import (
+    COMMAND_KEY_DTYPE,
     Ack,
     Command,
     CommandCode,
@@ -197,8 +198,9 @@ class SerialDecoder:
         self._c = np.zeros(k.C_SIZE, dtype=np.int64)
         self._status = StatusTracker()
 
-    def feed(self, data: bytes) -> DecodeResult:
-        """Decode every complete packet in the bytes received so far."""
+    def feed(self, data: bytes, max_records: int | None = None) -> DecodeResult:
+        """Decode every complete packet in the bytes received so far; with ``max_records``,
+        build at most that many records (the rest as :class:`DecodeResult` says)."""
         pending = self._pending
         pending += data
         end = pending.rfind(0)
@@ -217,13 +219,21 @@ class SerialDecoder:
         refuse_version(int(self._st[k.D_VERSIONS]), self.versions)
         events = make_events(t[:ne], a[:ne])
         records: list[Record] = []
-        for r in range(nr):
-            off, m, decoded = (int(v) for v in rec_ix[r])
+        built = nr if max_records is None else min(nr, max(0, int(max_records)))
+        for off, m, decoded in rec_ix[:built].tolist():
             record = self._record(rec[off:off + m].tobytes(), decoded)
             if record is not None:
                 records.append(record)
         self._sync_counters()
-        return DecodeResult(events, records)
+        if built == nr:
+            return DecodeResult(events, records)
+        off = rec_ix[built:nr, 0]
+        command = rec[off] >> 5 == k.T_COMMAND
+        at = off[command]
+        keys = np.empty(at.shape[0], dtype=COMMAND_KEY_DTYPE)
+        keys["token"] = rec[at + 2] | rec[at + 3].astype(np.uint16) << 8  # _COMMAND's layout
+        keys["opcode"] = rec[at + 4]
+        return DecodeResult(events, records, keys, int(command.shape[0] - at.shape[0]))
 
     def _record(self, body: bytes, decoded: int) -> Record | None:
         typ, low = body[0] >> 5, body[0] & 0x1F

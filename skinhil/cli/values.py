@@ -16,6 +16,7 @@ from collections.abc import Callable
 
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import MeshSize, format_size, parse_size, spring_count
+from skinhil.model.neurons import check_snr_db
 
 MAX_SEED = 2**63 - 1
 """Largest noise seed (numpy's SeedSequence takes any non-negative integer; 63 bits keep it
@@ -68,14 +69,16 @@ def real(lo: float, hi: float, unit: str, lo_open: bool = False) -> Callable[[st
 
 
 def snr_value(text: str) -> float:
-    """argparse type: an SNR in dB, or 'inf' for no noise."""
+    """argparse type: an SNR in dB (``MIN_SNR_DB``..``MAX_SNR_DB`` of
+    :mod:`skinhil.model.neurons`), or 'inf' for no noise."""
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a number of dB (or 'inf')") from None
-    if math.isnan(value) or value == -math.inf:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number of dB (or 'inf')")
-    return value
+    try:
+        return check_snr_db(value)
+    except ConfigError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def cores_value(text: str) -> tuple[int, ...]:

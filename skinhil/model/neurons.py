@@ -135,14 +135,24 @@ class IzhikevichParams:
                               f"v_peak_mv ({self.c_mv} >= {self.v_peak_mv})")
 
 
+MIN_SNR_DB = -20.0
+"""Lowest SNR (dB) a neuron noise takes: σ = 10 mV per √ms (P_ref 1 mV²), every neuron near
+its highest rate already. Below it the noise only grows numbers (at −1000 dB σ = 1e50 mV),
+never information."""
+MAX_SNR_DB = 200.0
+"""Highest finite SNR (dB): σ = 1e-10 mV per √ms, no spike moved; give inf for no noise."""
+
+
 def check_snr_db(snr_db: float) -> float:
-    """Validate an SNR in dB (any real number, or +inf for no noise) and return it as float."""
+    """Validate an SNR in dB (:data:`MIN_SNR_DB` .. :data:`MAX_SNR_DB`, or +inf for no noise)
+    and return it as float."""
     try:
         value = float(snr_db)
     except (TypeError, ValueError):
         raise ConfigError(f"snr_db must be a number of dB or inf, got {snr_db!r}") from None
-    if math.isnan(value) or value == -math.inf:
-        raise ConfigError(f"snr_db must be a number of dB or inf, got {snr_db!r}")
+    if value != math.inf and not MIN_SNR_DB <= value <= MAX_SNR_DB:
+        raise ConfigError(f"SNR {snr_db!r} dB is outside {MIN_SNR_DB:g}..{MAX_SNR_DB:g} dB: "
+                          "give a value in that range, or inf for no noise")
     return value
 
 
