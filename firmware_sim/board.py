@@ -237,6 +237,8 @@ class Board:
                  model.size[0], model.size[1], model.n_springs, config.threads)
         if scene is not None and file_schedule is None:
             file_schedule = Schedule(())  # contacts only
+        if file_schedule is not None:
+            model.check_schedule(file_schedule)  # no force on a fixed mass, lost unsaid
         self.timeline = Timeline(config.dt_s, file_schedule, config.seed, config.rest_s,
                                  config.schedule_mode, model.size)
         self._start_scene(config.schedule_mode, 0.0)
@@ -390,6 +392,9 @@ class Board:
             elif op == codes.STOP:
                 self.running = False
             elif op == codes.SET_STIMULUS:
+                stim = self.timeline.catalog.get(int(cmd.arg))
+                if stim is not None:  # a force on a fixed mass: BAD_ARGUMENT
+                    self.sensor.model.check_stimulus(stim)
                 if not self.timeline.start_stimulus(int(cmd.arg), now_s):
                     reason = why.UNKNOWN_STIMULUS
             elif op == codes.SET_SCHEDULE:
@@ -408,7 +413,7 @@ class Board:
                 pass  # QUERY_STATUS / QUERY_SESSION: the record follows the ACK
             else:
                 reason = why.UNKNOWN_COMMAND
-        except (ValueError, TypeError, OverflowError) as exc:
+        except (ValueError, TypeError, OverflowError, ConfigError) as exc:
             log.info("command %r rejected: %s", cmd, exc)
             reason = why.BAD_ARGUMENT
         except Exception as exc:  # a bad command never stops the board

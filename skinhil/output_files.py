@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import contextlib
 import os
+import signal
 import tempfile
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -68,11 +70,13 @@ def atomic_path(path: Path) -> Iterator[Path]:
     The file renamed over ``path`` has mode ``0o666`` less the umask.
     """
     path = check_output_path(path)
-    fd, name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix}",
-                                dir=path.parent)
-    os.close(fd)
-    tmp = Path(name)
+    tmp: Path | None = None
     try:
+        with _signals_held():  # a stop signal arriving while the file is made: handled after
+            fd, name = tempfile.mkstemp(prefix=f".{path.stem}.",
+                                        suffix=f".partial{path.suffix}", dir=path.parent)
+            os.close(fd)
+            tmp = Path(name)
         yield tmp
         if tmp.exists():
             with open(tmp, "rb+") as f:
@@ -83,7 +87,22 @@ def atomic_path(path: Path) -> Iterator[Path]:
         raise ConfigError(f"cannot write '{path}': {exc.strerror or exc} — free some space "
                           "or choose another folder") from None
     finally:
-        tmp.unlink(missing_ok=True)
+        if tmp is not None:
+            tmp.unlink(missing_ok=True)
+
+
+@contextlib.contextmanager
+def _signals_held() -> Iterator[None]:
+    """SIGINT and SIGTERM held back (on the main thread) while the body runs: the temporary
+    file of :func:`atomic_path` exists only inside the ``try`` that removes it."""
+    main = threading.current_thread() is threading.main_thread()
+    held = {signal.SIGINT, signal.SIGTERM}
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, held) if main else None
+    try:
+        yield
+    finally:
+        if old is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 def write_text(path: Path, text: str) -> Path:

@@ -41,6 +41,7 @@ def _run(argv: list[str]) -> int:
     import importlib
     import logging
 
+    from skinhil.cli.distinct_paths import check_distinct_paths
     from skinhil.cli.parser import ERROR_STATUS, build_parser, error_line
     from skinhil.errors import SkinhilError
 
@@ -50,6 +51,7 @@ def _run(argv: list[str]) -> int:
         signals.resume()  # start-up done: a Ctrl-C during the imports stops here
         level = logging.WARNING - 10 * min(args.verbose, 2)
         logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+        check_distinct_paths(args)
         module = importlib.import_module(f"skinhil.cli.{args.command}")
         status = int(module.run(args) or 0)
     except SkinhilError as exc:

@@ -4,9 +4,12 @@ real run starts at once (:mod:`skinhil.cli.kernel_notice` says when a run has to
 from __future__ import annotations
 
 import argparse
+import os
 import time
 
+from protocols import kernel_cache
 from skinhil.cli.kernel_notice import cache_is_cold
+from skinhil.errors import ConfigError
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -28,6 +31,10 @@ def run(args: argparse.Namespace) -> int:
     from skinhil.model.psp import PSPFilterBank
     from skinhil.transports import SerialTransport
 
+    where = kernel_cache.CACHE_DIR
+    if not (where.is_dir() and os.access(where, os.W_OK | os.X_OK)):
+        raise ConfigError(f"the kernel cache '{where}' cannot be written — set NUMBA_CACHE_DIR "
+                          "to a writable folder (without a cache every run compiles again)")
     t0 = time.monotonic()
     board = Board(BoardConfig(), lambda: SerialTransport("loop://", 921600), None,
                   lambda _: None)
@@ -35,6 +42,9 @@ def run(args: argparse.Namespace) -> int:
     events = make_events(np.arange(8, dtype=np.int64) * 100, np.arange(8))
     SerialDecoder().feed(SerialEncoder().events(events, 1000))
     PSPFilterBank(4, 1e-3).step_block(np.zeros((2, 4)))
-    cold, where = cache_is_cold()
-    print(f"kernels compiled and cached in {where} in {time.monotonic() - t0:.1f} s")
-    return 1 if cold else 0
+    cold, cached = cache_is_cold()
+    if cold:
+        raise ConfigError(f"the kernels compiled but were not cached in '{cached}' — set "
+                          "NUMBA_CACHE_DIR to a writable folder")
+    print(f"kernels compiled and cached in {cached} in {time.monotonic() - t0:.1f} s")
+    return 0

@@ -49,6 +49,9 @@ from skinhil.receiver.training import train_decoder
 from skinhil.transports import PtyMasterTransport
 
 DEFAULT_DURATION_S = 20.0
+MIN_DURATION_S = 1.0
+"""Shortest demo (s of board time): a stimulus and its rest, so that there is something to
+decide."""
 MAX_DURATION_S = 3600.0
 """Longest demo (s of board time)."""
 DEMO_REST_S = DEFAULT_REST_S
@@ -73,9 +76,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--snr-db", type=snr_value, default=DECODE_SNR_DB, metavar="DB",
                    help=f"neuron noise SNR in dB, 'inf' for none (default: {DECODE_SNR_DB:g})")
     p.add_argument("--duration", dest="duration_s",
-                   type=real(0, MAX_DURATION_S, "seconds", lo_open=True),
+                   type=real(MIN_DURATION_S, MAX_DURATION_S, "seconds"),
                    default=DEFAULT_DURATION_S,
-                   metavar="SECONDS", help=f"board time to play (default: "
+                   metavar="SECONDS", help=f"board time to play, {MIN_DURATION_S:g}.."
+                                           f"{MAX_DURATION_S:g} (default: "
                                            f"{DEFAULT_DURATION_S:g})")
     p.add_argument("--seed", type=seed_value, default=1,
                    help="board noise and schedule seed, 0..2^63-1 (default: 1)")
@@ -121,6 +125,14 @@ def cached_model(snr_db: float, quiet: bool, baud: int, seed: int) -> Path:
     path = cache_dir() / f"{stem}-{source_hash()}.npz"
     if path.exists():
         return path
+    try:  # before the training, not after it
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if not os.access(path.parent, os.W_OK):
+            raise PermissionError(13, "Permission denied")
+    except OSError as exc:
+        raise ConfigError(f"the demo's model cache '{path.parent}' cannot be written "
+                          f"({exc.strerror or exc}) — set XDG_CACHE_HOME to a writable folder "
+                          "or give --model FILE") from None
     print(f"training the demo model at {snr_db:g} dB (first use; cached in {path.parent})",
           flush=True)
     with board_warming(baud, snr_db, seed):

@@ -27,7 +27,7 @@ from skinhil.cli.lab_outputs import (
 from skinhil.cli.nwb_options import add_nwb_args, nwb_metadata
 from skinhil.cli.options import add_size_option
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
-from skinhil.cli.values import MAX_DURATION_S, integer, real
+from skinhil.cli.values import MAX_DURATION_S, integer, real, udp_allow_value
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import build_mesh, spring_count
 from skinhil.model.skin import SkinParams
@@ -74,10 +74,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="send each decision back to the board as a DECISION, so the board "
                         "scores this receiver as a decoder under test (serve --score)")
     p.add_argument("--udp-max-sources", type=integer(1, 4096, "count"),
-                   default=MAX_UDP_SOURCES, metavar="N",
+                   default=None, metavar="N",
                    help=f"with --udp: decode at most N sending boards; datagrams of further "
                         f"sources are refused and counted (default: {MAX_UDP_SOURCES})")
-    p.add_argument("--udp-allow", type=lambda text: [h for h in text.split(",") if h],
+    p.add_argument("--udp-allow", type=udp_allow_value,
                    metavar="HOST[:PORT][,...]",
                    help="with --udp: decode only these senders (an address, or address:port); "
                         "datagrams of others are refused and counted")
@@ -260,6 +260,11 @@ def run_bus(args: argparse.Namespace, bus: BusReceiver, names: dict[int, str]) -
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.udp is None and (args.udp_allow is not None or args.udp_max_sources is not None):
+        raise ConfigError("--udp-allow and --udp-max-sources choose the senders of a UDP "
+                          "link: use them with --udp")
+    if args.udp_max_sources is None:
+        args.udp_max_sources = MAX_UDP_SOURCES
     several = len(args.board_ids) > 1 or args.udp is not None
     if several and args.port is not None:
         raise ConfigError("a serial port carries one board: give one --board-id")
@@ -270,8 +275,8 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError("--answer sends one board its decisions: use it with one board on "
                           "--port or --can")
     record = None if args.record is None else check_output_path(args.record, (".npz", ".nwb"))
-    args.nwb_meta = nwb_metadata(args, record is not None and record.suffix == ".nwb")
-    if record is not None and record.suffix == ".nwb":
+    args.nwb_meta = nwb_metadata(args, record is not None and record.suffix.lower() == ".nwb")
+    if record is not None and record.suffix.lower() == ".nwb":
         require_pynwb()
     check_lab_outputs(args, args.size)
     decoder = load_window_decoder(args.model, n_channels=spring_count(args.size))
@@ -336,7 +341,7 @@ def save_session(args: argparse.Namespace, recorder: SessionRecorder, names: dic
                  info: dict[str, Any], receiver: Receiver) -> None:
     """Write the recorded session to --record: NWB for .nwb (its start time the board's
     start on the wall clock, by the receiver's clock model), else .npz."""
-    if args.record.suffix == ".nwb":
+    if args.record.suffix.lower() == ".nwb":
         wall = receiver.clock.wall_time_s(0)
         start = None if wall is None else datetime.datetime.fromtimestamp(wall, datetime.UTC)
         p = SkinParams(size=args.size)

@@ -54,6 +54,8 @@ MAX_TICK_S = 1.0
 """Longest publish tick (s)."""
 MAX_FIFO_EVENTS = 1 << 22
 """Largest event FIFO (4,194,304 events, 48 MB)."""
+MAX_RESPONSE_WINDOW_S = 3600.0
+"""Longest response window (s) of the decoder under test's scoreboard."""
 STATUS_PERIOD_RANGE_S = (1e-3, 60.0)
 """Status/heartbeat periods (s) the board takes."""
 
@@ -118,10 +120,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                         "itself): with the receiver or the decoder under test on another "
                         "core, no other program takes turns on the board's; as many cores "
                         "as --threads")
-    p.add_argument("--response-window", dest="response_window_s", type=float,
+    p.add_argument("--response-window", dest="response_window_s",
+                   type=real(0, MAX_RESPONSE_WINDOW_S, "seconds", lo_open=True),
                    default=DEFAULT_RESPONSE_WINDOW_S, metavar="SECONDS",
                    help="score the decoder under test: a DECISION answers the latest stimulus "
-                        "onset before it if it arrives within this time after it (default: "
+                        "onset before it if it arrives within this time after it, "
+                        f"0..{MAX_RESPONSE_WINDOW_S:g} (default: "
                         f"{DEFAULT_RESPONSE_WINDOW_S:g}; protocols/SPEC.md §3.5.2)")
     p.add_argument("--score", type=Path, metavar="FILE",
                    help="write the decoder under test's scoreboard here at the end (JSON, "

@@ -81,13 +81,14 @@ def _scenario(args: argparse.Namespace) -> Scenario:
 
 def run(args: argparse.Namespace) -> int:
     out = check_output_path(args.out, OUT_SUFFIXES)
-    nwb_meta = nwb_metadata(args, out.suffix == ".nwb")
-    if out.suffix == ".nwb":
+    nwb_meta = nwb_metadata(args, out.suffix.lower() == ".nwb")
+    if out.suffix.lower() == ".nwb":
         require_pynwb()
     scenario = _scenario(args)
     schedule, scene = scenario.schedule, scenario.scene
     duration = args.duration_s if args.duration_s is not None else scenario.duration_s + 0.25
     model = model_from_args(args)
+    model.check_schedule(schedule)  # a force on a fixed mass would be lost without a word
     n_steps = int(round(duration / args.dt_s))
     if args.forces:
         check_memory(n_steps * model.n_springs * 4, f"the spring forces of {duration:g} s "
@@ -137,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
             "contacts": [c.name for c in scene.contacts] if scene else [],
             "max_strain": strain,
             "params": {k: v for k, v in vars(model.params).items()}}
-    if out.suffix == ".nwb":
+    if out.suffix.lower() == ".nwb":
         write_simulation(out, mesh=model.mesh, schedule=schedule, events=ev,
                          forces_n=forces if args.forces else None, dt_s=args.dt_s,
                          description=f"skinhil simulate: {json.dumps(meta)}",

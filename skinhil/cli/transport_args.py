@@ -14,6 +14,7 @@ import argparse
 from skinhil.cli.values import integer
 from skinhil.errors import ConfigError
 from skinhil.transports import CanTransport, SerialTransport, Transport, UdpTransport
+from skinhil.transports.base import MAX_BAUD, MIN_BAUD
 from skinhil.transports.udp import DEFAULT_UDP_BITRATE, parse_address
 
 DEFAULT_BAUD = 921600
@@ -26,8 +27,8 @@ UDP_LISTEN_HOST = "127.0.0.1"
 
 MAX_BITRATE = 100_000_000
 """Highest baud rate or bitrate (bits/s) an option takes; each link checks its own."""
-baud_value = integer(1, MAX_BITRATE, "baud rate")
-"""argparse type: a serial baud rate (bits/s)."""
+baud_value = integer(MIN_BAUD, MAX_BAUD, "baud rate")
+"""argparse type: a serial baud rate (bits/s), the range the serial transport takes."""
 bitrate_value = integer(1, MAX_BITRATE, "bitrate")
 """argparse type: a CAN or UDP bitrate (bits/s)."""
 
@@ -54,7 +55,8 @@ def add_transport_args(parser: argparse.ArgumentParser, udp_listen: bool = False
         which.add_argument("--udp", metavar="HOST:PORT",
                            help="send the serial packet stream in UDP datagrams to HOST:PORT")
     group.add_argument("--baud", type=baud_value, default=DEFAULT_BAUD, metavar="N",
-                       help=f"serial baud rate, bits/s, 8N1 (default: {DEFAULT_BAUD})")
+                       help=f"serial baud rate, bits/s, 8N1, {MIN_BAUD}..{MAX_BAUD} (default: "
+                            f"{DEFAULT_BAUD})")
     group.add_argument("--interface", default="socketcan", metavar="NAME",
                        help="python-can interface: socketcan, virtual, pcan, kvaser, slcan, "
                             "udp_multicast, ... (default: socketcan)")
@@ -76,6 +78,9 @@ def open_transport(args: argparse.Namespace) -> Transport[bytes] | Transport[lis
         if args.fd or args.data_bitrate is not None:
             raise ConfigError("--fd and --data-bitrate are CAN options; use them with --can")
     if args.port is not None:
+        if args.bitrate is not None:
+            raise ConfigError("--bitrate is the rate of a CAN or UDP link; a serial port's "
+                              "is --baud")
         return SerialTransport(args.port, args.baud)
     if args.udp is not None:
         host, port = parse_address(args.udp, UDP_LISTEN_HOST if args.udp_listen else None)

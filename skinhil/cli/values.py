@@ -10,6 +10,7 @@ Ranges are the physical or practical limits of what the option controls; each op
 from __future__ import annotations
 
 import argparse
+import ipaddress
 import math
 import os
 from collections.abc import Callable
@@ -139,3 +140,31 @@ def check_memory(n_bytes: int, what: str, advice: str) -> None:
     if n_bytes > MEMORY_SHARE * free:
         raise ConfigError(f"{what} need {n_bytes / 2**30:,.1f} GiB of memory; "
                           f"{free / 2**30:,.1f} GiB is available — {advice}")
+
+
+def udp_allow_value(text: str) -> list[str]:
+    """argparse type of ``--udp-allow``: comma-separated IP addresses, each optionally with
+    ``:PORT`` (IPv6 with a port as ``[ADDR]:PORT``); host names are not resolved."""
+    items = [item.strip() for item in text.split(",")]
+    if not text.strip() or not all(items):
+        raise argparse.ArgumentTypeError(f"{text!r}: give addresses such as 192.168.1.20 or "
+                                         "192.168.1.20:5000, comma-separated, none empty")
+    return [_udp_source(item) for item in items]
+
+
+def _udp_source(item: str) -> str:
+    host, port = item, ""
+    if item.startswith("["):
+        host, _, rest = item[1:].partition("]")
+        port = rest[1:] if rest.startswith(":") else rest
+    elif item.count(":") == 1:
+        host, port = item.split(":")
+    try:
+        addr = ipaddress.ip_address(host)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{item!r} is not an IP address (host names are not resolved): give one such as "
+            "192.168.1.20 or 192.168.1.20:5000") from None
+    if port and not (port.isdigit() and 1 <= int(port) <= 65535):
+        raise argparse.ArgumentTypeError(f"{item!r}: the port must be a number 1..65535")
+    return f"{addr}:{int(port)}" if port else str(addr)

@@ -21,6 +21,10 @@ under a second, whatever it holds.
 from __future__ import annotations
 
 import math
+import os
+import select
+import stat
+import time
 import tomllib
 from collections.abc import Mapping
 from pathlib import Path
@@ -28,15 +32,19 @@ from pathlib import Path
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import PAPER_SIZE, MeshSize
 from skinhil.model.stimuli import (
+    MAX_FORCE_N,
     USER_STIMULUS_ID_BASE,
     Schedule,
     ScheduledStimulus,
     Stimulus,
     builtin_catalog,
+    check_total_force,
 )
 
 MAX_FILE_BYTES = 4 * 1024 * 1024
 """Largest schedule file (4 MiB: about 60,000 events)."""
+READ_TIMEOUT_S = 10.0
+"""Longest wait (s) for a schedule that is not a regular file (a pipe, a device) to end."""
 MAX_STIMULI = 1000
 """Most ``[[stimulus]]`` tables."""
 MAX_EVENTS = 100_000
@@ -46,9 +54,6 @@ MAX_NAME_CHARS = 64
 MAX_TIME_S = 1e6
 """Largest time (s, 11.6 days) of any ``start_s``, ``onset_s``, ``indentation_s`` or
 ``decay_tau_s``."""
-MAX_FORCE_N = 100.0
-"""Largest force component (N): 200 times the paper's 0.5 N; larger forces tear any real
-skin and overflow the model."""
 
 STIMULUS_KEYS = ("name", "forces", "onset_s", "indentation_s", "decay_tau_s")
 EVENT_KEYS = ("start_s", "stimulus")
@@ -167,7 +172,39 @@ def schedule_from_doc(doc: Mapping[str, object], where: str, size: MeshSize = PA
                               f"[[stimulus]] or a built-in: {', '.join(builtin_catalog())}")
         sid, stim = catalog[name]
         entries.append(ScheduledStimulus(_number(ev["start_s"], at, "start_s"), stim, sid))
+    check_total_force(entries, where)
     return Schedule(tuple(entries))
+
+
+def _read_bounded(p: Path, where: str) -> bytes:
+    """At most ``MAX_FILE_BYTES + 1`` bytes of ``p``; a FIFO or a device (not a regular file)
+    is read without blocking for at most :data:`READ_TIMEOUT_S`, so a pipe nobody writes
+    to cannot hang the command."""
+    fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK)
+    try:
+        if stat.S_ISREG(os.fstat(fd).st_mode):
+            os.set_blocking(fd, True)
+            with os.fdopen(os.dup(fd), "rb") as fh:
+                return fh.read(MAX_FILE_BYTES + 1)
+        chunks: list[bytes] = []
+        size = 0
+        deadline = time.monotonic() + READ_TIMEOUT_S
+        while size <= MAX_FILE_BYTES:
+            left = deadline - time.monotonic()
+            if left <= 0 or not select.select([fd], [], [], left)[0]:
+                raise ConfigError(f"{where} gave no end of data within {READ_TIMEOUT_S:g} s "
+                                  "(a pipe or device nobody writes to?) — give a regular file")
+            try:
+                chunk = os.read(fd, 65536)
+            except BlockingIOError:
+                continue
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+        return b"".join(chunks)
+    finally:
+        os.close(fd)
 
 
 def load_schedule(path: str | Path, size: MeshSize = PAPER_SIZE) -> Schedule:
@@ -189,8 +226,7 @@ def read_schedule_text(path: str | Path) -> tuple[str, str]:
     p = Path(path)
     where = f"schedule file {str(p)!r}"
     try:
-        with p.open("rb") as fh:
-            data = fh.read(MAX_FILE_BYTES + 1)
+        data = _read_bounded(p, where)
     except FileNotFoundError:
         raise ConfigError(f"{where} not found — check the path") from None
     except OSError as exc:

@@ -276,6 +276,12 @@ def builtin_catalog(size: MeshSize = PAPER_SIZE) -> dict[str, tuple[int, Stimulu
     return cat
 
 
+MAX_FORCE_N = 100.0
+"""Largest force (N) on one component of one mass, of one stimulus and of all the stimuli
+that overlap: 200 times the paper's 0.5 N; larger forces tear any real skin and overflow the
+model."""
+
+
 @dataclass(frozen=True)
 class ScheduledStimulus:
     """One stimulus on a timeline: it starts ``start_s`` (s) after the schedule's start."""
@@ -293,6 +299,30 @@ class ScheduledStimulus:
     def end_s(self) -> float:
         """Absolute time (s) at which the force returns to zero."""
         return self.start_s + self.stimulus.end_s
+
+
+def check_total_force(entries: Sequence[ScheduledStimulus], where: str) -> None:
+    """Refuse a timeline whose overlapping stimuli add up to more than :data:`MAX_FORCE_N`
+    on one component of one mass, each stimulus counted at its peak from its onset to its
+    end: the cap holds for the sum of the presses, not only for each."""
+    changes: list[tuple[float, int, int, tuple[float, float, float]]] = []
+    for e in entries:
+        for mass, vec in e.stimulus.forces.items():
+            a = (abs(vec[0]), abs(vec[1]), abs(vec[2]))
+            changes.append((e.onset_s, 1, mass, a))
+            changes.append((e.end_s, 0, mass, a))  # at one time, ends before starts
+    changes.sort(key=lambda c: (c[0], c[1]))
+    load: dict[int, list[float]] = {}
+    for t, starts, mass, a in changes:
+        total = load.setdefault(mass, [0.0, 0.0, 0.0])
+        sign = 1.0 if starts else -1.0
+        for k in range(3):
+            total[k] += sign * a[k]
+        if starts and max(total) > MAX_FORCE_N * (1 + 1e-9):
+            raise ConfigError(f"{where}: the stimuli overlapping at {t:g} s press mass {mass} "
+                              f"with {max(total):g} N in one direction — at most "
+                              f"{MAX_FORCE_N:g} N in all; space the events out or lower "
+                              "their forces")
 
 
 ScheduleOperands = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,

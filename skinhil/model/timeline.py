@@ -25,6 +25,7 @@ from skinhil.model.stimuli import (
     ScheduledStimulus,
     Stimulus,
     at_size,
+    check_total_force,
     direction_conditions,
     random_schedule,
 )
@@ -144,11 +145,16 @@ class Timeline:
         self._add(entries)
 
     def start_stimulus(self, stimulus_id: int, now_s: float) -> bool:
-        """Start stimulus ``stimulus_id`` at ``now_s`` (s); False if the id is unknown."""
+        """Start stimulus ``stimulus_id`` at ``now_s`` (s); False if the id is unknown.
+        Raises :class:`ConfigError` if it would press a mass harder than
+        :data:`~skinhil.model.stimuli.MAX_FORCE_N` with the stimuli still pressing."""
         stim = self.catalog.get(int(stimulus_id))
         if stim is None:
             return False
-        self._add([ScheduledStimulus(now_s, stim, int(stimulus_id))])
+        new = ScheduledStimulus(now_s, stim, int(stimulus_id))
+        check_total_force([e for e in self._entries if e.end_s > now_s] + [new],
+                          f"stimulus {int(stimulus_id)}")
+        self._add([new])
         return True
 
     def prepare(self, now_s: float) -> bool:

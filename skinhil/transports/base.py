@@ -26,6 +26,8 @@ from skinhil.errors import TransportError
 
 P = TypeVar("P")
 
+MIN_BAUD = 50
+"""Smallest baud rate accepted (bits/s)."""
 MAX_BAUD = 20_000_000
 """Largest baud rate accepted (bits/s)."""
 MAX_CAN_BITRATE = 12_000_000
@@ -121,8 +123,8 @@ class Deadline:
 
 def check_baud(baud: int) -> int:
     """``baud`` if it is a usable baud rate (bits/s), else :class:`TransportError`."""
-    if not isinstance(baud, int) or isinstance(baud, bool) or not 50 <= baud <= MAX_BAUD:
-        raise TransportError(f"invalid baud rate {baud!r}: give an integer from 50 to "
+    if not isinstance(baud, int) or isinstance(baud, bool) or not MIN_BAUD <= baud <= MAX_BAUD:
+        raise TransportError(f"invalid baud rate {baud!r}: give an integer from {MIN_BAUD} to "
                              f"{MAX_BAUD} bits/s, e.g. --baud 921600")
     return baud
 
