@@ -30,6 +30,19 @@ def _sensors(text: str) -> list[int]:
             from None
 
 
+MAX_LSL_NAME_CHARS = 64
+"""Longest LSL stream name prefix (the outlets add ``-spikes``, ``-psp``, ...)."""
+
+
+def _lsl_name(text: str) -> str:
+    """argparse type of ``--lsl NAME``: 1..64 printable characters."""
+    if not (0 < len(text) <= MAX_LSL_NAME_CHARS and text.isprintable() and text.strip()):
+        raise argparse.ArgumentTypeError(
+            f"{text[:40]!r}{'...' if len(text) > 40 else ''}: give a stream name of 1.."
+            f"{MAX_LSL_NAME_CHARS} printable characters, such as skinhil")
+    return text
+
+
 def add_lab_output_args(parser: argparse.ArgumentParser, lsl: bool = True) -> None:
     """Add ``--view [HOST:]PORT``, ``--psp-sensors`` and (with ``lsl``) ``--lsl [NAME]``."""
     parser.add_argument("--view", metavar="[HOST:]PORT",
@@ -41,7 +54,7 @@ def add_lab_output_args(parser: argparse.ArgumentParser, lsl: bool = True) -> No
                              "psp outlet carries (default: 8 spread over the skin in the "
                              "view, every sensor on LSL)")
     if lsl:
-        parser.add_argument("--lsl", nargs="?", const="skinhil", metavar="NAME",
+        parser.add_argument("--lsl", nargs="?", const="skinhil", metavar="NAME", type=_lsl_name,
                             help="publish LSL outlets NAME-spikes, NAME-psp, NAME-markers, "
                                  "NAME-decisions, NAME-link (default NAME: skinhil; with "
                                  "several boards the further ones' NAME-2-..., NAME-3-...; "

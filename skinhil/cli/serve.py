@@ -265,13 +265,46 @@ def _replay_text(s: ReplaySummary, path: Path, link: str) -> str:
             "others NACK REPLAYING)")
 
 
+BOARD_OPTIONS: dict[str, str] = {
+    "rest_s": "--rest", "duration_s": "--duration", "board_id": "--board-id",
+    "tick_s": "--tick", "fifo_events": "--fifo", "status_period_s": "--status-period",
+    "stopped": "--stopped", "reconnect": "--reconnect", "size": "--size",
+    "mechanics": "--mechanics", "readout": "--readout", "dt_s": "--dt", "snr_db": "--snr-db",
+    "noise": "--noise", "seed": "--seed", "threads": "--threads"}
+"""Options of the emulated board (dest: option), which a replay has none of."""
+
+
+def _board_options_given(args: argparse.Namespace) -> list[str]:
+    """The board options of ``args`` that differ from serve's defaults."""
+    sub = argparse.ArgumentParser().add_subparsers()
+    add_parser(sub)
+    defaults = sub.choices["serve"]
+    return [opt for dest, opt in BOARD_OPTIONS.items()
+            if getattr(args, dest, None) != defaults.get_default(dest)]
+
+
 def run_replay(args: argparse.Namespace) -> int:
     """``serve --replay FILE``: the recording checked whole, then played onto the link."""
     if args.record is not None:
         raise ConfigError("--record and --replay do not go together: a replay is already "
                           "a recording; copy the file instead")
+    given = _board_options_given(args)
+    if given:
+        raise ConfigError(f"{', '.join(given)} set{'s' if len(given) == 1 else ''} the "
+                          "emulated board; --replay plays a recording as it was (its board, "
+                          "size, SNR and length are the recording's) — drop "
+                          f"{'it' if len(given) == 1 else 'them'}")
     check_link_fits(args.replay, _link_kind(args))
     recording = open_recording(args.replay)
+    if recording.link == "can" and recording.fd != args.fd:
+        raise ConfigError(f"'{args.replay}' holds {'CAN FD' if recording.fd else 'classic CAN'}"
+                          f" frames: {'add' if recording.fd else 'drop'} --fd to replay them "
+                          "in the layout they were recorded in")
+    lasts_s = recording.duration_s / args.speed
+    if lasts_s > MAX_DURATION_S:
+        raise ConfigError(f"replaying '{args.replay}' ({recording.duration_s:.3g} s recorded) "
+                          f"at speed {args.speed:g} would take {lasts_s:.3g} s, more than "
+                          f"{MAX_DURATION_S:g} s — give a larger --speed")
     score_path = check_output_path(args.score) if args.score is not None else None
     scoreboard = DecisionScoreboard(args.response_window_s)
     _claim_cpu(args)

@@ -69,6 +69,22 @@ def _asset(name: str) -> bytes:
     return resources.files("skinhil.view").joinpath("static", name).read_bytes()
 
 
+KEPT_ERRORS = 100
+"""Page error reports kept for ``GET /client`` (the rest only counted)."""
+LOGGED_ERRORS = 10
+"""Page error reports logged as WARNING lines (the rest only counted)."""
+MAX_REPORT_BYTES = 1 << 16
+"""Largest report body read (bytes); a longer one is refused unread."""
+
+
+class _QuietHTTPServer(ThreadingHTTPServer):
+    """A request that fails (a client gone, a malformed request) is logged at DEBUG, not
+    printed as a traceback on the command's terminal."""
+
+    def handle_error(self, request: Any, client_address: Any) -> None:
+        log.debug("view: request from %s failed", client_address, exc_info=True)
+
+
 class ViewServer:
     """Serve the view of ``feed`` at ``host:port`` (port 0: any free port) on threads;
     further boards' feeds join with :meth:`add_feed` (several boards on one link)."""
@@ -85,7 +101,7 @@ class ViewServer:
         if feed is not None:
             self.add_feed("0", feed)
         try:
-            self.httpd = ThreadingHTTPServer((host, port), self._handler())
+            self.httpd = _QuietHTTPServer((host, port), self._handler())
         except OSError as exc:
             raise ConfigError(f"--view cannot listen on {host}:{port}: {exc.strerror} — "
                               "choose another port") from None
@@ -245,14 +261,29 @@ class ViewServer:
             feed.pick_psp_sensors(sensors)
 
     def _report(self, body: bytes) -> None:
+        """A page's report: malformed ones ignored; its errors kept (the first
+        :data:`KEPT_ERRORS`, the rest counted in ``errors_dropped``) and logged as WARNING
+        lines (the first :data:`LOGGED_ERRORS`, then counted only), so a page that floods
+        cannot flood the terminal or the memory."""
         try:
             report = json.loads(body or b"{}")
-        except json.JSONDecodeError:
+        except (ValueError, UnicodeDecodeError, RecursionError):
+            return
+        if not isinstance(report, dict):
             return
         if report.get("kind") == "error":
             message = str(report.get("message", ""))[:2000]
-            self.client_reports["errors"].append(message)
-            log.warning("the live view page reported an error: %s", message)
+            reports = self.client_reports
+            reports["error_count"] = reports.get("error_count", 0) + 1
+            if len(reports["errors"]) < KEPT_ERRORS:
+                reports["errors"].append(message)
+            else:
+                reports["errors_dropped"] = reports.get("errors_dropped", 0) + 1
+            n = reports["error_count"]
+            if n <= LOGGED_ERRORS:
+                log.warning("the live view page reported an error: %s%s", message,
+                            " (further errors are counted, not logged: GET /client)"
+                            if n == LOGGED_ERRORS else "")
         elif report.get("kind") == "state":
             self.client_reports["state"] = report
 
@@ -292,8 +323,12 @@ class ViewServer:
                     self._send(b"not found", "text/plain", HTTPStatus.NOT_FOUND)
 
             def do_POST(self) -> None:  # noqa: N802
-                length = min(int(self.headers.get("Content-Length") or 0), 1 << 16)
-                body = self.rfile.read(length)
+                text = self.headers.get("Content-Length") or "0"
+                if not (text.isascii() and text.isdigit() and int(text) <= MAX_REPORT_BYTES):
+                    self.close_connection = True  # a body of unknown length: not read
+                    self._send(b"bad Content-Length", "text/plain", HTTPStatus.BAD_REQUEST)
+                    return
+                body = self.rfile.read(int(text))
                 if self.path.split("?", 1)[0] == "/client":
                     server._report(body)
                 elif self.path.split("?", 1)[0] == "/psp":
