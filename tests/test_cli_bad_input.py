@@ -88,6 +88,9 @@ SCHEDULES: dict[str, tuple[str, str]] = {
     "over 4 MiB": ("#" * (5 * 2**20) + "\n[[event]]\nstart_s = 0\nstimulus = \"A\"\n",
                    "larger than"),
     "unknown section": ("[other]\na = 1\n", "unknown section"),
+    "overlapping presses above 100 N": (
+        '[[stimulus]]\nname = "p"\nforces = { 15 = [0, 0, -100] }\n'
+        + '[[event]]\nstart_s = 0\nstimulus = "p"\n' * 3, "at most 100 N"),
 }
 
 
@@ -174,6 +177,7 @@ def _bad_cases(tmp: Path) -> list[Case]:
         Case("listen --model pickle", ("listen", *loop, "--model", str(tmp / "pickle.npz")),
              "pickle"),
     ]
+    cases += [c for c in _cases_of_issue_32(tmp, loop) if c.prefix or c.name in AS_A_USER]
     for name, (_, word) in HOSTILE.items():
         cases.append(Case(f"listen --model {name}",
                           ("listen", *loop, "--model", str(tmp / f"{_slug(name)}.npz")), word))
@@ -182,6 +186,105 @@ def _bad_cases(tmp: Path) -> list[Case]:
                           ("listen", *loop, "--model", str(tmp / "unreadable.npz")),
                           "permission denied", tuple(_DROP_DAC if os.geteuid() == 0 else ())))
     return cases
+
+
+AS_A_USER = ("serve --score over its --schedule", "listen --record over its --model",
+             "replay of a capture with a flipped bit")
+"""Cases of :func:`_cases_of_issue_32` also run as a program (those with an environment
+prefix always are); every one runs in-process in :func:`test_bad_inputs_refused_in_process`."""
+
+
+def _cases_of_issue_32(tmp: Path, loop: tuple[str, ...]) -> list[Case]:
+    """Replay, scoring, decoder and lab options, and paths that collide."""
+    good, sched = str(tmp / "good338.npz"), str(tmp / "start_s_true.toml")
+    valid_sched = str(tmp / "valid.toml")
+    cap = str(tmp / "good.skcap")
+    replay = ("serve", *loop, "--replay", cap)
+    listen = ("listen", *loop, "--model", good)
+    udp_listen = ("listen", "--udp", "0", "--model", good)
+    cases = [
+        Case("--response-window 1e308", ("serve", *loop, "--response-window", "1e308"),
+             "--response-window"),
+        Case("replay --response-window 1e308", (*replay, "--response-window", "1e308"),
+             "--response-window"),
+        Case("listen --model with escapes in its labels",
+             ("listen", *loop, "--model", str(tmp / "escapes.npz")), "stimulus ids"),
+        Case("demo with an unwritable cache", ("demo", "--duration", "2"), "XDG_CACHE_HOME",
+             ("env", "XDG_CACHE_HOME=/proc/nope")),
+        Case("compile with an unwritable cache", ("compile",), "NUMBA_CACHE_DIR",
+             ("env", "NUMBA_CACHE_DIR=/proc/nope")),
+        Case("serve --score over its --schedule", ("serve", *loop, "--schedule", valid_sched,
+                                                   "--score", valid_sched), "overwrite"),
+        Case("listen --record over its --model", (*listen, "--record", good), "overwrite"),
+        Case("serve --record and --score one file",
+             ("serve", *loop, "--record", str(tmp / "x.skcap"), "--score",
+              str(tmp / "x.skcap")), "is also"),
+        Case("simulate --out over its --schedule",
+             ("simulate", "--schedule", sched, "--out", sched), "overwrite"),
+        Case("replay --score over the recording", (*replay, "--score", cap), "overwrite"),
+        Case("replay of a capture with a flipped bit",
+             ("serve", *loop, "--replay", str(tmp / "flipped.skcap")), "CRC-32"),
+        Case("simulate --size 3x3 --stimulus B (fixed edge)",
+             ("simulate", "--size", "3x3", "--stimulus", "B"), "fixed mass"),
+        Case("serve --bitrate on a serial port", ("serve", *loop, "--bitrate", "1000"),
+             "--baud"),
+        Case("--baud 20", ("serve", *loop, "--baud", "20"), "--baud"),
+        Case("--snr-db -1000", ("serve", *loop, "--snr-db", "-1000"), "--snr-db"),
+        Case("--snr-db 1e308", ("simulate", "--snr-db", "1e308"), "--snr-db"),
+        Case("demo --duration 1e-9", ("demo", "--duration", "1e-9"), "--duration"),
+        Case("--lsl of 100,000 characters", (*listen, "--lsl", "x" * 100_000), "--lsl"),
+        Case("--lsl with a newline", (*listen, "--lsl", "a\nb"), "--lsl"),
+        Case("--udp-allow on a serial listen", (*listen, "--udp-allow", "127.0.0.1"),
+             "--udp"),
+        Case("--udp-max-sources on a serial listen", (*listen, "--udp-max-sources", "3"),
+             "--udp"),
+        Case("replay --speed 1e-300 (1e300 s)", (*replay, "--speed", "1e-300"), "--speed"),
+        Case("replay of classic CAN frames onto CAN FD",
+             ("serve", "--can", "vcan0", "--fd", "--replay", str(tmp / "classic.asc")),
+             "--fd"),
+    ]
+    for value in ("", ",", "localhost", "999.1.1.1", "127.0.0.1:abc", "127.0.0.1:0"):
+        cases.append(Case(f"--udp-allow {value!r}", (*udp_listen, "--udp-allow", value),
+                          "--udp-allow"))
+    for option in (("--stopped",), ("--size", "4x4"), ("--snr-db", "20"),
+                   ("--board-id", "3"), ("--duration", "0.01"), ("--seed", "9")):
+        cases.append(Case(f"replay {' '.join(option)}", (*replay, *option), option[0]))
+    return cases
+
+
+def _issue_32_files(tmp: Path) -> None:
+    """The files the cases of :func:`_cases_of_issue_32` read."""
+    import can
+    import numpy as np
+    from harness.hostile_models import _entries, _signed, _write
+
+    import protocols
+    from protocols.capture import CaptureHeader, CaptureWriter
+
+    good = write_good(tmp / "good338.npz", n_channels=338)
+    header, arrays = _entries(good)
+    arrays["classes"] = np.array(["\x1b[31mred", "\x1b]0;title\x07", "c"])
+    header["classes_kind"] = "str"
+    _write(tmp / "escapes.npz", _signed(header, arrays), arrays)
+    (tmp / "valid.toml").write_text('[[event]]\nstart_s = 0\nstimulus = "A"\n')
+    enc = protocols.SerialEncoder()
+    units = [enc.events(protocols.events.make_events(np.array([k * 1000]), np.array([k])),
+                        (k + 1) * 1000) for k in range(20)]
+    with open(tmp / "good.skcap", "wb") as f:
+        w = CaptureWriter(f, CaptureHeader(3, "serial", 100, 0))
+        for k, u in enumerate(units):
+            w.write(k * 1_000_000, k * 1000, u)
+        w.close()
+    raw = bytearray((tmp / "good.skcap").read_bytes())
+    raw[len(raw) // 2] ^= 0x04
+    (tmp / "flipped.skcap").write_bytes(bytes(raw))
+    frames = protocols.CanEncoder().events(
+        protocols.events.make_events(np.arange(10) * 100, np.arange(10)), 1000)
+    with can.Logger(str(tmp / "classic.asc")) as log:
+        for k, fr in enumerate(frames):
+            log.on_message_received(can.Message(timestamp=1.0 + k * 1e-3,
+                                                arbitration_id=fr.arbitration_id,
+                                                data=fr.data, is_extended_id=False))
 
 
 def _slug(name: str) -> str:
@@ -195,6 +298,7 @@ def files(tmp_path_factory: pytest.TempPathFactory) -> Path:
     for name, (make, _) in HOSTILE.items():
         make(tmp / f"{_slug(name)}.npz", good)
     pickled(tmp / "pickle.npz", good)
+    _issue_32_files(tmp)
     unreadable = tmp / "unreadable.npz"
     shutil.copy(good, unreadable)
     unreadable.chmod(0)
@@ -224,7 +328,30 @@ def test_bad_inputs_refused_with_one_line(files: Path, warm_kernels: None) -> No
         if not ok:
             failures.append(f"{case.name}: status {done.returncode}, stderr {done.stderr!r}")
     assert not failures, "\n".join(failures)
-    assert len(results) >= 75
+    assert len(results) >= 80
+
+
+def test_bad_inputs_refused_in_process(files: Path, capsys) -> None:
+    """The cases of :func:`_cases_of_issue_32` that need no environment of their own, run
+    through ``skinhil.cli.main`` in this process (each is refused before any link opens or
+    any kernel runs): one ``skinhil: error:`` line, status 2."""
+    from skinhil.cli import main
+
+    failures = []
+    cases = [c for c in _cases_of_issue_32(files, ("--port", "loop://")) if not c.prefix]
+    assert len(cases) >= 30
+    for case in cases:
+        capsys.readouterr()
+        try:
+            status = main(list(case.argv))
+        except SystemExit as exc:  # argparse's refusals exit
+            status = exc.code
+        err = capsys.readouterr().err
+        lines = [ln for ln in err.splitlines() if ln.strip()]
+        if not (status == 2 and len(lines) == 1 and lines[0].startswith("skinhil: error: ")
+                and case.word.lower() in lines[0].lower()):
+            failures.append(f"{case.name}: status {status}, stderr {err[-500:]!r}")
+    assert not failures, "\n".join(failures)
 
 
 def test_port_held_by_uucp_lock_file_refused(warm_kernels: None, pty_pair) -> None:

@@ -73,7 +73,7 @@ class DecisionScoreboard:
 
     def __init__(self, response_window_s: float,
                  is_known: Callable[[int], bool] | None = None) -> None:
-        if not (math.isfinite(response_window_s) and response_window_s > 0):
+        if not (math.isfinite(response_window_s * 1e6) and response_window_s > 0):
             raise ConfigError(f"response window must be a positive number of seconds, "
                              f"got {response_window_s!r}: give e.g. 1.0")
         self.response_window_s = float(response_window_s)
