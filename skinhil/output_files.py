@@ -12,9 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import os
-import signal
-import tempfile
-import threading
+import secrets
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -72,11 +70,14 @@ def atomic_path(path: Path) -> Iterator[Path]:
     path = check_output_path(path)
     tmp: Path | None = None
     try:
-        with _signals_held():  # a stop signal arriving while the file is made: handled after
-            fd, name = tempfile.mkstemp(prefix=f".{path.stem}.",
-                                        suffix=f".partial{path.suffix}", dir=path.parent)
-            os.close(fd)
-            tmp = Path(name)
+        # the name is kept before the file exists: a stop signal at any instant leaves no
+        # file, or one the ``finally`` removes (mkstemp made it before returning its name)
+        while tmp is None:
+            tmp = path.parent / f".{path.stem}.{secrets.token_hex(4)}.partial{path.suffix}"
+            try:
+                os.close(os.open(tmp, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
+            except FileExistsError:  # another file's name: not ours to remove
+                tmp = None
         yield tmp
         if tmp.exists():
             with open(tmp, "rb+") as f:
@@ -89,20 +90,6 @@ def atomic_path(path: Path) -> Iterator[Path]:
     finally:
         if tmp is not None:
             tmp.unlink(missing_ok=True)
-
-
-@contextlib.contextmanager
-def _signals_held() -> Iterator[None]:
-    """SIGINT and SIGTERM held back (on the main thread) while the body runs: the temporary
-    file of :func:`atomic_path` exists only inside the ``try`` that removes it."""
-    main = threading.current_thread() is threading.main_thread()
-    held = {signal.SIGINT, signal.SIGTERM}
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, held) if main else None
-    try:
-        yield
-    finally:
-        if old is not None:
-            signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
 def write_text(path: Path, text: str) -> Path:
