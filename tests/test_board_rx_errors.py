@@ -1,16 +1,19 @@
 """Every refused host command shows in the board's next STATUS (``rx_errors``, SPEC.md §3.3):
-a NACKed command, a command whose CRC fails and a command repeating the host's previous
-sequence number (dropped unanswered), over a real pty."""
+a NACKed command (an SNR out of range among them), a command whose CRC fails, a command
+repeating the host's previous sequence number (dropped unanswered) and the host's own SYNC and
+EVENTS packets, over a real pty."""
 
 from __future__ import annotations
 
 import os
 import threading
 
+import numpy as np
 from harness.peers import PtyPeer
 
 import protocols
 from firmware_sim.board import Board, BoardConfig
+from protocols.events import make_events
 from skinhil.transports import SerialTransport
 
 
@@ -58,6 +61,15 @@ def test_refused_commands_show_in_the_next_status(pty_pair) -> None:
         os.write(pty_pair.master, bytes(packet) * 2)
         assert _status_after_query(peer).rx_errors == base + 3
         assert sum(isinstance(r, protocols.Ack) and r.token == ping for r in peer.records) == 1
+        # a host's own stream (a SYNC and an EVENTS packet) is no command: refused, counted
+        ev = make_events(np.array([0, 100]), np.array([1, 2]))
+        os.write(pty_pair.master, protocols.SerialEncoder().events(ev, 1_000))
+        assert _status_after_query(peer).rx_errors == base + 5
+        # an SNR out of its range is NACKed BAD_ARGUMENT
+        token = peer.command(protocols.CommandCode.SET_SNR, -1000.0)
+        assert _status_after_query(peer).rx_errors == base + 6
+        assert any(isinstance(r, protocols.Ack) and r.token == token
+                   and r.reason == protocols.NackReason.BAD_ARGUMENT for r in peer.records)
     finally:
         stop.set()
         runner.join(timeout=30)
