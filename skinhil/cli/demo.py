@@ -74,7 +74,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "online decision and end with accuracy, latency and loss figures. Trains "
                     "and caches a model on first use.")
     p.add_argument("--snr-db", type=snr_value, default=DECODE_SNR_DB, metavar="DB",
-                   help=f"neuron noise SNR in dB, 'inf' for none (default: {DECODE_SNR_DB:g})")
+                   help="neuron noise SNR in dB, -20..200 or 'inf' for none "
+                        f"(default: {DECODE_SNR_DB:g})")
     p.add_argument("--duration", dest="duration_s",
                    type=real(MIN_DURATION_S, MAX_DURATION_S, "seconds"),
                    default=DEFAULT_DURATION_S,

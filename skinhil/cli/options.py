@@ -53,7 +53,8 @@ def add_model_options(parser: argparse.ArgumentParser, snr_default: float = math
                         help=f"simulation step in seconds, {DT_RANGE_S[0]:g}..{DT_RANGE_S[1]:g}"
                              " (default: 1e-4)")
     parser.add_argument("--snr-db", type=snr_value, default=snr_default, metavar="DB",
-                        help=f"neuron noise SNR in dB, 'inf' for none (default: {snr_default:g})")
+                        help="neuron noise SNR in dB, -20..200 or 'inf' for none "
+                        f"(default: {snr_default:g})")
     parser.add_argument("--noise", choices=("diffusion", "measured"), default="diffusion",
                         help="how the SNR becomes neuron noise: 'diffusion', sigma^2 = 1 mV^2 x "
                              "10^(-SNR/10) per ms whatever the step (default), or 'measured', "

@@ -32,7 +32,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "board you will decode.")
     p.add_argument("--out", type=Path, required=True, metavar="NPZ", help="decoder file")
     p.add_argument("--snr-db", type=snr_value, default=DECODE_SNR_DB, metavar="DB",
-                   help="neuron noise SNR in dB, 'inf' for none (default: "
+                   help="neuron noise SNR in dB, -20..200 or 'inf' for none (default: "
                         f"{DECODE_SNR_DB:g}, the paper's)")
     p.add_argument("--reps", type=integer(1, MAX_REPS, "count"), default=50,
                    help=f"stimuli per condition on average (9 x reps in all), 1..{MAX_REPS} "
