@@ -68,6 +68,8 @@ _MARKER_CLASSIC = struct.Struct("<B5sH")
 _STATUS_FD = struct.Struct(f"<BB6s{len(STATUS_WORDS)}I4x")
 _MARKER_FD = struct.Struct("<BB6sI")
 _ACK = struct.Struct("<BBBBH")
+ACK_SEQ_MOD = 128
+"""The ACK counter of byte 1 bits 7..1 of every ACK frame counts modulo 128 (SPEC.md §5.6)."""
 _COMMAND = struct.Struct("<BBHI")
 
 STATUS_FRAMES_CLASSIC = 8
@@ -127,6 +129,7 @@ class CanEncoder:
         self.n_channels = int(n_channels)
         self._st[k.E_VERSION] = self.version
         self._cmd_seq = 0
+        self._ack_seq = 0
         self._t_min_us = 0
         self._ids = [can_id(c, self.board_id) for c in range(8)]
         self._sync_every = sync_us // step_us
@@ -250,8 +253,10 @@ class CanEncoder:
         return frames
 
     def ack(self, ack: Ack) -> list[CanFrame]:
-        """An ACK frame (board→host answer to a command)."""
-        data = _ACK.pack(self._next_seq(), int(bool(ack.ok)),
+        """An ACK frame (board→host answer to a command); byte 1 carries the ACK counter
+        (bits 7..1, modulo 128) beside ok (bit 0), SPEC.md §5.6."""
+        ack_seq, self._ack_seq = self._ack_seq, (self._ack_seq + 1) % ACK_SEQ_MOD
+        data = _ACK.pack(self._next_seq(), int(bool(ack.ok)) | ack_seq << 1,
                          check_uint(int(ack.opcode), 8, "opcode"),
                          check_uint(int(ack.reason), 8, "reason"),
                          check_uint(ack.token, 16, "token"))
@@ -278,6 +283,7 @@ class CanDecoder:
         self._group: list[bytes] = []
         self._group_seq = -1
         self._session = Reassembly(k.FD_SEQ_MOD if self.fd else k.CLASSIC_SEQ_MOD)
+        self._last_ack_seq = -1
 
     def feed(self, frames: Iterable[CanFrame], max_records: int | None = None) -> DecodeResult:
         """Decode a batch of received frames (in bus order); with ``max_records``, build at
@@ -332,8 +338,17 @@ class CanDecoder:
                 return self._session.add(kind, data[1], data[0], data[2:64])
             return self._session.add(kind, data[0] >> 4, data[0] & 0xF, data[1:8])
         _, ok, op, reason, token = _ACK.unpack(data[:6])
+        self._count_acks(ok >> 1)
         return Ack(token, enum_or_int(CommandCode, op), bool(ok & 1),
                    enum_or_int(NackReason, reason))
+
+    def _count_acks(self, ack_seq: int) -> None:
+        """Follow the ACK counter (SPEC.md §5.6): ACKs missing between two received ones go
+        to ``counters.acks_lost``. A counter that does not move (a board that sends 0, as
+        before the counter existed) counts nothing."""
+        last, self._last_ack_seq = self._last_ack_seq, ack_seq
+        if last >= 0 and ack_seq != last:
+            self.counters.acks_lost += (ack_seq - last - 1) % ACK_SEQ_MOD
 
     def _fd_status(self, data: bytes, decoded: int) -> Status:
         _, flags, t, *v = _STATUS_FD.unpack(data[:STATUS_LEN_FD])

@@ -141,7 +141,8 @@ def messages(fd: bool) -> tuple[Message, ...]:
         Signal("DecisionConfidence", 56, 8, mux=f"m{decision}",
                choices=((CONFIDENCE_STEPS + 1, "NONE"),))))
     ack = Message(k.CLS_ACK, "SKIN_ACK", 6, BOARD, (
-        seq, Signal("Ok", 8, 1), Signal("Opcode", 16, 8, choices=_enum_choices(CommandCode)),
+        seq, Signal("Ok", 8, 1), Signal("AckSeq", 9, 7),
+        Signal("Opcode", 16, 8, choices=_enum_choices(CommandCode)),
         Signal("Reason", 24, 8, choices=_enum_choices(NackReason)), Signal("Token", 32, 16)))
     phase_choices = _enum_choices(MarkerPhase)
     if fd:

@@ -276,6 +276,10 @@ class LinkCounters:
     """CAN: times a host's COMMAND sequence number jumped (not the board's frames)."""
     commands_lost: int = 0
     """CAN: COMMAND frames missing according to the host's sequence numbers."""
+    acks_lost: int = 0
+    """CAN: ACK frames missing according to the ACK counter (byte 1 bits 7..1, modulo 128,
+    SPEC.md §5.6): exact while fewer than 128 ACKs are lost in a row, even when whole
+    periods of the classic 4-bit frame sequence were lost (a receive-queue overflow)."""
     late_frames: int = 0
     """Serial: packets arriving 1..8 sequence numbers behind the last (reordered UDP
     datagrams): dropped (their events in ``events_untimed``), the time base kept."""

@@ -89,10 +89,12 @@ def _play(receiver: Receiver, link_args: list[str], tmp_path: Path) -> dict[str,
     print(f"\nanswers {answerer.as_dict()}, link {link}")
     assert answerer.unsent == 0 and answerer.sent == len(receiver.scoreboard.decisions)
     # every DECISION and its ACK come back, but on a link that loses frames (user-mode
-    # Linux on a loaded machine: the receiver's link counts what it lost)
-    if link["frames_lost"] == 0:
+    # Linux on a loaded machine: a receive queue overflow drops frames by the hundred, whole
+    # periods of the frame sequence; the ACK counter, SPEC.md §5.6, still counts every ACK
+    # lost before the last one received)
+    if link["frames_lost"] == 0 and link["acks_lost"] == 0:
         assert answerer.acked == answerer.sent == board["decisions"]
-    assert answerer.acked <= board["decisions"] <= answerer.sent
+    assert answerer.acked + link["acks_lost"] <= board["decisions"] <= answerer.sent
     board["tokens"] = answerer.tokens
     return board
 

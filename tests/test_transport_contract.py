@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 import random
 import shutil
+import socket
 import subprocess
 import threading
 import time
@@ -21,6 +22,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 import protocols
@@ -185,3 +187,47 @@ def test_wire_time_and_shutdown(link) -> None:
         tx.send(payload, timeout=0.5)
     with pytest.raises(TransportError, match="closed"):
         tx.recv(timeout=0)
+
+
+@pytest.mark.vcan
+def test_a_forced_receive_overflow_shows_in_the_acks_lost() -> None:
+    """A receiving socket that is not read overflows and drops frames by the hundred (whole
+    periods of the classic 4-bit frame sequence); the ACK counter (SPEC.md §5.6) still
+    counts every ACK it lost: received + lost = sent."""
+    import can
+
+    tx = CanTransport("vcan0")
+    rx = can.Bus(interface="socketcan", channel="vcan0", receive_own_messages=False)
+    rx.socket.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)  # overflows at once
+    enc, dec = protocols.CanEncoder(), protocols.CanDecoder()
+    acks_sent = 0
+    try:
+        frames = []
+        for k in range(60):  # an ACK among every ~20 frames of events
+            ev = protocols.events.make_events(np.arange(40) * 100 + k * 10_000,
+                                              np.arange(40) % 338)
+            frames += enc.events(ev, (k + 1) * 10_000)
+            frames += enc.ack(protocols.Ack(k, protocols.CommandCode.DECISION, True))
+            acks_sent += 1
+        for i in range(0, len(frames), 50):
+            tx.send(frames[i:i + 50], timeout=2.0)
+
+        def drain() -> list[protocols.CanFrame]:
+            got = []
+            while (msg := rx.recv(timeout=0.2)) is not None:
+                got.append(protocols.CanFrame(msg.arbitration_id, bytes(msg.data),
+                                              bool(msg.is_fd)))
+            return got
+
+        first = drain()
+        tx.send(enc.ack(protocols.Ack(999, protocols.CommandCode.PING, True)), timeout=2.0)
+        acks_sent += 1
+        result = dec.feed(first + drain())
+    finally:
+        rx.shutdown()
+        tx.shutdown()
+    acks = [r for r in result.records if isinstance(r, protocols.Ack)]
+    assert len(first) < len(frames) // 2, "the socket did not overflow"
+    assert acks[-1].token == 999
+    assert dec.counters.acks_lost > 0
+    assert len(acks) + dec.counters.acks_lost == acks_sent

@@ -198,7 +198,8 @@ def print_link(link: dict[str, Any]) -> None:
     print(f"link: {link['events_decoded']} events decoded, {link['frames_ok']} frames ok, "
           f"{link['crc_errors']} CRC errors, {link['seq_gaps']} sequence gaps "
           f"({link['frames_lost']} frames lost), {link['duplicates']} duplicates, "
-          f"{link['late_events']} late events; board: {link['board_generated']} generated, "
+          f"{link['late_events']} late events, {link.get('acks_lost', 0)} ACKs lost; board: "
+          f"{link['board_generated']} generated, "
           f"{link['board_sent']} sent, {link['board_dropped']} dropped; "
           f"{link['lost_on_link']} lost on the link")
 

@@ -98,6 +98,8 @@ class LinkReport:
     malformed: int
     late_events: int
     link_errors: int
+    acks_lost: int = 0
+    """CAN: the board's ACKs missing by their ACK counter (``protocols.LinkCounters``)."""
 
     def as_dict(self) -> dict[str, int]:
         return dict(self.__dict__)
@@ -368,4 +370,4 @@ class Receiver:
             board_dropped=g(st, "events_dropped"),
             lost_on_link=g(c, "events_lost"), untimed_events=g(c, "events_untimed"),
             malformed=g(c, "malformed"), late_events=self.classifier.late_events,
-            link_errors=self.link_errors)
+            link_errors=self.link_errors, acks_lost=g(c, "acks_lost"))
