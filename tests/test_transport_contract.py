@@ -200,8 +200,17 @@ def test_a_forced_receive_overflow_shows_in_the_acks_lost() -> None:
     rx = can.Bus(interface="socketcan", channel="vcan0", receive_own_messages=False)
     rx.socket.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)  # overflows at once
     enc, dec = protocols.CanEncoder(), protocols.CanDecoder()
-    acks_sent = 0
+    acks_sent = 1
     try:
+        def drain() -> list[protocols.CanFrame]:
+            got = []
+            while (msg := rx.recv(timeout=0.2)) is not None:
+                got.append(protocols.CanFrame(msg.arbitration_id, bytes(msg.data),
+                                              bool(msg.is_fd)))
+            return got
+
+        tx.send(enc.ack(protocols.Ack(998, protocols.CommandCode.PING, True)), timeout=2.0)
+        before = drain()  # the receiver knows the counter before the overflow
         frames = []
         for k in range(60):  # an ACK among every ~20 frames of events
             ev = protocols.events.make_events(np.arange(40) * 100 + k * 10_000,
@@ -211,23 +220,15 @@ def test_a_forced_receive_overflow_shows_in_the_acks_lost() -> None:
             acks_sent += 1
         for i in range(0, len(frames), 50):
             tx.send(frames[i:i + 50], timeout=2.0)
-
-        def drain() -> list[protocols.CanFrame]:
-            got = []
-            while (msg := rx.recv(timeout=0.2)) is not None:
-                got.append(protocols.CanFrame(msg.arbitration_id, bytes(msg.data),
-                                              bool(msg.is_fd)))
-            return got
-
         first = drain()
         tx.send(enc.ack(protocols.Ack(999, protocols.CommandCode.PING, True)), timeout=2.0)
         acks_sent += 1
-        result = dec.feed(first + drain())
+        result = dec.feed(before + first + drain())
     finally:
         rx.shutdown()
         tx.shutdown()
     acks = [r for r in result.records if isinstance(r, protocols.Ack)]
     assert len(first) < len(frames) // 2, "the socket did not overflow"
-    assert acks[-1].token == 999
+    assert acks[0].token == 998 and acks[-1].token == 999
     assert dec.counters.acks_lost > 0
     assert len(acks) + dec.counters.acks_lost == acks_sent

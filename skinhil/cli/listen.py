@@ -79,7 +79,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                         f"sources are refused and counted (default: {MAX_UDP_SOURCES})")
     p.add_argument("--udp-allow", type=udp_allow_value,
                    metavar="HOST[:PORT][,...]",
-                   help="with --udp: decode only these senders (an address, or address:port); "
+                   help="with --udp: decode only these senders (an IP address, or "
+                        "address:port; host names are not resolved); "
                         "datagrams of others are refused and counted")
     add_size_option(p)
     add_lab_output_args(p)

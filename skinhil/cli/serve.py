@@ -77,7 +77,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                      help="play this recording (serve --record) onto the link instead of "
                           "running the board: byte for byte (serial, UDP), frame for frame "
                           "(CAN), at its recorded pace; host commands get a NACK (REPLAYING), "
-                          "DECISIONs are scored against the recorded markers")
+                          "DECISIONs are scored against the recorded markers; the emulated "
+                          "board's options (--size, --snr-db, --stopped, --duration, ...) "
+                          "are refused with it")
     p.add_argument("--speed", type=speed_value, default=1.0, metavar="X",
                    help="--replay at X times the recorded pace (default: 1; inf: as fast "
                         "as the link takes)")
