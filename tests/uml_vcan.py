@@ -204,6 +204,11 @@ def _init_script(workdir: Path, modules: list[Path], command: list[str], cwd: Pa
         "ip link add dev vcan1 type vcan 1>&3 2>&3",
         "ip link set up vcan1 1>&3 2>&3",
         "ip link set up lo 1>&3 2>&3",
+        # the receive buffers the transports ask for (8 MB): UML's default cap, 208 KB,
+        # overflowed a receiver stalled by the loaded host, and the board then got its
+        # DECISIONs seconds late or after it had stopped (the answer loop's flaky failure)
+        "echo 8388608 > /proc/sys/net/core/rmem_max 2>&3",
+        "echo 8388608 > /proc/sys/net/core/wmem_max 2>&3",
     ]
     for key, value in env.items():
         lines.append(f"export {key}={q(value)}")
