@@ -151,6 +151,35 @@ def test_record_on_a_pty_then_replay_onto_a_second_pty_byte_for_byte(tmp_path) -
         second.close()
 
 
+def _replay_with_pings(rec: Path, tokens: tuple[int, ...], started: Any
+                       ) -> tuple[subprocess.Popen[str], bytearray, str, str]:
+    """``serve --replay rec`` onto a pty; once ``started(bytes so far)``, a PING per token
+    (50 ms apart); the process, every byte it sent, its stdout and stderr."""
+    pair = PtyPair()
+    reader = PtyReader(pair.master)
+    host = protocols.SerialEncoder()
+    try:
+        proc = subprocess.Popen(serve_argv("--port", pair.path, "--replay", str(rec),
+                                           "--json"), cwd=RUN_DIR, env=serve_env(),
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        got = bytearray()
+        deadline = time.monotonic() + 60
+        while not started(got) and time.monotonic() < deadline:
+            got += reader.take()
+            time.sleep(0.01)
+        for token in tokens:
+            pair.write(host.command(protocols.Command(token=token,
+                                                      opcode=protocols.CommandCode.PING)))
+            time.sleep(0.05)
+        out, err = proc.communicate(timeout=60)
+        time.sleep(0.2)
+        got += reader.take()
+    finally:
+        reader.stop()
+        pair.close()
+    return proc, got, out, err
+
+
 def test_commands_during_a_replay_are_nacked_and_the_stream_stays_whole(tmp_path) -> None:
     """A host sends commands while a recording plays: each gets a NACK with reason
     REPLAYING, and the stream around the answers decodes with no sequence gap and every
@@ -169,28 +198,7 @@ def test_commands_during_a_replay_are_nacked_and_the_stream_stays_whole(tmp_path
     rec.write_bytes(_capture_bytes(units, spacing_ns=10_000_000))
     recorded = decoded(b"".join(units))
 
-    pair = PtyPair()
-    reader = PtyReader(pair.master)
-    host = protocols.SerialEncoder()
-    try:
-        proc = subprocess.Popen(serve_argv("--port", pair.path, "--replay", str(rec),
-                                           "--json"), cwd=RUN_DIR, env=serve_env(),
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        got = bytearray()
-        deadline = time.monotonic() + 60
-        while not got and time.monotonic() < deadline:
-            got += reader.take()
-            time.sleep(0.01)
-        for token in (11, 12, 13):
-            pair.write(host.command(protocols.Command(token=token,
-                                                      opcode=protocols.CommandCode.PING)))
-            time.sleep(0.05)
-        out, err = proc.communicate(timeout=60)
-        time.sleep(0.2)
-        got += reader.take()
-    finally:
-        reader.stop()
-        pair.close()
+    proc, got, out, err = _replay_with_pings(rec, (11, 12, 13), lambda got: bool(got))
     assert proc.returncode == 0, err
     res = protocols.SerialDecoder()
     result = res.feed(bytes(got))
@@ -217,25 +225,7 @@ def test_a_crafted_capture_with_an_overlong_run_replays_and_answers_a_ping(tmp_p
     units[3:3] = [crafted]
     rec = tmp_path / "crafted.skcap"
     rec.write_bytes(_capture_bytes(units, spacing_ns=20_000_000))
-    pair = PtyPair()
-    reader = PtyReader(pair.master)
-    host = protocols.SerialEncoder()
-    try:
-        proc = subprocess.Popen(serve_argv("--port", pair.path, "--replay", str(rec),
-                                           "--json"), cwd=RUN_DIR, env=serve_env(),
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        got = bytearray()
-        deadline = time.monotonic() + 60
-        while crafted not in got and time.monotonic() < deadline:
-            got += reader.take()
-            time.sleep(0.01)
-        pair.write(host.command(protocols.Command(token=77, opcode=protocols.CommandCode.PING)))
-        out, err = proc.communicate(timeout=60)
-        time.sleep(0.2)
-        got += reader.take()
-    finally:
-        reader.stop()
-        pair.close()
+    proc, got, _, err = _replay_with_pings(rec, (77,), lambda got: crafted in got)
     assert proc.returncode == 0, err
     assert crafted in got
     acks = [r for r in protocols.SerialDecoder().feed(bytes(got)).records
