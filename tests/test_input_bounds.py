@@ -83,3 +83,19 @@ def test_an_uppercase_nwb_output_is_nwb(tmp_path) -> None:
     out = tmp_path / "run.NWB"
     assert main(["simulate", "--duration", "0.01", "--no-progress", "--out", str(out)]) == 0
     assert out.read_bytes()[:8] == b"\x89HDF\r\n\x1a\n"
+
+
+def test_the_decision_log_is_bounded(monkeypatch) -> None:
+    """A decoder under test that floods the board with DECISIONs cannot grow the per-decision
+    log (memory, the --score file) without bound: every decision is counted, the first ones
+    are logged and the rest said omitted."""
+    from skinhil.scoring import scoreboard
+
+    monkeypatch.setattr(scoreboard, "MAX_LOGGED_DECISIONS", 50)
+    board = scoreboard.DecisionScoreboard(0.5)
+    board.onset(1, 0)
+    for k in range(500):
+        board.decision(1, 1_000 * k, None, True, k)
+    summary = board.summary(with_log=True)
+    assert summary["decisions"] == 500
+    assert len(summary["log"]) == 50 and summary["log_omitted"] == 450

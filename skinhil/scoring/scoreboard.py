@@ -61,6 +61,12 @@ _KIND_OUTCOME = {MatchKind.DUPLICATE: Outcome.DUPLICATE, MatchKind.LATE: Outcome
                  MatchKind.NO_STIMULUS: Outcome.FALSE_ALARM}
 
 
+MAX_LOGGED_DECISIONS = 100_000
+"""Decisions the per-decision log keeps (the first ones; about 20 MB): a decoder under test
+that floods the board cannot grow it, or the --score file, without bound. Every decision is
+counted all the same."""
+
+
 class DecisionScoreboard:
     """Accuracy, confusion, latency, misses and every other outcome of a DUT's decisions.
 
@@ -116,8 +122,9 @@ class DecisionScoreboard:
             else:
                 outcome = _KIND_OUTCOME[m.kind]
         self.counts[outcome] += 1
-        self.log.append((int(t_us), int(stimulus_id), confidence, token, outcome.value, onset_us,
-                         true_id))
+        if len(self.log) < MAX_LOGGED_DECISIONS:
+            self.log.append((int(t_us), int(stimulus_id), confidence, token, outcome.value,
+                             onset_us, true_id))
         return outcome
 
     def advance(self, t_us: int) -> int:
@@ -163,6 +170,7 @@ class DecisionScoreboard:
             "confusion": [[t, d, n] for (t, d), n in sorted(self.confusion.items())],
         }
         if with_log:
+            out["log_omitted"] = self.decisions - len(self.log)
             out["log"] = [dict(zip(("t_us", "stimulus_id", "confidence", "token", "outcome",
                                     "onset_us", "true_id"), row, strict=True))
                           for row in self.log]
