@@ -161,8 +161,8 @@ def test_scripted_dut_lands_in_every_counter(pty_pair, tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("args", "says"), [
-    (("--response-window", "0"), "response window"),
-    (("--response-window", "nan"), "response window"),
+    (("--response-window", "0"), "response-window"),
+    (("--response-window", "nan"), "response-window"),
     (("--score", "/nonexistent-folder/score.json"), "does not exist"),
 ])
 def test_serve_refuses_bad_scoring_options(args: tuple[str, ...], says: str) -> None:

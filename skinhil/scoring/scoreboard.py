@@ -170,7 +170,8 @@ class DecisionScoreboard:
             "confusion": [[t, d, n] for (t, d), n in sorted(self.confusion.items())],
         }
         if with_log:
-            out["log_omitted"] = self.decisions - len(self.log)
+            if self.decisions > len(self.log):
+                out["log_omitted"] = self.decisions - len(self.log)
             out["log"] = [dict(zip(("t_us", "stimulus_id", "confidence", "token", "outcome",
                                     "onset_us", "true_id"), row, strict=True))
                           for row in self.log]
