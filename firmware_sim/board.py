@@ -31,6 +31,7 @@ drops events as ``link_down`` and reopens the link every ``reconnect_period_s``.
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import gc
 import logging
@@ -46,7 +47,12 @@ import numpy as np
 
 import protocols
 from firmware_sim.clock import TickClock, tighten_timer_slack
-from firmware_sim.command_budget import ANSWER_BURST, RECORDS_PER_TICK, CommandBudget
+from firmware_sim.command_budget import (
+    ANSWER_BURST,
+    PENDING_COMMANDS,
+    RECORDS_PER_TICK,
+    CommandBudget,
+)
 from firmware_sim.counters import BoardCounters
 from firmware_sim.fifo import EventFifo
 from firmware_sim.link import BoardLink
@@ -81,6 +87,12 @@ reader thread never holds the interpreter lock for longer than this against the 
 
 DEFAULT_RESPONSE_WINDOW_S = 0.5
 """Default response window (s) of the board's scoreboard (``serve --response-window``)."""
+
+
+def _is_query(cmd: Any) -> bool:
+    """Whether a host command is a QUERY_STATUS (never refused, needs no budget)."""
+    return (not isinstance(cmd, protocols.Decision)
+            and cmd.opcode == protocols.CommandCode.QUERY_STATUS)
 
 
 @dataclass(frozen=True)
@@ -265,6 +277,9 @@ class Board:
         sets SIGNAL when a signal set it)."""
         self._statuses_owed = 0
         """QUERY_STATUS answered this tick (their STATUS: after the first, at the end)."""
+        self._pending: collections.deque[tuple[Any, int]] = collections.deque()
+        """Host commands received and not yet executed, with their arrival (µs): at most
+        :data:`~firmware_sim.command_budget.PENDING_COMMANDS`."""
         self.link = self._make_link(open_link())
 
     # -- link ---------------------------------------------------------------------------
@@ -372,8 +387,9 @@ class Board:
         markers.clear()
 
     # -- commands -----------------------------------------------------------------------
-    def handle(self, cmd: Any) -> Any:
-        """Execute a host command; return its :class:`protocols.Ack` (never raises).
+    def handle(self, cmd: Any, arrival_us: int | None = None) -> Any:
+        """Execute a host command received at board time ``arrival_us`` (µs; default now);
+        return its :class:`protocols.Ack` (never raises).
 
         SET_SCHEDULE numbers: 0 none (host-driven), 1 the default random schedule,
         2 the schedule file. SET_STIMULUS takes a stimulus id (0..8 direction conditions,
@@ -386,7 +402,8 @@ class Board:
         reason = why.NONE
         try:
             if isinstance(cmd, protocols.Decision):
-                reason = self._score(cmd)
+                reason = self._score(cmd, self.board_time_us() if arrival_us is None
+                                     else arrival_us)
             elif op == codes.START:
                 self.running = True
             elif op == codes.STOP:
@@ -434,8 +451,9 @@ class Board:
                 self.touch.stop()
 
     def _execute(self, link: BoardLink, cmd: Any, arrival_us: int | None = None) -> None:
-        """Execute a host command and queue its ACK (a QUERY_SESSION's SESSION after it)."""
-        link.queue_record(self.handle(cmd))
+        """Execute a host command received at board time ``arrival_us`` (µs) and queue its
+        ACK (a QUERY_SESSION's SESSION after it)."""
+        link.queue_record(self.handle(cmd, arrival_us))
         if (not isinstance(cmd, protocols.Decision)
                 and cmd.opcode == protocols.CommandCode.QUERY_SESSION):
             self.queue_session(link, protocols.SessionReason.REQUEST)
@@ -476,11 +494,11 @@ class Board:
         if rest.shape[0]:
             self._refuse_busy(link, rest[:int(ANSWER_BURST)].tolist(), rest.shape[0])
 
-    def _score(self, decision: Any) -> Any:
-        """Stamp a DECISION with the board time and score it; its NACK reason (NONE when
-        scored, NOT_RUNNING while stopped, UNKNOWN_STIMULUS for an id the board does not
-        know: counted all the same)."""
-        outcome = self.scoreboard.decision(decision.stimulus_id, self.board_time_us(),
+    def _score(self, decision: Any, t_us: int) -> Any:
+        """Stamp a DECISION with its arrival's board time ``t_us`` (µs) and score it; its
+        NACK reason (NONE when scored, NOT_RUNNING while stopped, UNKNOWN_STIMULUS for an id
+        the board does not know: counted all the same)."""
+        outcome = self.scoreboard.decision(decision.stimulus_id, t_us,
                                            decision.confidence, self.running, decision.token)
         log.debug("decision %r: %s", decision, outcome.value)
         return answer_reason(outcome)
@@ -540,21 +558,31 @@ class Board:
     def _serve_link(self, t_end_us: int) -> None:
         link = self.link
         assert link is not None
-        commands, excess = link.poll_commands(RECORDS_PER_TICK)
+        pending = self._pending
+        room = PENDING_COMMANDS - len(pending)
+        commands, excess = link.poll_commands(max(RECORDS_PER_TICK, room))
         self.counters.rx_errors += link.take_rx_errors()
         budget = self._budget
         budget.new_tick()
         self._statuses_owed = 0
         for cmd in commands:
-            if (not isinstance(cmd, protocols.Decision)
-                    and cmd.opcode == protocols.CommandCode.QUERY_STATUS):
+            if len(pending) < PENDING_COMMANDS:
+                pending.append((cmd, t_end_us))  # a burst waits its turn, its arrival kept
+            elif _is_query(cmd):  # never refused: answered at once when the queue is full
                 self._answer_query(link, cmd, t_end_us)
-            elif budget.admit():
-                self._execute(link, cmd)
             else:
                 self._refuse_busy(link, [(cmd.token, int(cmd.opcode))], 1)
         if excess.shape[0]:
             self._refuse_excess(link, excess, t_end_us)
+        while pending:  # in arrival order: a QUERY_STATUS needs no budget, the others do
+            cmd, arrival_us = pending[0]
+            if _is_query(cmd):
+                self._answer_query(link, cmd, t_end_us)
+            elif budget.admit():
+                self._execute(link, cmd, arrival_us)
+            else:
+                break
+            pending.popleft()
         if self._statuses_owed > 1:  # one more STATUS answers the later QUERY_STATUS
             self._fill(link, t_end_us)
             link.queue_record(self.status())

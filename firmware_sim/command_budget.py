@@ -9,22 +9,30 @@ Two limits, applied in the order commands arrive within one tick:
   token bucket that refills with :data:`ANSWER_SHARE` of the wire's time per tick, in answers
   of the link's size (at most :data:`ANSWER_BURST` saved up).
 
-A command beyond either limit is not executed: it is refused as BUSY, counted in ``rx_errors``
-(on the wire in every STATUS) and in ``busy``, and answered with a NACK of reason BUSY while
-the answer bucket has a token; without one it stays unanswered (the count says it was
-refused). QUERY_STATUS is always executed and answered (its ACK may take the bucket below
-zero, by at most :data:`ANSWER_BURST`), and one STATUS per tick answers every QUERY_STATUS of
-that tick.
+A command beyond the execution or answer limit waits in a queue of :data:`PENDING_COMMANDS`
+(executed in arrival order in the next ticks, a DECISION stamped with its arrival's board
+time); one that finds the queue full is not executed: it is refused as BUSY, counted in
+``rx_errors`` (on the wire in every STATUS) and in ``busy``, and answered with a NACK of
+reason BUSY while the answer bucket has a token; without one it stays unanswered (the count
+says it was refused). QUERY_STATUS is always executed and answered, in its turn, or at once
+when the queue is full (its ACK may take the bucket below zero, by at most
+:data:`ANSWER_BURST`); a STATUS follows the tick's first at once, and one more STATUS at the
+end of the tick answers the others.
 """
 
 from __future__ import annotations
 
 COMMANDS_PER_TICK = 8
 """Host commands executed per tick at most (QUERY_STATUS apart)."""
+PENDING_COMMANDS = 64
+"""Host commands received and waiting for their turn at most: a burst (a decoder that fell
+behind and sends its decisions at once) is executed over the next ticks, each DECISION
+stamped with its arrival; a command that finds the queue full is refused BUSY."""
 RECORDS_PER_TICK = COMMANDS_PER_TICK
-"""Host units the link builds into records per tick; the commands past them come as token
-and opcode only (a compiled pass, :class:`protocols.DecodeResult`): each QUERY_STATUS among
-them is executed, the others refused BUSY."""
+"""Host units the link builds into records per tick at least (as many as the pending queue
+has room for, when more); the commands past them come as token and opcode only (a compiled
+pass, :class:`protocols.DecodeResult`): each QUERY_STATUS among them is executed, the others
+refused BUSY."""
 ANSWER_SHARE = 0.25
 """Share of the wire's time the board's answers (ACK, NACK) may take on average."""
 ANSWER_BURST = 16.0
