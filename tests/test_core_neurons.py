@@ -141,7 +141,7 @@ def test_events_round_trip() -> None:
 
 
 def test_bad_input() -> None:
-    with pytest.raises(ConfigError, match="snr_db"):
+    with pytest.raises(ConfigError, match="SNR nan dB"):
         NeuronPopulation(3, snr_db=float("nan"))
     with pytest.raises(ConfigError, match="dt_s"):
         NeuronPopulation(3).step_block(np.zeros((2, 3)), 0.0)
