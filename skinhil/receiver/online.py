@@ -75,8 +75,15 @@ def step_us(dt_s: float) -> int:
     return dt_us
 
 
-MAX_BLOCK_STEPS = 10_000
-"""Most steps the receiver filters in one block (1 s at 0.1 ms: 27 MB of PSP values)."""
+MAX_BLOCK_STEPS = 1_000
+"""Most steps the receiver filters in one block (0.1 s at 0.1 ms: 2.7 MB of PSP values for
+338 channels). A backlog (a receiver that fell behind) is filtered block by block, and
+blocks this small reuse the memory the last one freed: 1 s blocks (27 MB) took fresh pages
+every time, 21,000 page faults per 12 s of stream on the host and 284,000 inside user-mode
+Linux, where each is a round trip to the host: 1.24 s per 1 s of stream, so a receiver
+that once fell behind never caught up (its next backlog larger). In blocks of 1,000 steps:
+0.02-0.03 s per 1 s of stream inside user-mode Linux at any backlog, 1,000-2,000 faults
+(``benchmarks/bench_receiver_backlog.py``)."""
 
 
 class OnsetWindows:

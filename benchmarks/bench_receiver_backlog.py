@@ -1,0 +1,72 @@
+"""The receiver's filters on a backlog: the cost of 1 s of stream whatever the chunk it comes in.
+
+Run: ``python benchmarks/bench_receiver_backlog.py [--seconds 12] [--block-steps N]``; inside
+user-mode Linux: ``python tests/uml_vcan.py -- python benchmarks/bench_receiver_backlog.py``.
+The same board stream (``board_stream``, 10 dB, seed 3; 338 channels at 0.1 ms) is pushed into
+a fresh :class:`skinhil.receiver.online.OnlineClassifier` in chunks of 0.02 s (a receiver
+keeping up) to 4 s (a receiver that fell seconds behind reads its whole backlog at once), and
+each pass reports its time per second of stream and the minor page faults it took.
+
+A receiver whose cost per second of stream grows with the backlog never catches up once
+behind: the next backlog is larger. Target: every chunk size well under 1 s per 1 s of
+stream, and no chunk size costlier than the smallest by more than a few times.
+
+Measured (2-core AMD EPYC Zen 4 VM, load 2-3: another engineer's tests and UML runs;
+command ``python benchmarks/bench_receiver_backlog.py``), s per s of stream / page faults
+per 12 s, chunks 0.02 / 0.2 / 1 / 4 s:
+
+- blocks of 10,000 steps (27 MB of PSP values), on the host: 0.015 / 0.012 / 0.035 / 0.025,
+  faults 1 / 0 / 21,221 / 15,887; inside user-mode Linux: 0.011 / 0.010 / **1.24 / 1.27**,
+  faults 6 / 0 / 284,509 / 201,376 (each fault a round trip to the host);
+- blocks of 1,000 steps (``MAX_BLOCK_STEPS``), on the host: 0.017 / 0.014 / 0.012 / 0.013,
+  faults 1 / 858 / 429 / 2,037 (0 / 0 / 0 / 0 in another run: the allocator's state);
+  inside user-mode Linux: 0.018 / 0.029 / 0.019 / 0.026, faults 6 / 1,880 / 990 / 1,806.
+"""
+
+from __future__ import annotations
+
+import argparse
+import resource
+import sys
+import time
+
+import numpy as np
+
+import skinhil.receiver.online as online
+from skinhil.receiver import WindowDecoder
+from skinhil.receiver.training import board_stream, train_decoder
+
+CHUNKS_S = (0.02, 0.2, 1.0, 4.0)
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--seconds", type=float, default=12.0, help="stream length (s)")
+    p.add_argument("--block-steps", type=int, default=online.MAX_BLOCK_STEPS,
+                   help="steps filtered per block at most (default: the receiver's)")
+    args = p.parse_args()
+    online.MAX_BLOCK_STEPS = args.block_steps
+    model, _ = train_decoder(10.0, reps=2, seed=0, rest_s=0.05, cross_validation=False)
+    decoder = WindowDecoder(model)
+    events = np.concatenate([b[0] for b in board_stream(args.seconds, 10.0, 0.25, 3)])
+    warm = online.OnlineClassifier(decoder)
+    warm.advance(500_000)  # numba kernels loaded before anything is timed
+    print(f"{events.shape[0]} events in {args.seconds:g} s, blocks of {args.block_steps} steps")
+    for chunk_s in CHUNKS_S:
+        clf = online.OnlineClassifier(decoder)
+        edges = np.arange(0.0, args.seconds + 1e-9, chunk_s)
+        r0, t0 = resource.getrusage(resource.RUSAGE_SELF), time.perf_counter()
+        decisions = 0
+        for a, b in zip(edges[:-1], edges[1:], strict=True):
+            sel = (events["t"] >= a * 1e6) & (events["t"] < b * 1e6)
+            clf.push(events[sel])
+            decisions += len(clf.advance(int(round(b * 1e6))))
+        spent = time.perf_counter() - t0
+        faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - r0.ru_minflt
+        print(f"chunks of {chunk_s:4.2f} s: {spent / args.seconds:.3f} s per s of stream, "
+              f"{faults} minor page faults, {decisions} decisions")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
