@@ -88,7 +88,8 @@ def _force(value: object, where: str, mass: str) -> tuple[float, float, float]:
     return float(value[0]), float(value[1]), float(value[2])
 
 
-def _keys(table: object, allowed: tuple[str, ...], where: str) -> Mapping[str, object]:
+def checked_table(table: object, allowed: tuple[str, ...], where: str) -> Mapping[str, object]:
+    """``table`` as a TOML table holding only ``allowed`` keys, else a one-line ConfigError."""
     if not isinstance(table, Mapping):
         raise ConfigError(f"{where} is not a table — write it as [[...]] with keys "
                           f"{', '.join(allowed)}")
@@ -100,7 +101,7 @@ def _keys(table: object, allowed: tuple[str, ...], where: str) -> Mapping[str, o
 
 
 def _stimulus(table: object, where: str, size: MeshSize) -> Stimulus:
-    t = _keys(table, STIMULUS_KEYS, where)
+    t = checked_table(table, STIMULUS_KEYS, where)
     name, forces = t.get("name"), t.get("forces")
     if not (isinstance(name, str) and 0 < len(name) <= MAX_NAME_CHARS):
         raise ConfigError(f"{where}: name = {name!r} — give a name of 1..{MAX_NAME_CHARS} "
@@ -114,7 +115,8 @@ def _stimulus(table: object, where: str, size: MeshSize) -> Stimulus:
     return Stimulus(name, vectors, size=size, **times)  # type: ignore[arg-type]
 
 
-def _tables(doc: Mapping[str, object], key: str, cap: int, where: str) -> list[object]:
+def table_list(doc: Mapping[str, object], key: str, cap: int, where: str) -> list[object]:
+    """The ``[[key]]`` tables of ``doc`` (at most ``cap``), else a one-line ConfigError."""
     tables = doc.get(key, [])
     if not isinstance(tables, list):
         raise ConfigError(f"{where}: '{key}' is not a list of tables — write [[{key}]]")
@@ -153,17 +155,17 @@ def schedule_from_doc(doc: Mapping[str, object], where: str, size: MeshSize = PA
         raise ConfigError(f"{where}: unknown section(s) {', '.join(unknown)} — use "
                           f"{', '.join(f'[[{s}]]' for s in sections)}")
     catalog = builtin_catalog(size)
-    for i, table in enumerate(_tables(doc, "stimulus", MAX_STIMULI, where)):
+    for i, table in enumerate(table_list(doc, "stimulus", MAX_STIMULI, where)):
         stim = _stimulus(table, f"{where}: [[stimulus]] #{i + 1}", size)
         catalog[stim.name] = (USER_STIMULUS_ID_BASE + i, stim)
-    events = _tables(doc, "event", MAX_EVENTS, where)
+    events = table_list(doc, "event", MAX_EVENTS, where)
     if not events and events_required:
         raise ConfigError(f"{where} has no [[event]] entries — add [[event]] tables with "
                           "start_s and stimulus")
     entries = []
     for i, table in enumerate(events):
         at = f"{where}: [[event]] #{i + 1}"
-        ev = _keys(table, EVENT_KEYS, at)
+        ev = checked_table(table, EVENT_KEYS, at)
         if "start_s" not in ev or "stimulus" not in ev:
             raise ConfigError(f"{at}: needs start_s = <seconds> and stimulus = \"name\"")
         name = ev["stimulus"]

@@ -33,7 +33,13 @@ import numpy as np
 
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import PAPER_SIZE, MeshSize
-from skinhil.model.schedule_file import parse_toml, read_schedule_text, schedule_from_doc
+from skinhil.model.schedule_file import (
+    checked_table,
+    parse_toml,
+    read_schedule_text,
+    schedule_from_doc,
+    table_list,
+)
 from skinhil.model.stimuli import Schedule
 from skinhil.world.indenters import SHAPES, Indenter
 from skinhil.world.scene import MAX_CONTACTS, Contact, Scene
@@ -103,16 +109,6 @@ def _number(t: Mapping[str, object], key: str, where: str,
     return float(value)  # type: ignore[arg-type]
 
 
-def _table(table: object, allowed: tuple[str, ...], where: str) -> Mapping[str, object]:
-    if not isinstance(table, Mapping):
-        raise ConfigError(f"{where} is not a table — write it as [[...]]")
-    unknown = sorted(set(table) - set(allowed))
-    if unknown:
-        raise ConfigError(f"{where}: unknown key(s) {', '.join(unknown)} — allowed: "
-                          f"{', '.join(allowed)}")
-    return table
-
-
 def _name(t: Mapping[str, object], where: str, default: str | None = None) -> str:
     name = t.get("name", default)
     if not (isinstance(name, str) and 0 < len(name) <= 64):
@@ -121,7 +117,7 @@ def _name(t: Mapping[str, object], where: str, default: str | None = None) -> st
 
 
 def _indenter(table: object, where: str) -> tuple[str, Indenter]:
-    t = _table(table, INDENTER_KEYS, where)
+    t = checked_table(table, INDENTER_KEYS, where)
     name = _name(t, where)
     shape = t.get("shape")
     if shape not in SHAPES:
@@ -159,7 +155,7 @@ def _contact(table: object, where: str, indenters: Mapping[str, Indenter],
     motion = table.get("motion") if isinstance(table, Mapping) else None
     if motion not in MOTIONS:
         raise ConfigError(f"{where}: motion = {motion!r} — give one of {', '.join(MOTIONS)}")
-    t = _table(table, COMMON_KEYS + MOTION_KEYS[motion], where)
+    t = checked_table(table, COMMON_KEYS + MOTION_KEYS[motion], where)
     which = t.get("indenter")
     if not isinstance(which, str) or which not in indenters:
         raise ConfigError(f"{where}: indenter = {which!r} — give the name of an "
@@ -206,21 +202,12 @@ def _contact(table: object, where: str, indenters: Mapping[str, Indenter],
         raise ConfigError(text if text.startswith(where) else f"{where}: {text}") from None
 
 
-def _list(doc: Mapping[str, object], key: str, cap: int, where: str) -> list[object]:
-    tables = doc.get(key, [])
-    if not isinstance(tables, list):
-        raise ConfigError(f"{where}: '{key}' is not a list of tables — write [[{key}]]")
-    if len(tables) > cap:
-        raise ConfigError(f"{where} has {len(tables)} [[{key}]] tables — at most {cap}")
-    return tables
-
-
 def parse_scenario(text: str, where: str, size: MeshSize = PAPER_SIZE) -> Scenario:
     """The scenario of TOML ``text`` (named ``where`` in errors) for a skin of ``size``."""
     doc = parse_toml(text, where)
-    contacts_in = _list(doc, "contact", MAX_CONTACTS, where)
+    contacts_in = table_list(doc, "contact", MAX_CONTACTS, where)
     indenters: dict[str, Indenter] = {}
-    for i, table in enumerate(_list(doc, "indenter", MAX_INDENTERS, where)):
+    for i, table in enumerate(table_list(doc, "indenter", MAX_INDENTERS, where)):
         name, ind = _indenter(table, f"{where}: [[indenter]] #{i + 1}")
         indenters[name] = ind
     schedule = schedule_from_doc(doc, where, size, ("indenter", "contact"),
