@@ -9,7 +9,7 @@ simulated offline: the same stimuli and noise, so online must match it within th
 points whatever the sampling error), and the decoder's cross-validated accuracy on its
 training stream (another seed: a sampling error apart, bound max(5 points, 2 s.e.)).
 
-Runs: 100 stimuli at the paper's 10 dB through the pty and through vcan0 and 27 without
+Runs: 100 stimuli at the paper's 10 dB through the pty, 50 through vcan0, and 27 without
 noise through vcan0, with 0.05 s rests (0.3 s per stimulus, ~31 s of real time per 100), and
 short fault runs.
 """
@@ -36,6 +36,9 @@ from skinhil.recording import SessionRecorder
 from skinhil.transports import CanTransport, FaultParams, FaultyTransport, PtyMasterTransport
 
 N_STIMULI = 100
+N_VCAN_STIMULI = 50
+"""Through vcan0 (inside user-mode Linux, several times slower): half the pty's run, the
+same comparisons (two standard errors widen with the smaller count)."""
 REST_S = 0.05
 BOARD_SEED = 7
 SNR_DB = 10.0
@@ -185,8 +188,8 @@ def test_online_accuracy_through_vcan_matches_offline_at_10_db(decoder_10db):
     """The issue's test through vcan0 at 1 Mbit/s: at 10 dB the board sends a few hundred
     events/s, well within the bus."""
     decoder, trained = decoder_10db
-    receiver = run_vcan(decoder, SNR_DB, N_STIMULI)
-    check_online_matches_offline("vcan", receiver, decoder, trained)
+    receiver = run_vcan(decoder, SNR_DB, N_VCAN_STIMULI)
+    check_online_matches_offline("vcan", receiver, decoder, trained, n_stimuli=N_VCAN_STIMULI)
 
 
 @pytest.mark.vcan
