@@ -8,7 +8,6 @@ import pytest
 from skinhil import IzhikevichParams, NeuronPopulation, events_to_raster, raster_to_events
 from skinhil.errors import ConfigError
 from skinhil.model.neurons import NoiseParams
-from skinhil.model.rng import ZIG_R, fill_normal, seed_states
 
 
 def _euler_reference(current: float, n_steps: int, dt_ms: float) -> list[int]:
@@ -76,49 +75,6 @@ def test_measured_noise_variance_is_measured_awgn() -> None:
         # variance estimate over 101,400 samples has relative s.d. 0.44 %: 3 % is > 6 s.d.
         assert abs(z.var() - 1.0) < 0.03
         assert abs(z.mean()) < 0.02
-
-
-def test_ziggurat_is_standard_normal() -> None:
-    from scipy import stats
-
-    out = np.empty(2_000_000)
-    fill_normal(seed_states(11, 1)[0], out)
-    assert stats.kstest(out, "norm").pvalue > 1e-3
-    assert abs(out.var() - 1) < 0.005
-    # the density bin by bin, layer edges and wedges included (0.025 wide over ±4.5)
-    edges = np.concatenate([[-np.inf], np.linspace(-4.5, 4.5, 361), [np.inf]])
-    seen, _ = np.histogram(out, edges)
-    expected = np.diff(stats.norm.cdf(edges)) * out.size
-    assert stats.chisquare(seen, expected * seen.sum() / expected.sum()).pvalue > 1e-3
-    for x in (3.5, ZIG_R):  # the outer layers, and the tail beyond the base layer's edge
-        tail = (np.abs(out) > x).sum()
-        mean = 2 * stats.norm.sf(x) * out.size
-        assert abs(tail - mean) < 4 * np.sqrt(mean)
-
-
-def test_fast_path_draws_the_normals_of_the_test_spelled_out() -> None:
-    # the pinned contract of the generator: fill_normal_pairs' one-compare fast path gives,
-    # bit for bit, the normals and the stream position of Marsaglia & Tsang's test per half
-    # (_finish_pair on every word), over 600,000 pairs (~5,400 through the slow path)
-    import numba
-
-    from skinhil.model.rng import _finish_pair, fill_normal_pairs, xoshiro_step
-
-    @numba.njit
-    def spelled_out(state: np.ndarray, first: np.ndarray, second: np.ndarray) -> None:
-        for i in range(first.shape[0]):
-            w, state[0], state[1], state[2], state[3] = xoshiro_step(
-                state[0], state[1], state[2], state[3])
-            first[i], second[i] = _finish_pair(state, w & np.uint64(0xFFFFFFFF),
-                                               w >> np.uint64(32))
-
-    fast, slow = seed_states(5, 1)[0], seed_states(5, 1)[0]
-    got, want = np.empty((2, 200_000)), np.empty((2, 200_000))
-    for _ in range(3):
-        fill_normal_pairs(fast, got[0], got[1])
-        spelled_out(slow, want[0], want[1])
-        assert np.array_equal(got, want)
-        assert np.array_equal(fast, slow)
 
 
 def test_snr_inf_is_deterministic_and_seed_reproducible() -> None:

@@ -42,8 +42,10 @@ The per-step order, for every step k of length dt (ms), each trial independently
 3. threshold: where ``v ≥ 30``: a spike in step k, ``v ← c``, ``u ← u + d``.
 
 A spike in step k is stamped with the step's start time ``k·dt`` (see
-:func:`raster_to_events`). Noise comes from :mod:`skinhil.model.rng`, one seeded stream per trial
-and block of 1,024 channels (:data:`CHANNEL_BLOCK`).
+:func:`raster_to_events`). Noise comes from :mod:`skinhil.model.rng`: the two normals of
+channel i at the population's step number k (counted from its creation, across calls) are a
+function of the channel's key (one per channel and trial, from the seed) and k alone, so any
+split of the work, on any number of threads, draws the same numbers.
 """
 
 from __future__ import annotations
@@ -58,17 +60,23 @@ import numpy as np
 
 from skinhil.errors import ConfigError
 from skinhil.events import EVENT_DTYPE, make_events
-from skinhil.model.rng import fill_normal_pairs, seed_states
+from skinhil.model.rng import (
+    fast_pair,
+    fill_normal_pairs,
+    mix64,
+    normal_pair,
+    seed_keys,
+    step_hash,
+)
 
 KernelOperands = tuple[np.ndarray, np.ndarray, float, float, float, float, float, float, bool,
-                       float, float, np.ndarray, np.ndarray]
+                       float, float, np.ndarray, np.ndarray, np.ndarray]
 """``NeuronPopulation.kernel_operands()``: v, u, a, b, c, d, K, v_peak, measured, noise
-variance, reference step (ms), streams, run-away counts."""
+variance, reference step (ms), noise keys, step count, run-away counts."""
 
 CHANNEL_BLOCK = 1024
-"""Channels per noise stream: each trial's channels 0..1023 draw from one stream, 1024..2047
-from the next, and so on (one stream per trial up to 1,024 channels, as the 6x6 skin's 338),
-so that blocks can run on several threads with the same draws."""
+"""Channels the kernels update together (while their state is in cache), and the unit of work
+shared among threads; the draws do not depend on it (each channel has its own key)."""
 
 BLOWUP_RMS_MV = 1e4
 """Population RMS of u (mV) beyond which a trial counts as run away under the measured-power
@@ -211,44 +219,75 @@ def _noise_and_threshold(v: np.ndarray, u: np.ndarray, zv: np.ndarray, zu: np.nd
                                                       v_peak)
 
 
+MISSED_BYTES = np.uint64(0x0202020202020202)
+"""Bit 1 of each of 8 spike bytes read as one word: the channels whose pair missed the
+normals' fast path (:func:`_diffusion_block`)."""
+
+
 @numba.njit(inline="always")
-def _diffusion_block(v: np.ndarray, u: np.ndarray, current: np.ndarray, zv: np.ndarray,
-                     zu: np.ndarray, stream: np.ndarray, sigma: float, dt_ms: float,
-                     a: float, b: float, c: float, d: float, gain: float, v_peak: float,
+def _diffusion_block(v: np.ndarray, u: np.ndarray, current: np.ndarray, keys: np.ndarray,
+                     step: int, sigma: float, dt_ms: float, a: float, b: float, c: float,
+                     d: float, gain: float, v_peak: float,
                      spikes: np.ndarray) -> None:  # pragma: no cover - compiled
-    # steps 1-3 for one channel block under the diffusion noise: its normals drawn from
-    # stream into zv, zu (sigma > 0), then one pass per channel (the same numbers as the
-    # three passes of the measured noise), while the block's normals are still in the
-    # first-level cache
+    # steps 1-3 at step number ``step`` for one block of channels under the diffusion noise:
+    # one branch-free pass (it vectorises) with the normals' fast path, in which a channel
+    # whose pair missed it keeps Euler's v, u (noise 0, no spike) and its spike byte is 2;
+    # then a scan of the spike bytes, 8 at a time, finishes those with the slow path
     n = v.shape[0]
-    if sigma > 0.0:
-        fill_normal_pairs(stream, zv[:n], zu[:n])
+    if sigma == 0.0:
+        for i in range(n):
+            vv, uu = _euler(v[i], u[i], current[i], dt_ms, a, b, gain)
+            spikes[i], v[i], u[i] = _noise_then_threshold(vv, uu, 0.0, 0.0, 0.0, 0.0, c, d,
+                                                          v_peak)
+        return
+    h = step_hash(step)
+    flags = spikes.view(np.uint8)
     for i in range(n):
         vv, uu = _euler(v[i], u[i], current[i], dt_ms, a, b, gain)
-        spikes[i], v[i], u[i] = _noise_then_threshold(vv, uu, zv[i], zu[i], sigma, sigma, c, d,
+        z1, z2, ok1, ok2 = fast_pair(mix64(keys[i] ^ h))
+        ok = ok1 & ok2
+        vv = vv + sigma * (z1 if ok else 0.0)
+        uu = uu + sigma * (z2 if ok else 0.0)
+        fired = (vv >= v_peak) & ok
+        flags[i] = fired + 2 * (not ok)
+        v[i] = c if fired else vv
+        u[i] = uu + d if fired else uu
+    whole = n // 8
+    words = flags[:8 * whole].view(np.uint64)
+    for j in range(whole + 1):  # (no call with an array inside: numba would count references)
+        if j < whole and not words[j] & MISSED_BYTES:
+            continue
+        for i in range(8 * j, min(8 * j + 8, n)):
+            if flags[i] > 1:  # v, u hold Euler's values: the noise and threshold now
+                z1, z2 = normal_pair(keys[i], step)
+                fired, vv, uu = _noise_then_threshold(v[i], u[i], z1, z2, sigma, sigma, c, d,
                                                       v_peak)
+                v[i] = vv
+                u[i] = uu
+                flags[i] = fired
 
 
 @numba.njit(cache=True, fastmath=False, nogil=True)
 def _izhikevich_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray, v: np.ndarray,
                        u: np.ndarray, a: float, b: float, c: float, d: float, gain: float,
                        v_peak: float, measured: bool, noise_var: float, ref_step_ms: float,
-                       rng: np.ndarray, blowups: np.ndarray) -> None:  # pragma: no cover
+                       keys: np.ndarray, clock: np.ndarray,
+                       blowups: np.ndarray) -> None:  # pragma: no cover - compiled
     # current (n_steps, 1 or n_batch, n) N over steps of dt_ms (ms) → spikes (n_steps,
     # n_batch, n); the rest are NeuronPopulation.kernel_operands()
     n_steps, n_batch, n = spikes.shape
     shared_input = current.shape[1] == 1
     sigma_step = math.sqrt(noise_var * dt_ms / ref_step_ms)  # diffusion σ per step (mV)
-    if not measured:  # block by block: each block's normals used while in cache
-        zb = np.zeros((2, min(n, CHANNEL_BLOCK)))  # zero without noise
+    first = clock[0]
+    clock[0] += n_steps
+    if not measured:  # block by block: each block's state used while in cache
         for k in range(n_steps):
             for bb in range(n_batch):
                 cur = current[k, 0 if shared_input else bb]
-                for j in range(rng.shape[1]):
-                    lo = j * CHANNEL_BLOCK
+                for lo in range(0, n, CHANNEL_BLOCK):
                     hi = min(n, lo + CHANNEL_BLOCK)
-                    _diffusion_block(v[bb, lo:hi], u[bb, lo:hi], cur[lo:hi], zb[0], zb[1],
-                                     rng[bb, j], sigma_step, dt_ms, a, b, c, d, gain, v_peak,
+                    _diffusion_block(v[bb, lo:hi], u[bb, lo:hi], cur[lo:hi], keys[bb, lo:hi],
+                                     first + k, sigma_step, dt_ms, a, b, c, d, gain, v_peak,
                                      spikes[k, bb, lo:hi])
         return
     zv = np.zeros(n)  # this step's normals, drawn before use; zero without noise
@@ -269,10 +308,7 @@ def _izhikevich_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray, v:
             sv = math.sqrt(pv / n * noise_var)
             su = math.sqrt(pu / n * noise_var)
             if noise_var > 0.0:
-                for j in range(rng.shape[1]):  # each channel block from its own stream
-                    lo = j * CHANNEL_BLOCK
-                    hi = min(n, lo + CHANNEL_BLOCK)
-                    fill_normal_pairs(rng[bb, j], zv[lo:hi], zu[lo:hi])
+                fill_normal_pairs(keys[bb], first + k, zv, zu)
             _noise_and_threshold(vb, ub, zv, zu, sv, su, c, d, v_peak, spikes[k, bb])
 
 
@@ -280,26 +316,27 @@ def _izhikevich_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray, v:
 def _izhikevich_parallel_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray,
                                 v: np.ndarray, u: np.ndarray, a: float, b: float, c: float,
                                 d: float, gain: float, v_peak: float, measured: bool,
-                                noise_var: float, ref_step_ms: float, rng: np.ndarray,
+                                noise_var: float, ref_step_ms: float, keys: np.ndarray,
+                                clock: np.ndarray,
                                 blowups: np.ndarray) -> None:  # pragma: no cover - compiled
     # _izhikevich_kernel for the diffusion noise (measured is False), the channel blocks of
     # every trial shared among numba's threads: the same arithmetic and draws per channel,
     # so the same spikes; blowups stays untouched (the diffusion never runs away)
     n_steps, n_batch, n = spikes.shape
-    n_blocks = rng.shape[1]
+    n_blocks = -(-n // CHANNEL_BLOCK)
     shared_input = current.shape[1] == 1
     sigma_step = math.sqrt(noise_var * dt_ms / ref_step_ms)
+    first = clock[0]
     for job in numba.prange(n_batch * n_blocks):
         bb = job // n_blocks
-        j = job % n_blocks
-        lo = j * CHANNEL_BLOCK
+        lo = (job % n_blocks) * CHANNEL_BLOCK
         hi = min(n, lo + CHANNEL_BLOCK)
-        zb = np.zeros((2, hi - lo))
         for k in range(n_steps):
             _diffusion_block(v[bb, lo:hi], u[bb, lo:hi],
-                             current[k, 0 if shared_input else bb, lo:hi], zb[0], zb[1],
-                             rng[bb, j], sigma_step, dt_ms, a, b, c, d, gain, v_peak,
+                             current[k, 0 if shared_input else bb, lo:hi], keys[bb, lo:hi],
+                             first + k, sigma_step, dt_ms, a, b, c, d, gain, v_peak,
                              spikes[k, bb, lo:hi])
+    clock[0] += n_steps
 
 
 def check_threads(threads: int) -> int:
@@ -321,8 +358,9 @@ def check_threads(threads: int) -> int:
 class NeuronPopulation:
     """A population of ``n_channels`` noisy Izhikevich neurons, optionally ``batch`` trials.
 
-    ``seed`` makes the noise reproducible (each trial, and within it each block of
-    ``CHANNEL_BLOCK`` channels, draws from its own stream); ``noise`` says how ``snr_db``
+    ``seed`` makes the noise reproducible (each channel of each trial has its own key, and
+    its normals at step k are a function of the key and k alone: :mod:`skinhil.model.rng`);
+    ``noise`` says how ``snr_db``
     becomes noise (default: the step-invariant diffusion). ``threads`` > 1 shares the
     channel blocks of every trial among that many threads (diffusion noise only): the same
     spikes as one thread, in less time once there are a few thousand channels.
@@ -348,9 +386,8 @@ class NeuronPopulation:
             raise ConfigError("the measured-power noise needs the whole population's power at "
                               "every step and runs on one thread: use threads=1 or the "
                               "diffusion noise")
-        n_blocks = -(-self.n_channels // CHANNEL_BLOCK)
-        self._rng = seed_states(seed, self._n_batch * n_blocks).reshape(
-            self._n_batch, n_blocks, 4)
+        self._keys = seed_keys(seed, (self._n_batch, self.n_channels))
+        self._clock = np.zeros(1, dtype=np.int64)  # steps made: where the noise streams are
         self.blowups = np.zeros(self._n_batch, dtype=np.int64)
         """Per trial: how often the measured-power noise ran away and the trial was put back
         at rest (always 0 under the diffusion noise)."""
@@ -364,13 +401,14 @@ class NeuronPopulation:
         self.u[:] = self.params.b * self.params.c_mv
 
     def noise_streams(self) -> np.ndarray:
-        """A copy of the noise streams' state, for :meth:`restore_noise_streams`."""
-        return self._rng.copy()
+        """Where the noise streams are (a copy: the steps made, which with the seed's keys
+        fix every draw to come), for :meth:`restore_noise_streams`."""
+        return self._clock.copy()
 
     def restore_noise_streams(self, streams: np.ndarray) -> None:
         """Put the noise streams back where :meth:`noise_streams` saw them: the draws made
         since then are drawn again."""
-        self._rng[:] = streams
+        self._clock[:] = streams
 
     def set_snr(self, snr_db: float) -> None:
         """Change the noise level (dB; inf for none) from the next step on."""
@@ -407,11 +445,12 @@ class NeuronPopulation:
         """What the compiled step takes after the current, the step (ms) and the spikes: the
         membranes v (mV) and u, the parameters a, b, c (mV), d, K, v_peak (mV), whether the
         noise is measured, :meth:`NoiseParams.variance` at the SNR, the reference step (ms),
-        the noise streams and the run-away counts; the arrays are updated in place."""
+        the noise keys (batch, n) and the step count (the noise streams' position) and the
+        run-away counts; the arrays are updated in place."""
         p = self.params
         return (self.v, self.u, p.a, p.b, p.c_mv, p.d, p.gain, p.v_peak_mv,
                 self.noise.definition == "measured", self._noise_var, self.noise.ref_step_ms,
-                self._rng, self.blowups)
+                self._keys, self._clock, self.blowups)
 
 
 def simulate_spikes(forces_n: np.ndarray, dt_s: float, snr_db: float = math.inf,
