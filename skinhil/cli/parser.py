@@ -19,6 +19,7 @@ SUBCOMMANDS: tuple[str, ...] = (
     "stimuli",
     "pty",
     "compile",
+    "bench",
 )
 
 ERROR_STATUS = 2

@@ -33,15 +33,18 @@ bitrate_value = integer(1, MAX_BITRATE, "bitrate")
 """argparse type: a CAN or UDP bitrate (bits/s)."""
 
 
-def add_transport_args(parser: argparse.ArgumentParser, udp_listen: bool = False) -> None:
-    """Add the link options to ``parser`` (one of --port, --can or --udp is required).
+def add_transport_args(parser: argparse.ArgumentParser, udp_listen: bool = False,
+                       required: bool = True, title: str = "link (one of --port, --can or --udp)"
+                       ) -> None:
+    """Add the link options to ``parser`` (one of --port, --can or --udp; required unless
+    ``required`` is false, under the group heading ``title``).
 
     ``udp_listen``: this end listens on the ``--udp`` address (the host) instead of sending
     to it (the board).
     """
-    group = parser.add_argument_group("link (one of --port, --can or --udp)")
+    group = parser.add_argument_group(title)
     parser.set_defaults(udp_listen=udp_listen)
-    which = group.add_mutually_exclusive_group(required=True)
+    which = group.add_mutually_exclusive_group(required=required)
     which.add_argument("--port", metavar="PORT",
                        help="serial port: device path (/dev/ttyUSB0, /dev/pts/3) or pyserial "
                             "URL (loop://, socket://host:port)")
@@ -68,19 +71,39 @@ def add_transport_args(parser: argparse.ArgumentParser, udp_listen: bool = False
                        help="CAN FD data-phase bitrate, bits/s (default: same as --bitrate)")
 
 
+def check_transport_args(args: argparse.Namespace) -> None:
+    """:class:`ConfigError` when :func:`add_transport_args`' options do not fit together."""
+    if args.port is not None or args.udp is not None:
+        if args.fd or args.data_bitrate is not None:
+            raise ConfigError("--fd and --data-bitrate are CAN options; use them with --can")
+    if args.port is not None and args.bitrate is not None:
+        raise ConfigError("--bitrate is the rate of a CAN or UDP link; a serial port's "
+                          "is --baud")
+
+
+def transport_argv(args: argparse.Namespace) -> list[str]:
+    """The link options of ``args`` as a command line gives them (for a ``skinhil serve``
+    another command starts on the same link); empty when no link is selected."""
+    if args.port is not None:
+        return ["--port", args.port, "--baud", str(args.baud)]
+    if args.udp is not None:
+        return ["--udp", args.udp, *(["--bitrate", str(args.bitrate)] if args.bitrate else [])]
+    if args.can is None:
+        return []
+    return ["--can", args.can, "--interface", args.interface, *(["--fd"] if args.fd else []),
+            *(["--bitrate", str(args.bitrate)] if args.bitrate is not None else []),
+            *(["--data-bitrate", str(args.data_bitrate)] if args.data_bitrate is not None
+              else [])]
+
+
 def open_transport(args: argparse.Namespace) -> Transport[bytes] | Transport[list]:
     """Open the link selected by :func:`add_transport_args`' options.
 
     Raises :class:`skinhil.errors.TransportError` (port or channel unusable) or
     :class:`ConfigError` (options that do not fit together).
     """
-    if args.port is not None or args.udp is not None:
-        if args.fd or args.data_bitrate is not None:
-            raise ConfigError("--fd and --data-bitrate are CAN options; use them with --can")
+    check_transport_args(args)
     if args.port is not None:
-        if args.bitrate is not None:
-            raise ConfigError("--bitrate is the rate of a CAN or UDP link; a serial port's "
-                              "is --baud")
         return SerialTransport(args.port, args.baud)
     if args.udp is not None:
         host, port = parse_address(args.udp, UDP_LISTEN_HOST if args.udp_listen else None)

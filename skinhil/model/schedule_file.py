@@ -221,12 +221,12 @@ def load_schedule(path: str | Path, size: MeshSize = PAPER_SIZE) -> Schedule:
     return parse_schedule(text, where, size)
 
 
-def read_schedule_text(path: str | Path) -> tuple[str, str]:
-    """The text of schedule file ``path`` and its name for errors, within
-    :data:`MAX_FILE_BYTES`; :class:`ConfigError` for a missing, unreadable, oversized or
-    non-UTF-8 file."""
+def read_schedule_text(path: str | Path, what: str = "schedule file") -> tuple[str, str]:
+    """The text of the TOML file ``path`` and its name for errors (``what`` and the path:
+    a schedule file, a campaign file), within :data:`MAX_FILE_BYTES`; :class:`ConfigError`
+    for a missing, unreadable, oversized or non-UTF-8 file."""
     p = Path(path)
-    where = f"schedule file {str(p)!r}"
+    where = f"{what} {str(p)!r}"
     try:
         data = _read_bounded(p, where)
     except FileNotFoundError:
