@@ -20,7 +20,7 @@ from dataclasses import asdict
 from typing import Any
 
 from protocols import SerialDecoder
-from skinhil.errors import TransportError
+from skinhil.errors import SkinhilError
 from skinhil.transports import PtyMasterTransport, Transport
 from skinhil.transports.faults import FaultParams, FaultyTransport
 
@@ -86,7 +86,7 @@ class RelayLink:
                     del down[:self._decoder.send(bytes(down), 0)]
                 if up:
                     del up[:self._board.send(bytes(up), 0)]
-        except TransportError as exc:
+        except SkinhilError as exc:  # a pty gone, or a stream the tap cannot read
             self.error = str(exc)
 
     def counters(self) -> dict[str, Any]:
