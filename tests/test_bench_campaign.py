@@ -26,6 +26,8 @@ from junitparser import Error, Failure, JUnitXml
 
 from skinhil.campaign.criteria import MissingKey, parse_criterion
 from skinhil.cli import main
+from skinhil.cli.parser import build_parser
+from skinhil.cli.transport_args import transport_argv
 from skinhil.decoding.classifier import DirectionDecoder
 from skinhil.decoding.model_file import save_decoder
 from skinhil.receiver.training import feature_spec
@@ -186,3 +188,20 @@ def test_criteria_read_any_number_of_the_score_file() -> None:
     for text in ("tasks.slip.misses == 0", "name >= 1", "flag == 1", "confusion.1.0 > 0"):
         with pytest.raises(MissingKey):
             parse_criterion(text, "test").value(score)
+
+
+@pytest.mark.parametrize("link", [
+    ["--port", "/dev/ttyUSB0", "--baud", "115200"],
+    ["--udp", "192.168.1.20:5005", "--bitrate", "2000000"],
+    ["--can", "can0", "--interface", "virtual", "--fd", "--bitrate", "500000",
+     "--data-bitrate", "2000000"],
+])
+def test_the_link_given_to_bench_is_the_boards(link: list[str]) -> None:
+    """Each case's ``serve`` gets the link options as ``bench`` was given them."""
+    bench = build_parser("bench").parse_args(["bench", "c.toml", *link])
+    argv = transport_argv(bench)
+    serve = build_parser("serve").parse_args(["serve", *argv])
+    for name in ("port", "baud", "udp", "can", "interface", "fd", "bitrate", "data_bitrate"):
+        if f"--{name.replace('_', '-')}" in link or name in ("fd",):
+            assert getattr(serve, name) == getattr(bench, name), name
+    assert transport_argv(serve) == argv

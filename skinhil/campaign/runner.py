@@ -29,10 +29,9 @@ def run_campaign(campaign: Campaign, out: Path, link: BenchLink, link_text: str,
     ``out/summary.json``, ``out/junit.xml`` and one folder per case under ``out/cases``;
     the summary. ``on_case(record)`` is called after each case played (``None`` for each
     case skipped as done)."""
-    out.mkdir(parents=True, exist_ok=True)
-    summary_path = out / SUMMARY_NAME
-    summary = load_summary(summary_path, campaign) if resume else \
+    summary = load_summary(out / SUMMARY_NAME, campaign) if resume else \
         new_summary(campaign, link_text)
+    out.mkdir(parents=True, exist_ok=True)
     cases = campaign.cases()
     done = {record["id"] for record in summary["cases"]}
     for index, case in enumerate(cases):
