@@ -212,6 +212,8 @@ def run_case(case: Case, folder: Path, link: BenchLink, rig: RigBounds,
         if relay is not None:
             relay.start()
         errors = _play(case, folder, link, relay, rig, stop)
+        if stop.is_set():  # a Ctrl-C from a terminal also stops the children: not a fault
+            raise Stopped
     finally:
         if relay is not None:
             relay.stop()
