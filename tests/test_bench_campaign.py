@@ -68,7 +68,7 @@ def _read(out: Path) -> tuple[dict[str, Any], JUnitXml]:
 def _junit_agrees(summary: dict[str, Any], xml: JUnitXml) -> None:
     """The JUnit XML holds the summary's cases, each with its outcome as a result."""
     suites = list(xml)
-    assert len(suites) == 1 and suites[0].name == "smoke"
+    assert len(suites) == 1 and suites[0].name == summary["campaign"]["name"]
     suite = suites[0]
     cases = list(suite)
     t = summary["totals"]
@@ -205,3 +205,23 @@ def test_the_link_given_to_bench_is_the_boards(link: list[str]) -> None:
         if f"--{name.replace('_', '-')}" in link or name in ("fd",):
             assert getattr(serve, name) == getattr(bench, name), name
     assert transport_argv(serve) == argv
+
+
+def test_a_decoder_that_crashes_is_the_rigs_error(tmp_path: Path) -> None:
+    campaign = tmp_path / "one.toml"
+    campaign.write_text('name = "one"\ncriteria = ["decisions >= 1"]\n[parameters]\n'
+                        'duration_s = 1.0\n[[scenario]]\nbuiltin = "random"\n',
+                        encoding="utf-8")
+    broken = tmp_path / "broken.npz"
+    broken.write_bytes(b"not a model")
+    out = tmp_path / "run"
+    done = subprocess.run([sys.executable, "-m", "skinhil", "bench", str(campaign), "--quiet",
+                           "--model", str(broken), "--out", str(out)], cwd=RUN_DIR,
+                          env=serve_env(), text=True, capture_output=True, timeout=120,
+                          stdin=subprocess.DEVNULL)
+    assert done.returncode == 1, done.stderr
+    summary, xml = _read(out)
+    (record,) = summary["cases"]
+    assert record["outcome"] == "error" and record["criteria"] == []
+    assert "the decoder process ended with status 2" in record["message"]
+    assert [type(r) for r in next(iter(next(iter(xml)))).result] == [Error]
