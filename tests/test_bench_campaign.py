@@ -207,21 +207,32 @@ def test_the_link_given_to_bench_is_the_boards(link: list[str]) -> None:
     assert transport_argv(serve) == argv
 
 
-def test_a_decoder_that_crashes_is_the_rigs_error(tmp_path: Path) -> None:
+def test_a_board_that_cannot_start_is_the_rigs_error(tmp_path: Path) -> None:
     campaign = tmp_path / "one.toml"
     campaign.write_text('name = "one"\ncriteria = ["decisions >= 1"]\n[parameters]\n'
                         'duration_s = 1.0\n[[scenario]]\nbuiltin = "random"\n',
                         encoding="utf-8")
-    broken = tmp_path / "broken.npz"
-    broken.write_bytes(b"not a model")
     out = tmp_path / "run"
     done = subprocess.run([sys.executable, "-m", "skinhil", "bench", str(campaign), "--quiet",
-                           "--model", str(broken), "--out", str(out)], cwd=RUN_DIR,
-                          env=serve_env(), text=True, capture_output=True, timeout=120,
-                          stdin=subprocess.DEVNULL)
+                           "--port", str(tmp_path / "no-such-tty"), "--out", str(out)],
+                          cwd=RUN_DIR, env=serve_env(), text=True, capture_output=True,
+                          timeout=120, stdin=subprocess.DEVNULL)
     assert done.returncode == 1, done.stderr
     summary, xml = _read(out)
     (record,) = summary["cases"]
     assert record["outcome"] == "error" and record["criteria"] == []
-    assert "the decoder process ended with status 2" in record["message"]
+    assert "the board process ended with status 2: skinhil: error:" in record["message"]
+    assert "no-such-tty" in record["message"]
     assert [type(r) for r in next(iter(next(iter(xml)))).result] == [Error]
+
+
+def test_a_file_that_is_no_model_is_one_line(model: Path, tmp_path: Path,
+                                             capsys: pytest.CaptureFixture[str]) -> None:
+    broken = tmp_path / "broken.npz"
+    broken.write_bytes(b"not a model")
+    for path, word in ((broken, "not a decoder"), (tmp_path / "none.npz", "none.npz")):
+        assert main(["bench", str(SMOKE), "--model", str(path), "--out",
+                     str(tmp_path / "out")]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("skinhil: error: ") and "\n" not in err and word in err, err
+    assert not (tmp_path / "out").exists()

@@ -75,16 +75,22 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar, only the totals")
 
 
-def _model(args: argparse.Namespace) -> Path:
-    if args.model is not None:
-        if not args.model.is_file():
-            raise ConfigError(f"--model '{args.model}' not found — give a file written by "
-                              "skinhil train")
-        return args.model
-    from skinhil.cli.demo import cached_model
-    from skinhil.cli.options import DECODE_SNR_DB
+def _model(args: argparse.Namespace, sizes: tuple[str, ...]) -> Path:
+    """The reference receiver's model, checked for every skin size of the campaign (a file
+    the receiver would refuse is refused here, once, not as every case's error)."""
+    from skinhil.model.geometry import parse_size, spring_count
+    from skinhil.receiver.model_file import load_window_decoder
 
-    return cached_model(DECODE_SNR_DB, args.quiet, args.baud, 1)
+    if args.model is None:
+        from skinhil.cli.demo import cached_model
+        from skinhil.cli.options import DECODE_SNR_DB
+
+        path = cached_model(DECODE_SNR_DB, args.quiet, args.baud, 1)
+    else:
+        path = args.model
+    for size in sizes:
+        load_window_decoder(path, n_channels=spring_count(parse_size(size)))
+    return path
 
 
 def run(args: argparse.Namespace) -> int:
@@ -114,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
         link = BenchLink(link_args=tuple(link_args))
         link_text = describe_transport(args)
     else:
-        model = _model(args)
+        model = _model(args, tuple(str(v) for v in campaign.parameters.get("size", ("6x6",))))
         link = BenchLink(model=model, baud=args.baud, faults=args.faults)
         link_text = (f"bench pty pair @ {args.baud} baud, reference receiver (listen "
                      f"--answer, model {model})"
