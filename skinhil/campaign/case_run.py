@@ -176,21 +176,17 @@ def _play(case: Case, folder: Path, link: BenchLink, relay: RelayLink | None, ri
             if time.monotonic() > deadline:
                 return [f"timed out: the board ran {case.duration_s + rig.timeout_s:g} s of "
                         f"wall time for {case.duration_s:g} s of board time"]
-            if decoder is not None and decoder.popen.poll() not in (None, 0):
-                faults.append(f"the decoder process crashed (status "
-                              f"{decoder.popen.returncode}): {_last_line(decoder.err_path)}")
-                decoder = None
             time.sleep(POLL_S)
         log.info("%s: the board process ran %.1f s", case.id, time.monotonic() - t_board)
         if board.popen.returncode != 0:
             faults.append(f"the board process ended with status {board.popen.returncode}: "
                           f"{_last_line(board.err_path) or 'no message'}")
-        if decoder is not None:
+        if decoder is not None:  # it ends at the board's RUN_END
             try:
                 decoder.popen.wait(timeout=DECODER_END_S)
             except subprocess.TimeoutExpired:
                 pass
-            if decoder.popen.poll() not in (None, 0):
+            if decoder.popen.poll() not in (None, 0):  # during the run or after it
                 faults.append(f"the decoder process crashed (status "
                               f"{decoder.popen.returncode}): {_last_line(decoder.err_path)}")
         return faults
