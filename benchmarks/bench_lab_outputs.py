@@ -39,25 +39,7 @@ from harness.host_link import linked_ptys  # noqa: E402
 from harness.lab import LOOPBACK_LSL_CFG, quick_model, wait_for_stderr  # noqa: E402
 from harness.serve import ServeProcess  # noqa: E402
 from machine import describe, load_average  # noqa: E402
-
-
-def cpu_s(pid: int) -> float:
-    """User + system CPU seconds of process ``pid``."""
-    with open(f"/proc/{pid}/stat", encoding="ascii") as fh:
-        fields = fh.read().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-
-def settle(pid: int, timeout_s: float = 120.0) -> None:
-    """Wait until process ``pid`` is idle (started up: < 20 ms CPU in 0.5 s)."""
-    end = time.monotonic() + timeout_s
-    last = cpu_s(pid)
-    while time.monotonic() < end:
-        time.sleep(0.5)
-        now = cpu_s(pid)
-        if now - last < 0.02:
-            return
-        last = now
+from process_cpu import cpu_s, settle  # noqa: E402
 
 
 class PageReader:

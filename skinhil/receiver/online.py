@@ -76,18 +76,35 @@ def step_us(dt_s: float) -> int:
 
 
 MAX_BLOCK_STEPS = 1_000
-"""Most steps the receiver filters in one block (0.1 s at 0.1 ms: 2.7 MB of PSP values for
-338 channels). A backlog (a receiver that fell behind) is filtered block by block, and
-blocks this small reuse the memory the last one freed: 1 s blocks (27 MB) took fresh pages
-every time, 21,000 page faults per 12 s of stream on the host and 284,000 inside user-mode
-Linux, where each is a round trip to the host: 1.24 s per 1 s of stream, so a receiver
-that once fell behind never caught up (its next backlog larger). In blocks of 1,000 steps:
-0.02-0.03 s per 1 s of stream inside user-mode Linux at any backlog, 1,000-2,000 faults
-(``benchmarks/bench_receiver_backlog.py``)."""
+"""Most steps the receiver processes in one block (0.1 s at 0.1 ms). A backlog (a receiver
+that fell behind) is processed block by block, so memory stays bounded whatever the jump:
+only the PSP of decision windows is ever written (see :class:`OnsetWindows`), but a block's
+population counts and the arrays of its events grow with its length
+(``benchmarks/bench_receiver_backlog.py``: inside user-mode Linux every fresh page is a round
+trip to the host)."""
+
+
+@dataclass
+class _OpenWindow:
+    """A window being filled: onset at ``detect_step``, rows from ``start_step``; ``psp`` its
+    PSP rows (the steps the filter has passed are written, zero before the stream began)."""
+
+    detect_step: int
+    start_step: int
+    psp: np.ndarray
 
 
 class OnsetWindows:
-    """Events on board time → PSP bank and onset detector → decision windows (no decoder)."""
+    """Events on board time → PSP bank and onset detector → decision windows (no decoder).
+
+    The PSP filter runs ``lookback_steps`` behind the onset detector (its state at step
+    :attr:`filtered_step`, the events since then kept), and writes its values only into open
+    windows: so the per-step cost is the decay of its states, and a window starting up to
+    ``lookback_steps`` before the onset that opened it still gets every row. A window whose
+    last step the detector passed is finished on a copy of the filter over the events kept.
+    The values are those of the dense filter (:meth:`PSPFilterBank.step_block` over per-step
+    counts) to the bit, whatever the chunks the events came in.
+    """
 
     def __init__(self, dt_s: float, n_channels: int, psp_params: PSPParams,
                  window_steps: int, onset: OnsetParams | None = None) -> None:
@@ -98,7 +115,6 @@ class OnsetWindows:
         self.detector = OnsetDetector(self.dt_s, onset)
         self.window_steps = int(window_steps)
         self.lookback_steps = int(round(self.detector.params.lookback_s / self.dt_s))
-        self.history_steps = self.lookback_steps + self.window_steps
         self.reset()
 
     def reset(self) -> None:
@@ -106,10 +122,13 @@ class OnsetWindows:
         self.bank.reset()
         self.detector.reset()
         self.next_step = 0
+        self.filtered_step = 0
+        """Steps before this one are in the PSP filter's state."""
         self._pending: list[np.ndarray] = []
-        self._history = np.zeros((0, self.n_channels))
-        self._history_start = 0
-        self._open: list[tuple[int, int]] = []  # (detect step, window start step)
+        self._kept_steps = np.zeros(0, np.int64)
+        self._kept_addrs = np.zeros(0, np.int64)
+        """Events of the steps from :attr:`filtered_step` on (absolute steps, ascending)."""
+        self._open: list[_OpenWindow] = []
         self.late_events = 0
         self.max_late_us = 0
         """Largest lateness (µs) of an event for an already processed step."""
@@ -139,59 +158,94 @@ class OnsetWindows:
             out += self._advance_steps(self.next_step + MAX_BLOCK_STEPS)
         return out + self._advance_steps(end_step)
 
+    def _take_events(self, end_step: int) -> tuple[np.ndarray, np.ndarray]:
+        """The queued events of the steps before ``end_step`` as (absolute step, channel),
+        by step; late ones (for steps already processed) counted and applied at the current
+        step, bad addresses counted and dropped."""
+        if not self._pending:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        ev = np.concatenate(self._pending) if len(self._pending) > 1 else self._pending[0]
+        steps = ev["t"] // self.dt_us
+        later = steps >= end_step
+        if later.any():
+            self._pending = [ev[later]]
+            ev, steps = ev[~later], steps[~later]
+        else:
+            self._pending = []
+        late = steps < self.next_step
+        if late.any():
+            self.late_events += int(late.sum())
+            self.max_late_us = max(self.max_late_us,
+                                   int(self.next_step - steps.min()) * self.dt_us)
+            steps = np.maximum(steps, self.next_step)
+        addr = ev["addr"].astype(np.int64)
+        bad = addr >= self.n_channels
+        if bad.any():
+            self.bad_address_events += int(bad.sum())
+            steps, addr = steps[~bad], addr[~bad]
+        if steps.size > 1 and np.any(steps[1:] < steps[:-1]):
+            order = np.argsort(steps, kind="stable")
+            steps, addr = steps[order], addr[order]
+        return steps.astype(np.int64), addr
+
     def _advance_steps(self, end_step: int) -> list[Window]:
         n = end_step - self.next_step
         if n <= 0:
             return []
-        counts = np.zeros((n, self.n_channels))
-        if self._pending:
-            ev = np.concatenate(self._pending)
-            steps = ev["t"] // self.dt_us
-            later = steps >= end_step
-            self._pending = [ev[later]] if later.any() else []
-            now = ev[~later]
-            rel = steps[~later] - self.next_step
-            late = rel < 0
-            if late.any():
-                self.late_events += int(late.sum())
-                self.max_late_us = max(self.max_late_us, int(-rel.min()) * self.dt_us)
-                rel = np.maximum(rel, 0)
-            addr = now["addr"].astype(np.int64)
-            bad = addr >= self.n_channels
-            if bad.any():
-                self.bad_address_events += int(bad.sum())
-            np.add.at(counts, (rel[~bad], addr[~bad]), 1.0)
         first = self.next_step
-        psp = self.bank.step_block(counts)
-        onsets = self.detector.process(counts.sum(axis=1))
+        steps, addr = self._take_events(end_step)
+        counts = np.bincount(steps - first, minlength=n).astype(np.float64)
+        onsets = self.detector.process(counts)
         self.next_step = end_step
         for d in onsets:
-            self._open.append((d, d - self.lookback_steps))
-        self._keep_history(psp, first)
+            a = d - self.lookback_steps
+            self._open.append(_OpenWindow(d, a, np.zeros((self.window_steps,
+                                                          self.n_channels))))
+        self._kept_steps = np.concatenate([self._kept_steps, steps])
+        self._kept_addrs = np.concatenate([self._kept_addrs, addr])
+        self._filter(self.bank, self.filtered_step, max(self.filtered_step,
+                                                          end_step - self.lookback_steps),
+                     self._open)
+        self.filtered_step = max(self.filtered_step, end_step - self.lookback_steps)
+        keep = np.searchsorted(self._kept_steps, self.filtered_step)
+        self._kept_steps, self._kept_addrs = self._kept_steps[keep:], self._kept_addrs[keep:]
         return self._ready()
 
-    def _keep_history(self, psp: np.ndarray, first: int) -> None:
-        joined = np.concatenate([self._history, psp]) if self._history.shape[0] else psp
-        start = first - self._history.shape[0]
-        keep_from = self.next_step - self.history_steps
-        if self._open:
-            keep_from = min(keep_from, min(a for _, a in self._open))
-        cut = max(0, keep_from - start)
-        self._history = joined[cut:]
-        self._history_start = start + cut
+    def _filter(self, bank: PSPFilterBank, lo: int, hi: int,
+                windows: list[_OpenWindow]) -> None:
+        """Step ``bank`` from step ``lo`` to ``hi`` over the kept events, writing the rows of
+        ``windows`` that fall in between."""
+        if hi <= lo:
+            return
+        i0, i1 = np.searchsorted(self._kept_steps, [lo, hi])
+        steps, addr = self._kept_steps[i0:i1] - lo, self._kept_addrs[i0:i1]
+        cuts = sorted({lo, hi} | {min(max(b, lo), hi) for w in windows
+                                  for b in (w.start_step, w.start_step + self.window_steps)})
+        for a, b in zip(cuts[:-1], cuts[1:], strict=False):
+            if b <= a:
+                continue
+            inside = [w for w in windows if w.start_step <= a
+                      and b <= w.start_step + self.window_steps]
+            j0, j1 = np.searchsorted(steps, [a - lo, b - lo])
+            out = inside[0].psp if inside else None
+            row = 0 if not inside else a - inside[0].start_step
+            bank.step_events(b - a, steps[j0:j1] - (a - lo), addr[j0:j1],
+                             None if out is None else out[row:row + b - a])
+            for w in inside[1:]:
+                r = a - w.start_step
+                w.psp[r:r + b - a] = out[row:row + b - a]  # type: ignore[index]
 
     def _ready(self) -> list[Window]:
         out = []
         still = []
-        for d, a in self._open:
-            if a + self.window_steps > self.next_step:
-                still.append((d, a))
+        for w in self._open:
+            end = w.start_step + self.window_steps
+            if end > self.next_step:
+                still.append(w)
                 continue
-            lo = a - self._history_start
-            window = self._history[max(lo, 0):lo + self.window_steps]
-            if lo < 0:  # window starts before the stream did: zero PSP there
-                window = np.concatenate([np.zeros((-lo, self.n_channels)), window])
-            out.append(Window(d, a, window.copy()))
+            if end > self.filtered_step:  # its last rows: on a copy, from the events kept
+                self._filter(self.bank.copy(), self.filtered_step, end, [w])
+            out.append(Window(w.detect_step, w.start_step, w.psp))
         self._open = still
         return out
 
