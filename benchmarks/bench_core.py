@@ -1,6 +1,7 @@
 """Speed of the simulation core: real-time factor of one skin, and 450 trials.
 
-Run: ``python benchmarks/bench_core.py`` (pinned to one core). Reports
+Run: ``python benchmarks/bench_core.py [--smoke]`` (pinned to one core; ``--smoke``: tiny
+runs, a few seconds, to check the script runs: its figures mean little). Reports
 - the real-time factor of one skin (mechanics + 338 neurons + noise at 10 dB) stepped as the
   board steps it, in 1 ms blocks of 0.1 ms steps, for both mechanics (targets ≥ 20x linear,
   ≥ 5x geometric);
@@ -16,6 +17,7 @@ Run: ``python benchmarks/bench_core.py`` (pinned to one core). Reports
 
 from __future__ import annotations
 
+import argparse
 import os
 import sys
 import time
@@ -42,10 +44,15 @@ from skinhil.model.trials import simulate_trial_events, simulate_trials  # noqa:
 
 REPEATS = 3
 """Each figure is the best of this many runs: the machine is a shared VM whose speed varies."""
+SIM_S = 5.0
+"""Simulated seconds per real-time-factor run."""
+TRIAL_REPS, TRIAL_S = 50, 0.5
+"""Repetitions per condition and seconds per trial of the trial runs (450 trials x 0.5 s)."""
 
 
-def real_time_factor(mechanics: str, sim_s: float = 5.0) -> float:
+def real_time_factor(mechanics: str) -> float:
     """Simulated seconds per wall second, stepping 1 ms blocks of 0.1 ms under a schedule."""
+    sim_s = SIM_S
     dt = 1e-4
     sensor = SkinSensor(SkinModel(SkinParams(mechanics=mechanics)), dt, snr_db=10.0, seed=0)
     schedule = random_schedule(direction_conditions(), 40, rest_s=0.25, seed=0)
@@ -67,9 +74,10 @@ def trials_wall_s() -> float:
     walls = []
     for _ in range(REPEATS):
         t0 = time.perf_counter()
-        raster = simulate_trials(direction_conditions(), 50, duration_s=0.5, snr_db=10.0, seed=0)
+        raster = simulate_trials(direction_conditions(), TRIAL_REPS, duration_s=TRIAL_S,
+                                 snr_db=10.0, seed=0)
         walls.append(time.perf_counter() - t0)
-        assert raster.shape == (9, 50, 5000, 338)
+        assert raster.shape == (9, TRIAL_REPS, int(round(TRIAL_S / 1e-4)), 338)
         del raster
     return min(walls)
 
@@ -81,7 +89,7 @@ def simulate_vs_solve_ivp() -> tuple[float, float, float]:
     # the state space solve_ivp integrates, read out as its C y (the axial projection)
     model = SkinModel(SkinParams(mechanics="linear", readout="axial"))
     stim = paper_stimuli()[0]
-    dt, n = 1e-4, 5000
+    dt, n = 1e-4, int(round(TRIAL_S / 1e-4))
     model.simulate(stim, 0.01, dt)  # compile
     p = model.params
     a, b = state_space(model.mesh, p.mass_kg, p.stiffness_n_per_m, p.damping_n_s_per_m,
@@ -114,15 +122,15 @@ def trial_events_memory() -> tuple[float, int, float, float]:
     walls = []
     for _ in range(REPEATS):
         t0 = time.perf_counter()
-        ev = simulate_trial_events(direction_conditions(), 50, duration_s=0.5, snr_db=10.0,
-                                   seed=0)
+        ev = simulate_trial_events(direction_conditions(), TRIAL_REPS, duration_s=TRIAL_S,
+                                   snr_db=10.0, seed=0)
         walls.append(time.perf_counter() - t0)
         n_events = sum(len(e) for trial in ev for e in trial)
         del ev
     peaks = []
     for fn in (simulate_trial_events, simulate_trials):
         tracemalloc.start()
-        out = fn(direction_conditions(), 50, duration_s=0.5, snr_db=10.0, seed=0)
+        out = fn(direction_conditions(), TRIAL_REPS, duration_s=TRIAL_S, snr_db=10.0, seed=0)
         peaks.append(tracemalloc.get_traced_memory()[1] / 1e6)
         tracemalloc.stop()
         del out
@@ -130,6 +138,12 @@ def trial_events_memory() -> tuple[float, int, float, float]:
 
 
 def main() -> None:
+    global REPEATS, SIM_S, TRIAL_REPS, TRIAL_S
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--smoke", action="store_true",
+                    help="tiny runs (one of each, 0.05 s, 9 x 2 trials): the script runs")
+    if ap.parse_args().smoke:
+        REPEATS, SIM_S, TRIAL_REPS, TRIAL_S = 1, 0.05, 2, 0.05
     print(describe())
     print(f"best of {REPEATS} runs each; {load_average()}", flush=True)
     lin = real_time_factor("linear")
@@ -137,17 +151,18 @@ def main() -> None:
     geo = real_time_factor("geometric")
     print(f"real-time factor, geometric mechanics: {geo:6.1f}x  (target >= 5x)", flush=True)
     wall = trials_wall_s()
-    print(f"450 trials x 0.5 s at dt 0.1 ms with spikes: {wall:5.2f} s  (target <= 10 s)",
-          flush=True)
+    print(f"{9 * TRIAL_REPS} trials x {TRIAL_S:g} s at dt 0.1 ms with spikes: {wall:5.2f} s  "
+          "(target <= 10 s for 450 x 0.5 s)", flush=True)
     ours, ref, err = simulate_vs_solve_ivp()
-    print(f"SkinModel.simulate, paper stimulus A, 0.5 s on the 0.1 ms grid: {1e3 * ours:6.1f} ms;"
+    print(f"SkinModel.simulate, paper stimulus A, {TRIAL_S:g} s on the 0.1 ms grid: "
+          f"{1e3 * ours:6.1f} ms;"
           f" solve_ivp RK45 (default tolerances, same equations and grid): {1e3 * ref:6.1f} ms;"
           f" {ref / ours:5.1f}x faster (target >= 2x); largest difference {err:.1e} of the peak"
           " force (RK45's own tolerance)", flush=True)
     ev_wall, n_ev, ev_mb, raster_mb = trial_events_memory()
-    print(f"450 trials x 0.5 s kept as events: {ev_wall:5.2f} s, {n_ev} events; peak memory "
-          f"allocated {ev_mb:6.1f} MB (target <= 250 MB; tracemalloc), dense raster "
-          f"{raster_mb:6.1f} MB")
+    print(f"{9 * TRIAL_REPS} trials x {TRIAL_S:g} s kept as events: {ev_wall:5.2f} s, "
+          f"{n_ev} events; peak memory allocated {ev_mb:6.1f} MB (target <= 250 MB; "
+          f"tracemalloc), dense raster {raster_mb:6.1f} MB")
     print(load_average())
 
 

@@ -16,6 +16,10 @@ Usage::
     python benchmarks/bench_lab_outputs.py [--sizes 6x6,26x26] [--duration 30]
                                            [--psp-sensors LIST] [--baud N]
                                            [--configs none,view,lsl,view+lsl]
+                                           [--smoke]
+
+``--smoke``: 6x6 for 1 s, listen alone, with a decoder fitted on random features
+(``chance_model``) instead of a trained one (checks that the script runs).
 """
 
 from __future__ import annotations
@@ -36,7 +40,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "benchmarks")]
 
 from harness.host_link import linked_ptys  # noqa: E402
-from harness.lab import LOOPBACK_LSL_CFG, quick_model, wait_for_stderr  # noqa: E402
+from harness.lab import LOOPBACK_LSL_CFG, chance_model, quick_model, wait_for_stderr  # noqa: E402
 from harness.serve import ServeProcess  # noqa: E402
 from machine import describe, load_average  # noqa: E402
 from process_cpu import cpu_s, settle  # noqa: E402
@@ -114,15 +118,19 @@ CONFIGS = {"none": [], "view": ["--view", "0"], "lsl": ["--lsl", "bench"],
 """The listen runs compared: alone, with each output, with both."""
 
 
-def first_events(listen: ServeProcess, timeout_s: float = 600.0) -> None:
-    """Wait for listen's first link line (``--json``, every second) with events decoded."""
+def first_events(listen: ServeProcess, board: ServeProcess, timeout_s: float = 600.0) -> None:
+    """Wait for listen's first link line (``--json``, every second) with events decoded, or
+    for the board's end (a run shorter than listen's first line: listen ends with it)."""
     end = time.monotonic() + timeout_s
     while time.monotonic() < end:
+        if board.exited:
+            return
         if any(x.get("type") == "link" and x.get("events_decoded", 0) > 0
                for x in list(listen.lines)):
             return
         time.sleep(0.02)
-    raise SystemExit(f"no events reached listen: {listen.stderr[-2000:]}")
+    raise SystemExit(f"no events reached listen: {listen.stderr[-2000:]}\nthe board: "
+                     f"{board.stderr[-2000:]}")
 
 
 def run(size: str, duration: float, config: str, model: Path, tmp: Path,
@@ -145,7 +153,7 @@ def run(size: str, duration: float, config: str, model: Path, tmp: Path,
             board = ServeProcess("--port", str(board_end), "--baud", str(baud),
                                  "--duration", str(duration),
                                  "--size", size, "--snr-db", "10", "--seed", "1", "--json")
-            first_events(listen)
+            first_events(listen, board)
             c0, t0 = cpu_s(listen.proc.pid), time.monotonic()
             rc = board.wait(duration + 600)
             time.sleep(1.0)
@@ -187,7 +195,10 @@ def main() -> None:
                     help="the board's serial budget, bits/s (a pty carries any)")
     ap.add_argument("--configs", default="none,view+lsl",
                     help=f"listen runs to compare, of {', '.join(CONFIGS)}")
+    ap.add_argument("--smoke", action="store_true", help="6x6 for 1 s: the script runs")
     args = ap.parse_args()
+    if args.smoke:
+        args.sizes, args.duration, args.configs = "6x6", 1.0, "none"
     if shutil.which("socat") is None:
         raise SystemExit("socat is needed (apt-get install socat)")
     print(describe())
@@ -197,7 +208,7 @@ def main() -> None:
     os.environ["LSLAPICFG"] = str(cfg)
     for size in args.sizes.split(","):
         rows, cols = (int(v) for v in size.split("x"))
-        model = quick_model(tmp, (rows, cols))
+        model = (chance_model if args.smoke else quick_model)(tmp, (rows, cols))
         for config in args.configs.split(","):
             print(load_average(), flush=True)
             res = run(size, args.duration, config, model, tmp, args.psp_sensors, args.baud)

@@ -19,7 +19,7 @@ Usage::
     python benchmarks/bench_live_hand.py [--size 34x34] [--duration 60] [--board-cpu 0]
                                          [--listen-cpu 1] [--snr-db 10] [--smoke]
 
-``--smoke``: 6x6 for 2 s (checks that the script runs; its figures mean little).
+``--smoke``: 6x6 for 1 s (checks that the script runs; its figures mean little).
 """
 
 from __future__ import annotations
@@ -109,7 +109,7 @@ def run(size: str, duration: float, board_cpu: int, listen_cpu: int, snr_db: str
         "events_decoded": link["events_decoded"], "lost_on_link": link["lost_on_link"],
         "frames_lost": link["frames_lost"], "late_events": link["late_events"],
         "all_decoded": link["events_decoded"] == s["sent"] and link["lost_on_link"] == 0,
-        "decisions": decisions,
+        "decisions": decisions, "socket_buffer": info.get("socket_buffer"),
         "listen_cpu_share": round((c1 - c0) / (t1 - t0), 4),
         "listen_cpu_s_per_board_s": round((c1 - c0) / max(s["board_time_s"], 1e-9), 4),
         "load_before": [round(v, 2) for v in load_before],
@@ -126,10 +126,10 @@ def main() -> int:
     ap.add_argument("--snr-db", default="10", help="neuron noise SNR, dB (10)")
     ap.add_argument("--profile", type=Path, metavar="SVG",
                     help="record listen with py-spy (pip install py-spy) into this flame graph")
-    ap.add_argument("--smoke", action="store_true", help="6x6 for 2 s: the script runs")
+    ap.add_argument("--smoke", action="store_true", help="6x6 for 1 s: the script runs")
     args = ap.parse_args()
     if args.smoke:
-        args.size, args.duration = "6x6", 2.0
+        args.size, args.duration = "6x6", 1.0
     cores = os.sched_getaffinity(0)
     for name in ("board_cpu", "listen_cpu"):
         if getattr(args, name) not in cores:
@@ -147,8 +147,9 @@ def main() -> int:
           f"({res['board_generated']} generated), {res['lost_on_link']} lost on the link, "
           f"{res['late_events']} late; board late ticks {res['late_ticks']} of "
           f"{res['ticks']} ({res['late_ticks_pct']} %); listen "
-          f"{100 * res['listen_cpu_share']:.1f} % of its core; {res['decisions']} decisions",
-          flush=True)
+          f"{100 * res['listen_cpu_share']:.1f} % of its core "
+          f"({res['listen_cpu_s_per_board_s']:.3f} CPU s per board s); {res['decisions']} "
+          f"decisions; socket buffer {res['socket_buffer']}", flush=True)
     print(load_average(), flush=True)
     return 0
 

@@ -1,6 +1,7 @@
 """Compactness and speed of the wire protocols (serial, classic CAN, CAN FD).
 
-Run: ``python benchmarks/bench_protocols.py`` (pinned to one core). For Poisson spikes over
+Run: ``python benchmarks/bench_protocols.py [--smoke]`` (pinned to one core; ``--smoke``:
+0.05 s of spikes, one run each, to check the script runs). For Poisson spikes over
 338 channels at 100 µs steps, with frames flushed every 1 ms (one ``events`` call per ms, as
 the board does) and a status record every 100 ms, it reports
 - serial bytes per event, framing, SYNC and status included (targets ≤ 2.5 at 20k ev/s,
@@ -14,6 +15,7 @@ the board does) and a status record every 100 ms, it reports
 
 from __future__ import annotations
 
+import argparse
 import os
 import sys
 import time
@@ -142,6 +144,11 @@ def can_report(rate: float, fd: bool) -> None:
 
 
 def main() -> None:
+    global DURATION_S, REPEATS
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--smoke", action="store_true", help="0.05 s, one run each: the script runs")
+    if ap.parse_args().smoke:
+        DURATION_S, REPEATS = 0.05, 1
     print(describe())
     print(f"Poisson spikes over 338 channels, {STEP_US} µs steps, flush every {FLUSH_US} µs, "
           f"status every {STATUS_US // 1000} ms, {DURATION_S} s; speeds best of {REPEATS}")

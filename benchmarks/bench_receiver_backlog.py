@@ -1,6 +1,7 @@
 """The receiver's filters on a backlog: the cost of 1 s of stream whatever the chunk it comes in.
 
-Run: ``python benchmarks/bench_receiver_backlog.py [--seconds 12] [--block-steps N]``; inside
+Run: ``python benchmarks/bench_receiver_backlog.py [--seconds 12] [--block-steps N] [--smoke]``
+(``--smoke``: 0.4 s of stream in chunks of 0.02 and 0.2 s, to check the script runs); inside
 user-mode Linux: ``python tests/uml_vcan.py -- python benchmarks/bench_receiver_backlog.py``.
 The same board stream (``board_stream``, 10 dB, seed 3; 338 channels at 0.1 ms) is pushed into
 a fresh :class:`skinhil.receiver.online.OnlineClassifier` in chunks of 0.02 s (a receiver
@@ -44,15 +45,20 @@ def main() -> int:
     p.add_argument("--seconds", type=float, default=12.0, help="stream length (s)")
     p.add_argument("--block-steps", type=int, default=online.MAX_BLOCK_STEPS,
                    help="steps filtered per block at most (default: the receiver's)")
+    p.add_argument("--smoke", action="store_true", help="0.4 s of stream: the script runs")
     args = p.parse_args()
+    chunks_s = CHUNKS_S
+    if args.smoke:
+        args.seconds, chunks_s = 0.4, CHUNKS_S[:2]
     online.MAX_BLOCK_STEPS = args.block_steps
-    model, _ = train_decoder(10.0, reps=2, seed=0, rest_s=0.05, cross_validation=False)
+    model, _ = train_decoder(10.0, reps=1 if args.smoke else 2, seed=0, rest_s=0.05,
+                             cross_validation=False)
     decoder = WindowDecoder(model)
     events = np.concatenate([b[0] for b in board_stream(args.seconds, 10.0, 0.25, 3)])
     warm = online.OnlineClassifier(decoder)
     warm.advance(500_000)  # numba kernels loaded before anything is timed
     print(f"{events.shape[0]} events in {args.seconds:g} s, blocks of {args.block_steps} steps")
-    for chunk_s in CHUNKS_S:
+    for chunk_s in chunks_s:
         clf = online.OnlineClassifier(decoder)
         edges = np.arange(0.0, args.seconds + 1e-9, chunk_s)
         r0, t0 = resource.getrusage(resource.RUSAGE_SELF), time.perf_counter()

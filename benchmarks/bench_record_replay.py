@@ -20,7 +20,10 @@ Usage::
 
     python benchmarks/bench_record_replay.py [--parts pace,record,session,listen,...]
                                              [--duration 20]
-                                             [--events 10000000]
+                                             [--events 10000000] [--smoke]
+
+``--smoke``: the parts pace, record and session with 1 s of board time and 20,000 events
+(checks that the script runs; its figures mean little).
 """
 
 from __future__ import annotations
@@ -318,7 +321,11 @@ def main() -> None:
                          "otherwise make its resident memory vary by ~100 MB from run to run)")
     ap.add_argument("--realtime", action="store_true",
                     help="pace: the board and the replay with real-time scheduling (root)")
+    ap.add_argument("--smoke", action="store_true",
+                    help="pace, record, session: 1 s and 20,000 events: the script runs")
     args = ap.parse_args()
+    if args.smoke:
+        args.parts, args.duration, args.events = "pace,record,session", 1.0, 20_000
     print(describe())
     print(load_average())
     parts = args.parts.split(",")

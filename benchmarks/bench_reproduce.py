@@ -1,6 +1,8 @@
 """Cost of the reproduction: one sweep grid point on one core, and the full run.
 
-Run: ``python benchmarks/bench_reproduce.py [--out DIR] [--skip-full]``. Reports
+Run: ``python benchmarks/bench_reproduce.py [--out DIR] [--skip-full] [--smoke]``
+(``--smoke``: two linear and one geometric grid point, no full run, to check the script
+runs). Reports
 - the time of one K x C grid point (5 paper stimuli, 0.5 s, both phases' measures) on one
   core, median of 20 points of the default grid, for the linear mechanics (target ≤ 50 ms)
   and, for information, the geometric one (median of 5);
@@ -43,12 +45,16 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", help="output directory of the full run (default: temporary)")
     parser.add_argument("--skip-full", action="store_true", help="only the grid-point cost")
+    parser.add_argument("--smoke", action="store_true",
+                        help="3 grid points and no full run: the script runs")
     args = parser.parse_args()
     print(describe())
-    print(f"grid point, linear, one core: {point_cost_s('linear', 20) * 1e3:.1f} ms "
+    n_linear, n_geometric = (2, 1) if args.smoke else (20, 5)
+    print(f"grid point, linear, one core: {point_cost_s('linear', n_linear) * 1e3:.1f} ms "
           "(target <= 50 ms)")
-    print(f"grid point, geometric, one core: {point_cost_s('geometric', 5) * 1e3:.0f} ms")
-    if args.skip_full:
+    print(f"grid point, geometric, one core: "
+          f"{point_cost_s('geometric', n_geometric) * 1e3:.0f} ms")
+    if args.skip_full or args.smoke:
         return 0
     out = args.out or tempfile.mkdtemp(prefix="skinhil-reproduce-")
     t0 = time.perf_counter()

@@ -12,7 +12,9 @@ Runs the board as a subprocess, as a user would, and reports from its own summar
 
 Usage::
 
-    python benchmarks/bench_serve.py [--duration 60] [--skip-vcan] [--realtime]
+    python benchmarks/bench_serve.py [--duration 60] [--skip-vcan] [--realtime] [--smoke]
+
+``--smoke``: 1 s per pty run and no vcan run (checks that the script runs).
 
 Each pty run also reports how busy the whole machine was meanwhile (from /proc/stat) and
 the load average: tick lateness on a shared machine says more about the others than about
@@ -110,7 +112,10 @@ def main() -> int:
     ap.add_argument("--vcan-only", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--realtime", action="store_true",
                     help="serve with --realtime (FIFO scheduling; needs root or CAP_SYS_NICE)")
+    ap.add_argument("--smoke", action="store_true", help="1 s, no vcan: the script runs")
     args = ap.parse_args()
+    if args.smoke:
+        args.duration, args.skip_vcan = 1.0, True
     rt = ["--realtime"] if args.realtime else []
     if args.vcan_only:  # inside UML (or on a host with vcan0): print one JSON summary
         print("RESULT " + json.dumps(_vcan_run(args.duration, "--snr-db", "20", *rt)))

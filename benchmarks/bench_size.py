@@ -37,7 +37,9 @@ Usage::
     python benchmarks/bench_size.py [--sizes 6,16,26,32,48] [--threads 1,2] [--snr-db 10]
                                     [--seconds 2] [--find-largest] [--min-rtf 1.0]
                                     [--clock wall|cpu] [--cpu N]
-                                    [--contact slide,vibrate [--contact-only]]
+                                    [--contact slide,vibrate [--contact-only]] [--smoke]
+
+``--smoke``: 6x6 and 8x8 on one thread, one 0.05 s run each (checks that the script runs).
 
 Every figure is the best of ``--repeats`` runs (the machine is shared): the load average is
 printed before and after. ``--clock cpu`` (one thread only) times this process's CPU time
@@ -337,7 +339,11 @@ def main() -> None:
                          "(module docstring)")
     ap.add_argument("--contact-only", action="store_true",
                     help="with --contact: only the contact table")
+    ap.add_argument("--smoke", action="store_true",
+                    help="6x6 and 8x8, one thread, one 0.05 s run each: the script runs")
     args = ap.parse_args()
+    if args.smoke:
+        args.sizes, args.threads, args.seconds, args.repeats = "6,8", "1", 0.05, 1
     if args.cpu is not None:
         os.sched_setaffinity(0, {args.cpu})  # before any thread starts: all on that core
     global CLOCK

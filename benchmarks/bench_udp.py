@@ -10,7 +10,9 @@ board's own final status (``events_sent``) and the decoder's ``events_lost``.
 Usage::
 
     python benchmarks/bench_udp.py [--sizes 6x6,32x32] [--duration 60] [--snr-db DB]
-                                   [--threads N] [--realtime] [--cpu N]
+                                   [--threads N] [--realtime] [--cpu N] [--smoke]
+
+``--smoke``: the default skin for 1 s (checks that the script runs).
 
 ``--sizes`` needs ``skinhil serve --size``; 6x6 is the default skin either way. ``--cpu N``
 runs the board on core N (``serve --cpu N``) and this process, the receiver, on the others:
@@ -122,7 +124,10 @@ def main() -> int:
                     help="serve with --realtime (FIFO scheduling; needs root or CAP_SYS_NICE)")
     ap.add_argument("--cpu", type=int, default=None,
                     help="the board on this core (serve --cpu), the receiver on the others")
+    ap.add_argument("--smoke", action="store_true", help="6x6 for 1 s: the script runs")
     args = ap.parse_args()
+    if args.smoke:
+        args.sizes, args.duration = "", 1.0
     extra = (["--snr-db", args.snr_db] if args.snr_db else []) + (
         ["--threads", args.threads] if args.threads else []) + (
         ["--realtime"] if args.realtime else []) + (

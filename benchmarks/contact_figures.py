@@ -9,7 +9,10 @@ scenario's spikes and max strain.
 
 Usage::
 
-    python benchmarks/contact_figures.py [--snr-db inf] [--out docs/figures]
+    python benchmarks/contact_figures.py [--snr-db inf] [--out docs/figures] [--smoke]
+
+``--smoke``: the first scenario only, drawn into a temporary directory (checks that the
+script runs).
 """
 
 from __future__ import annotations
@@ -76,9 +79,15 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--snr-db", default="inf")
     ap.add_argument("--out", type=Path, default=REPO / "docs" / "figures")
+    ap.add_argument("--smoke", action="store_true",
+                    help="the first scenario only, its figure in a temporary directory: the "
+                         "script runs")
     args = ap.parse_args()
+    scenarios = sorted((REPO / "examples" / "scenarios").glob("*.toml"))
     with tempfile.TemporaryDirectory() as tmp:
-        for path in sorted((REPO / "examples" / "scenarios").glob("*.toml")):
+        if args.smoke:
+            scenarios, args.out = scenarios[:1], Path(tmp)
+        for path in scenarios:
             npz = Path(tmp) / f"{path.stem}.npz"
             code = skinhil(["simulate", "--schedule", str(path), "--out", str(npz),
                             "--no-progress", "--snr-db", args.snr_db])

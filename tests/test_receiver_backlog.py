@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import skinhil
-from skinhil.model.psp import PSPParams
+from skinhil.model.psp import PSPFilterBank, PSPParams
 from skinhil.model.sensor import SkinSensor
 from skinhil.receiver.online import OnsetWindows, Window
 
@@ -57,9 +57,14 @@ def _play(stream: tuple[np.ndarray, int, int], chunk_steps: int) -> tuple[list[W
     return out, peak
 
 
+@pytest.fixture(scope="module")
+def live(stream: tuple[np.ndarray, int, int]) -> list[Window]:
+    """The windows of a receiver keeping up (20 ms chunks)."""
+    return _play(stream, 200)[0]
+
+
 def test_a_backlog_read_at_once_gives_the_windows_of_a_receiver_keeping_up_in_bounded_memory(
-        stream: tuple[np.ndarray, int, int]) -> None:
-    live, _ = _play(stream, 200)  # 20 ms chunks: a receiver keeping up
+        stream: tuple[np.ndarray, int, int], live: list[Window]) -> None:
     behind, peak = _play(stream, stream[1])  # the whole stream at once
     assert len(live) >= 6  # the comparison is not vacuous
     assert [(w.detect_step, w.start_step) for w in behind] == [
@@ -67,3 +72,22 @@ def test_a_backlog_read_at_once_gives_the_windows_of_a_receiver_keeping_up_in_bo
     for a, b in zip(live, behind, strict=True):
         assert np.array_equal(a.psp, b.psp)
     assert peak <= BACKLOG_PEAK_BYTES, f"{peak / 1e6:.1f} MB"
+
+
+def test_the_windows_hold_the_dense_filters_values_bit_for_bit(
+        stream: tuple[np.ndarray, int, int], live: list[Window]) -> None:
+    """The receiver filters event by event and writes only its windows: each window is the
+    dense eq. 12 filter of the whole stream's per-step counts over the window's steps,
+    exactly (zero before the stream began)."""
+    events, _, n_channels = stream
+    assert len(live) >= 6
+    last = max(w.start_step for w in live) + WINDOW_STEPS
+    counts = np.zeros((last, n_channels))
+    steps = events["t"] // DT_US
+    keep = steps < last
+    np.add.at(counts, (steps[keep], events["addr"][keep].astype(np.int64)), 1.0)
+    dense = PSPFilterBank(n_channels, DT_S, PSPParams()).step_block(counts)
+    for w in live:
+        lo = max(w.start_step, 0)
+        assert np.array_equal(w.psp[lo - w.start_step:], dense[lo:w.start_step + WINDOW_STEPS])
+        assert not w.psp[:lo - w.start_step].any()

@@ -164,6 +164,7 @@ def summary(receiver: Receiver, wall_s: float) -> dict[str, Any]:
             "decision_latency_board_ms": {"p50": pct(lat_b, 50), "p99": pct(lat_b, 99)},
             "decision_latency_host_ms": {"p50": pct(lat_h, 50), "p99": pct(lat_h, 99)},
             "link": receiver.link_report().as_dict(),
+            "socket_buffer": socket_buffer(receiver.transport),
             "run_end": None if receiver.run_end is None else {
                 "t_s": receiver.run_end.t_us * 1e-6,
                 "reason": getattr(receiver.run_end.reason, "name", receiver.run_end.reason)}}
@@ -189,6 +190,7 @@ def print_summary(info: dict[str, Any], names: dict[int, str]) -> None:
         if d["p50"] is not None:
             print(f"{label}: p50 {d['p50']:.1f} ms, p99 {d['p99']:.1f} ms")
     print_link(info["link"])
+    print_socket_buffer(info.get("socket_buffer"))
     end = info.get("run_end")
     if end is not None:
         print(f"the board's run ended at {end['t_s']:.3f} s board time ({end['reason']})")
@@ -210,7 +212,26 @@ def bus_summary(bus: BusReceiver, wall_s: float) -> dict[str, Any]:
     return {"type": "summary", "wall_s": round(wall_s, 3),
             "boards": {str(k): summary(rx, wall_s) for k, rx in bus.boards.items()},
             "foreign_frames": bus.foreign_frames, "refused_datagrams": bus.refused_datagrams,
-            "link": bus.combined_report().as_dict()}
+            "link": bus.combined_report().as_dict(),
+            "socket_buffer": socket_buffer(bus.transport)}
+
+
+def socket_buffer(transport: Any) -> dict[str, int] | None:
+    """The receive buffer (bytes) the link's socket asked of the kernel and was granted
+    (``granted < asked``: the kernel capped it at ``net.core.rmem_max``), or None where the
+    link has no socket buffer of its own (serial, pty)."""
+    asked = int(getattr(transport, "rcvbuf_asked", 0) or 0)
+    if not asked:
+        return None
+    return {"asked": asked, "granted": int(getattr(transport, "rcvbuf_granted", 0) or 0)}
+
+
+def print_socket_buffer(buf: dict[str, int] | None) -> None:
+    """The socket buffer line, when the kernel granted less than asked."""
+    if buf is not None and buf["granted"] < buf["asked"]:
+        print(f"socket receive buffer {buf['granted']} bytes granted of {buf['asked']} asked "
+              "(the kernel's net.core.rmem_max): data is lost if listen stalls longer than "
+              "that holds")
 
 
 def listen_until_stopped(args: argparse.Namespace, rx: Receiver | BusReceiver,
@@ -258,6 +279,7 @@ def run_bus(args: argparse.Namespace, bus: BusReceiver, names: dict[int, str]) -
         print_summary(board, names)
     print(f"all {len(info['boards'])} boards ({info['foreign_frames']} frames of other boards):")
     print_link(info["link"])
+    print_socket_buffer(info["socket_buffer"])
     return 0
 
 
