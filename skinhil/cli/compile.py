@@ -41,7 +41,9 @@ def run(args: argparse.Namespace) -> int:
     board.run(0.01)  # the board's warm-up runs the model and the serial link once
     events = make_events(np.arange(8, dtype=np.int64) * 100, np.arange(8))
     SerialDecoder().feed(SerialEncoder().events(events, 1000))
-    PSPFilterBank(4, 1e-3).step_block(np.zeros((2, 4)))
+    bank = PSPFilterBank(4, 1e-3)
+    bank.step_block(np.zeros((2, 4)))
+    bank.step_events(2, np.zeros(1, np.int64), np.zeros(1, np.int64), np.zeros((2, 4)))
     cold, cached = cache_is_cold()
     if cold:
         raise ConfigError(f"the kernels compiled but were not cached in '{cached}' — set "

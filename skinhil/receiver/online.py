@@ -115,6 +115,8 @@ class OnsetWindows:
         self.detector = OnsetDetector(self.dt_s, onset)
         self.window_steps = int(window_steps)
         self.lookback_steps = int(round(self.detector.params.lookback_s / self.dt_s))
+        empty = np.zeros(0, np.int64)
+        self.bank.copy().step_events(1, empty, empty)  # the kernel loaded before the stream
         self.reset()
 
     def reset(self) -> None:
