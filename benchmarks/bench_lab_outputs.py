@@ -43,7 +43,7 @@ from harness.host_link import linked_ptys  # noqa: E402
 from harness.lab import LOOPBACK_LSL_CFG, chance_model, quick_model, wait_for_stderr  # noqa: E402
 from harness.serve import ServeProcess  # noqa: E402
 from machine import describe, load_average  # noqa: E402
-from process_cpu import cpu_s, settle  # noqa: E402
+from process_cpu import cpu_while, settle  # noqa: E402
 
 
 class PageReader:
@@ -154,10 +154,7 @@ def run(size: str, duration: float, config: str, model: Path, tmp: Path,
                                  "--duration", str(duration),
                                  "--size", size, "--snr-db", "10", "--seed", "1", "--json")
             first_events(listen, board)
-            c0, t0 = cpu_s(listen.proc.pid), time.monotonic()
-            rc = board.wait(duration + 600)
-            time.sleep(1.0)
-            c1, t1 = cpu_s(listen.proc.pid), time.monotonic()
+            rc, cpu, wall = cpu_while(listen.proc.pid, lambda: board.wait(duration + 600), 1.0)
             listen.interrupt()
             listen.wait(120)
             if lsl is not None:
@@ -168,9 +165,9 @@ def run(size: str, duration: float, config: str, model: Path, tmp: Path,
     if rc != 0:
         raise SystemExit(f"the board stopped with {rc}: {board.stderr[-2000:]}")
     link = listen.summary()["link"]
-    out = {"size": size, "outputs": config, "wall_s": round(t1 - t0, 2),
-           "listen_cpu_share": round((c1 - c0) / (t1 - t0), 4),
-           "listen_cpu_s_per_board_s": round((c1 - c0) / duration, 4),
+    out = {"size": size, "outputs": config, "wall_s": round(wall, 2),
+           "listen_cpu_share": round(cpu / wall, 4),
+           "listen_cpu_s_per_board_s": round(cpu / duration, 4),
            "board_generated": board.summary().get("generated"),
            "board_wall_s": round(board.summary().get("wall_s", 0.0), 2),
            "board_dropped_by": {k: v for k, v in board.summary().get("dropped_by", {}).items()

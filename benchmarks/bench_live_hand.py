@@ -41,7 +41,7 @@ sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "benchmarks")]
 from harness.lab import chance_model  # noqa: E402
 from harness.serve import ServeProcess  # noqa: E402
 from machine import describe, load_average  # noqa: E402
-from process_cpu import cpu_s, settle  # noqa: E402
+from process_cpu import cpu_while, settle  # noqa: E402
 
 
 def free_udp_port() -> int:
@@ -77,13 +77,10 @@ def run(size: str, duration: float, board_cpu: int, listen_cpu: int, snr_db: str
                              "--seed", "1", "--duration", str(duration), "--cpu",
                              str(board_cpu), "--json")
         started(board)
-        c0, t0 = cpu_s(listen.proc.pid), time.monotonic()
         spy = None if profile is None else subprocess.Popen(
             ["py-spy", "record", "-r", "50", "-d", str(int(duration)), "-o", str(profile),
              "-p", str(listen.proc.pid)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        rc = board.wait(duration + 600)
-        time.sleep(0.5)
-        c1, t1 = cpu_s(listen.proc.pid), time.monotonic()
+        rc, cpu, wall = cpu_while(listen.proc.pid, lambda: board.wait(duration + 600), 0.5)
         listen.interrupt()
         listen.wait(120)
         if spy is not None:
@@ -110,8 +107,8 @@ def run(size: str, duration: float, board_cpu: int, listen_cpu: int, snr_db: str
         "frames_lost": link["frames_lost"], "late_events": link["late_events"],
         "all_decoded": link["events_decoded"] == s["sent"] and link["lost_on_link"] == 0,
         "decisions": decisions, "socket_buffer": info.get("socket_buffer"),
-        "listen_cpu_share": round((c1 - c0) / (t1 - t0), 4),
-        "listen_cpu_s_per_board_s": round((c1 - c0) / max(s["board_time_s"], 1e-9), 4),
+        "listen_cpu_share": round(cpu / wall, 4),
+        "listen_cpu_s_per_board_s": round(cpu / max(s["board_time_s"], 1e-9), 4),
         "load_before": [round(v, 2) for v in load_before],
         "load_after": [round(v, 2) for v in os.getloadavg()],
     }

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable
 
 
 def cpu_s(pid: int) -> float:
@@ -23,3 +24,12 @@ def settle(pid: int, timeout_s: float = 120.0) -> None:
         if now - last < 0.02:
             return
         last = now
+
+
+def cpu_while(pid: int, wait: Callable[[], int], after_s: float) -> tuple[int, float, float]:
+    """Run ``wait()`` (a board's run: its exit status) and ``after_s`` s more; return that
+    status, the CPU seconds process ``pid`` used meanwhile and the wall seconds it took."""
+    c0, t0 = cpu_s(pid), time.monotonic()
+    rc = wait()
+    time.sleep(after_s)
+    return rc, cpu_s(pid) - c0, time.monotonic() - t0
