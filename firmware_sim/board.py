@@ -66,7 +66,7 @@ from skinhil.model.skin import SkinModel, SkinParams
 from skinhil.model.stimuli import Schedule, ScheduledStimulus
 from skinhil.model.stimulus_table import stimulus_table
 from skinhil.model.timeline import MarkerEvent, Timeline
-from skinhil.scoring import DecisionScoreboard, answer_reason
+from skinhil.scoring import DecisionScoreboard, TaskScoreboard, answer_reason
 from skinhil.transports import Transport
 from skinhil.world import Scene, TouchSensor, TruthLog
 
@@ -86,6 +86,8 @@ reader thread never holds the interpreter lock for longer than this against the 
 
 
 DEFAULT_RESPONSE_WINDOW_S = 0.5
+MAX_TRUTH_MARKERS = 1_000_000
+"""Markers :attr:`Board.truth_markers` keeps (about 100 MB at most)."""
 """Default response window (s) of the board's scoreboard (``serve --response-window``)."""
 
 
@@ -145,6 +147,10 @@ class BoardConfig:
     """At the end, how long (s) the FIFO may take to drain onto the wire."""
     response_window_s: float = DEFAULT_RESPONSE_WINDOW_S
     """How long (s) after a stimulus onset a DECISION may arrive and still answer it."""
+    markers: bool = True
+    """Send the ground-truth MARKERs on the link. False: the **blind link** (SPEC.md §3.4):
+    no byte of truth reaches the decoder; the markers go to :attr:`Board.truth_markers`
+    only (``serve --score`` without ``--markers``)."""
 
     @property
     def steps_per_tick(self) -> int:
@@ -206,6 +212,8 @@ class BoardSummary:
     (:mod:`firmware_sim.command_budget`)."""
     scoreboard: dict[str, Any] = field(default_factory=dict)
     """The decoder under test's scoreboard (:meth:`DecisionScoreboard.summary`)."""
+    tasks: dict[str, Any] = field(default_factory=dict)
+    """Its ANSWERs' scores per task (:meth:`TaskScoreboard.summary`)."""
 
     def as_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
@@ -257,6 +265,16 @@ class Board:
         self.scoreboard = DecisionScoreboard(config.response_window_s,
                                              lambda sid: sid in self.timeline.catalog)
         """The decoder under test's DECISIONs scored against the onsets the board sent."""
+        self.tasks: TaskScoreboard | None = None
+        """Its ANSWERs of the contact tasks scored against :attr:`truth` (with a scene)."""
+        if scene is not None:
+            self.tasks = TaskScoreboard(
+                [c.trajectory.vibration_frequency_hz if c.trajectory.vibration_amplitude_m > 0
+                 else 0.0 for c in scene.contacts], config.response_window_s)
+        self.truth_markers: list[MarkerEvent] = []
+        """Every marker that fell due while running with the link up, sent or (on the blind
+        link) withheld: the operator's truth (``serve --truth``), the first
+        :data:`MAX_TRUTH_MARKERS`."""
         self.fifo = EventFifo(config.fifo_events)
         self.counters = BoardCounters()
         self.clock = TickClock(config.tick_s, spin_s=config.spin_s)
@@ -404,6 +422,9 @@ class Board:
             if isinstance(cmd, protocols.Decision):
                 reason = self._score(cmd, self.board_time_us() if arrival_us is None
                                      else arrival_us)
+            elif isinstance(cmd, protocols.Answer):
+                reason = self._score_answer(cmd, self.board_time_us() if arrival_us is None
+                                            else arrival_us)
             elif op == codes.START:
                 self.running = True
             elif op == codes.STOP:
@@ -503,6 +524,24 @@ class Board:
         log.debug("decision %r: %s", decision, outcome.value)
         return answer_reason(outcome)
 
+    def _score_answer(self, answer: Any, t_us: int) -> Any:
+        """Score an ANSWER arriving at board time ``t_us`` (µs), SPEC.md §3.5.3: a
+        CLASSIFICATION as a DECISION without confidence, the contact tasks against the truth
+        (:attr:`tasks`); its NACK reason (UNKNOWN_TASK, TASK_NOT_POSED: counted too)."""
+        task = int(answer.task)
+        if task == protocols.Task.CLASSIFICATION:
+            return self._score(protocols.Decision(answer.token, int(answer.values[0])), t_us)
+        if task not in protocols.Task._value2member_map_:
+            return protocols.NackReason.UNKNOWN_TASK
+        if self.tasks is None or not self.tasks.posed(task):
+            if self.tasks is not None:
+                self.tasks.not_posed[task] += 1
+            return protocols.NackReason.TASK_NOT_POSED
+        outcome = self.tasks.answer(answer, t_us, self.running)
+        log.debug("answer %r: %s", answer, outcome)
+        return (protocols.NackReason.NOT_RUNNING if outcome == "while_stopped"
+                else protocols.NackReason.NONE)
+
     # -- one tick -----------------------------------------------------------------------
     def tick(self) -> None:
         """Run one publish tick (see module docstring for the order)."""
@@ -513,6 +552,8 @@ class Board:
             schedule = self.timeline.schedule_for(first * cfg.dt_s, (first + n - 1) * cfg.dt_s)
             _, spikes, raw = self.touch.advance_schedule(schedule, n)
             self.truth.add_raw(first * self._dt_us, raw[0])
+            if self.tasks is not None and self.running and self.link is not None:
+                self.tasks.observe(first * self._dt_us, raw[0])
         elif self.pipeline is None:  # the schedule's forces made inside the compiled step
             schedule = self.timeline.schedule_for(first * cfg.dt_s, (first + n - 1) * cfg.dt_s)
             _, spikes = self.sensor.advance_schedule(schedule, n)
@@ -527,6 +568,8 @@ class Board:
         except TransportError as exc:
             self._lose_link(exc)
         self.scoreboard.advance(self.board_time_us())
+        if self.tasks is not None:
+            self.tasks.advance(self.board_time_us())
 
     def _publish(self, spikes: np.ndarray, first: int) -> bool:
         """The events of a spike block starting at step ``first`` counted as generated and
@@ -547,7 +590,10 @@ class Board:
             self._drop_markers(markers)
             return False
         if self.running:
-            self._markers.extend(markers)
+            if self.config.markers:
+                self._markers.extend(markers)
+            if len(self.truth_markers) < MAX_TRUTH_MARKERS:
+                self.truth_markers.extend(markers)
             for m in markers:  # the ground truth the decoder under test is scored against
                 if m.phase == "onset":
                     self.scoreboard.onset(m.stimulus_id, m.t_us)
@@ -768,4 +814,5 @@ class Board:
             markers_sent=c.markers_sent, markers_dropped=c.markers_dropped,
             units_sent=self._units_sent + (link.units_sent if link else 0),
             wire_busy_s=self._wire_busy_s + (link.pacer.busy_s if link else 0.0),
-            busy=c.busy, scoreboard=self.scoreboard.summary())
+            busy=c.busy, scoreboard=self.scoreboard.summary(),
+            tasks=self.tasks.summary() if self.tasks is not None else {})

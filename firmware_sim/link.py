@@ -226,7 +226,8 @@ class BoardLink:
         self.rx_errors += refused - self._rx_reported
         self._rx_reported = refused
         commands = [r for r in res.records
-                    if isinstance(r, (protocols.Command, protocols.Decision))]
+                    if isinstance(r, (protocols.Command, protocols.Decision,
+                                      protocols.Answer))]
         # every good unit that is no command (a host's SYNC, EVENTS, STATUS, ...) is refused
         n_commands = len(commands) + res.excess_commands.shape[0]
         self.rx_errors += max(0, c.frames_ok - self._rx_units - n_commands)

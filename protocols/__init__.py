@@ -2,8 +2,8 @@
 
 - Serial: :class:`SerialEncoder` / :class:`SerialDecoder` (COBS-framed packets, CRC-16).
 - CAN and CAN FD: :class:`CanEncoder` / :class:`CanDecoder` over :class:`CanFrame`.
-- Records: :class:`Status`, :class:`Marker`, :class:`Command`, :class:`Decision` (the
-  decoder under test's answer), :class:`Ack`; the session records :class:`Session`,
+- Records: :class:`Status`, :class:`Marker`, :class:`Command`, :class:`Decision` and
+  :class:`Answer` (the decoder under test's answers to a task), :class:`Ack`; the session records :class:`Session`,
   :class:`StimulusEntry` (one row of the stimulus table) and :class:`RunEnd`.
 - Wire time: :func:`serial_seconds`, :func:`can_frame_seconds`.
 
@@ -20,7 +20,10 @@ from protocols.budget import can_frame_seconds, serial_seconds
 from protocols.can_codec import CanDecoder, CanEncoder, full_events_frame
 from protocols.constants import N_CHANNELS
 from protocols.records import (
+    ANSWER_SCALE,
+    ANSWER_UNITS,
     Ack,
+    Answer,
     CanFrame,
     Command,
     CommandCode,
@@ -37,6 +40,7 @@ from protocols.records import (
     SessionReason,
     Status,
     StimulusEntry,
+    Task,
 )
 from protocols.serial_codec import MAX_PACKET_BYTES, SerialDecoder, SerialEncoder
 from protocols.session_layout import table_digest
@@ -60,5 +64,6 @@ __all__ = [
     "SessionReason", "StimulusEntry", "table_digest",
     "Command", "CommandCode", "DecodeResult", "Decision", "LinkCounters", "Marker", "MarkerPhase",
     "MAX_PACKET_BYTES", "NackReason", "Record", "SerialDecoder", "SerialEncoder", "Status",
+    "ANSWER_SCALE", "ANSWER_UNITS", "Answer", "Task",
     "can_frame_seconds", "full_events_frame", "serial_seconds",
 ]

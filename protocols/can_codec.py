@@ -34,6 +34,7 @@ from protocols.record_fields import check_uint, command_fields, command_record, 
 from protocols.records import (
     COMMAND_KEY_DTYPE,
     Ack,
+    Answer,
     CanFrame,
     Command,
     CommandCode,
@@ -233,7 +234,7 @@ class CanEncoder:
                                     check_uint(marker.stimulus_id, 16, "stimulus_id (classic)"))
         return [CanFrame(ident, data, False)]
 
-    def command(self, command: Command | Decision) -> list[CanFrame]:
+    def command(self, command: Command | Decision | Answer) -> list[CanFrame]:
         """A COMMAND frame (host→board; commands have their own sequence counter)."""
         token, opcode, arg = command_fields(command)
         seq, self._cmd_seq = self._cmd_seq, (self._cmd_seq + 1) % self._seq_mod

@@ -7,7 +7,8 @@ has one fixed length on the wire, so cantools, SavvyCAN and candump users decode
 with default settings. Event slots after a frame's last event hold the all-ones address
 (511; wide: 1048575), which the DBC names ``NONE`` (an FD frame also says how many events it
 holds in ``Count``). A COMMAND frame is multiplexed by its ``Opcode``: ``Arg`` for opcodes
-1..7, ``DecisionStimulusId`` and ``DecisionConfidence`` for DECISION (SPEC.md §3.5.1).
+1..7, ``DecisionStimulusId`` and ``DecisionConfidence`` for DECISION (SPEC.md §3.5.1),
+``AnswerTask`` and the task's values for ANSWER (§3.5.3; the task multiplexes them).
 """
 
 from __future__ import annotations
@@ -18,13 +19,16 @@ from protocols import can_kernels as k
 from protocols.can_codec import STATUS_LEN_FD, can_id
 from protocols.constants import PROTOCOL_VERSION
 from protocols.errors import ProtocolError
+from protocols.record_fields import ANSWER_FIELD_BITS, PLACE_BITS
 from protocols.records import (
+    ANSWER_SCALE,
     CONFIDENCE_STEPS,
     CommandCode,
     MarkerPhase,
     NackReason,
     RunEndReason,
     SessionReason,
+    Task,
 )
 from protocols.session_layout import (
     CLASSIC_CHUNK,
@@ -57,6 +61,13 @@ class Signal:
     choices: tuple[tuple[int, str], ...] = ()
     float32: bool = False
     """An IEEE-754 binary32 (``SIG_VALTYPE_`` 1), not an unsigned integer."""
+    scale: float = 1.0
+    """Physical value = raw × scale."""
+    signed: bool = False
+    """Two's complement (``@1-``), not unsigned."""
+    multiplexer: str = ""
+    """For a field of a nested multiplexer (``mux`` "m<n>" of a signal other than the
+    message's "M" one): that multiplexer's name (``SG_MUL_VAL_``)."""
 
 
 @dataclass(frozen=True)
@@ -75,7 +86,7 @@ def _camel(name: str) -> str:
 
 
 def _enum_choices(enum: type[CommandCode] | type[NackReason] | type[MarkerPhase]
-                  | type[SessionReason] | type[RunEndReason]) -> tuple[tuple[int, str], ...]:
+                  | type[SessionReason] | type[RunEndReason] | type[Task]) -> tuple[tuple[int, str], ...]:
     return tuple(sorted({int(m): m.name for m in enum}.items()))
 
 
@@ -90,6 +101,27 @@ def _event_slots(header_bits: int, slots: int, wide: bool = False) -> tuple[Sign
                 Signal(f"{name}{i}Addr", at + delta, width - delta,
                        choices=((empty >> delta, "NONE"),))]
     return tuple(out)
+
+
+def _answer_signals(opcode: int) -> tuple[Signal, ...]:
+    """The ANSWER command's fields (SPEC.md §3.5.3): ``AnswerTask`` (bits 32..35), itself a
+    multiplexer of the task's values in bits 36..63."""
+    def field(name: str, start: int, bits: int, task: Task, unit: str = "",
+              scale: float = 1.0, signed: bool = False) -> Signal:
+        return Signal(name, start, bits, unit, mux=f"m{int(task)}",
+                      mux_range=(int(task), int(task)), scale=scale, signed=signed,
+                      multiplexer="AnswerTask")
+    return (
+        Signal("AnswerTask", 32, 4, mux=f"m{opcode}M", mux_range=(opcode, opcode),
+               choices=_enum_choices(Task)),
+        field("AnswerStimulusId", 36, 24, Task.CLASSIFICATION),
+        field("AnswerXmm", 36, PLACE_BITS, Task.LOCALISATION, "mm",
+              ANSWER_SCALE[Task.LOCALISATION], True),
+        field("AnswerYmm", 36 + PLACE_BITS, PLACE_BITS, Task.LOCALISATION, "mm",
+              ANSWER_SCALE[Task.LOCALISATION], True),
+        field("AnswerForceN", 36, ANSWER_FIELD_BITS, Task.FORCE, "N", ANSWER_SCALE[Task.FORCE]),
+        field("AnswerFrequencyHz", 36, ANSWER_FIELD_BITS, Task.VIBRATION, "Hz",
+              ANSWER_SCALE[Task.VIBRATION]))
 
 
 def _payload_signals(fields: tuple[tuple[str, int, int], ...], fd: bool,
@@ -133,13 +165,15 @@ def messages(fd: bool) -> tuple[Message, ...]:
     (SKIN_WIDE_EVENTS, sent only by boards of more than 338 channels) §9.2."""
     seq = Signal("Seq", 0, 8 if fd else 4)
     decision = int(CommandCode.DECISION)
+    answer = int(CommandCode.ANSWER)
     command = Message(k.CLS_COMMAND, "SKIN_COMMAND", 8, HOST, (
         seq, Signal("Opcode", 8, 8, mux="M", choices=_enum_choices(CommandCode)),
         Signal("Token", 16, 16),
         Signal("Arg", 32, 32, mux="m1", mux_range=(1, decision - 1)),
-        Signal("DecisionStimulusId", 32, 24, mux=f"m{decision}"),
-        Signal("DecisionConfidence", 56, 8, mux=f"m{decision}",
-               choices=((CONFIDENCE_STEPS + 1, "NONE"),))))
+        Signal("DecisionStimulusId", 32, 24, mux=f"m{decision}", mux_range=(decision, decision)),
+        Signal("DecisionConfidence", 56, 8, mux=f"m{decision}", mux_range=(decision, decision),
+               choices=((CONFIDENCE_STEPS + 1, "NONE"),)),
+        *_answer_signals(answer)))
     ack = Message(k.CLS_ACK, "SKIN_ACK", 6, BOARD, (
         seq, Signal("Ok", 8, 1), Signal("AckSeq", 9, 7),
         Signal("Opcode", 16, 8, choices=_enum_choices(CommandCode)),
@@ -204,14 +238,21 @@ def dbc_text(board_id: int = 0, fd: bool = False) -> str:
         receiver = HOST if m.sender == BOARD else BOARD
         for s in m.signals:
             mux = f" {s.mux}" if s.mux else ""
-            top = "3.4e+38" if s.float32 else (1 << s.bits) - 1
-            low = "-3.4e+38" if s.float32 else 0
-            lines.append(f" SG_ {s.name}{mux} : {s.start}|{s.bits}@1+ (1,0) "
-                         f'[{low}|{top}] "{s.unit}" {receiver}')
+            if s.float32:
+                low, top = "-3.4e+38", "3.4e+38"
+            elif s.signed:
+                low = f"{-(1 << (s.bits - 1)) * s.scale:g}"
+                top = f"{((1 << (s.bits - 1)) - 1) * s.scale:g}"
+            elif s.scale == 1.0:
+                low, top = "0", str((1 << s.bits) - 1)
+            else:
+                low, top = "0", f"{((1 << s.bits) - 1) * s.scale:g}"
+            lines.append(f" SG_ {s.name}{mux} : {s.start}|{s.bits}@1{'-' if s.signed else '+'}"
+                         f' ({s.scale:g},0) [{low}|{top}] "{s.unit}" {receiver}')
             if s.float32:
                 value_types.append(f"SIG_VALTYPE_ {ident} {s.name} : 1;")
             if s.mux_range is not None:
-                mux_name = next(x.name for x in m.signals if x.mux == "M")
+                mux_name = s.multiplexer or next(x.name for x in m.signals if x.mux == "M")
                 mux_ranges.append(f"SG_MUL_VAL_ {ident} {s.name} {mux_name} "
                                   f"{s.mux_range[0]}-{s.mux_range[1]};")
             if s.choices:
@@ -222,7 +263,8 @@ def dbc_text(board_id: int = 0, fd: bool = False) -> str:
                  f"{board_id} (ID = class << 4 | board id). Every frame type has the length "
                  "given here. Event slots after the last event hold address 511 (NONE). "
                  "A COMMAND of opcode DECISION carries DecisionStimulusId and "
-                 "DecisionConfidence (0..254 = confidence x 254; 255 NONE) instead of Arg. "
+                 "DecisionConfidence (0..254 = confidence x 254; 255 NONE) instead of Arg; "
+                 "one of opcode ANSWER carries AnswerTask and the task's values. "
                  'Layout: protocols/SPEC.md";')
     if fd:
         lines.append('BA_DEF_ BO_ "VFrameFormat" ENUM "StandardCAN","ExtendedCAN",'

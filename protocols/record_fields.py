@@ -9,10 +9,13 @@ from typing import TypeVar
 
 from protocols.errors import ProtocolError
 from protocols.records import (
+    ANSWER_SCALE,
     CONFIDENCE_STEPS,
+    Answer,
     Command,
     CommandCode,
     Decision,
+    Task,
 )
 
 E = TypeVar("E", bound=enum.IntEnum)
@@ -46,10 +49,75 @@ def arg_value(opcode: int, bits: int) -> int | float:
     return bits
 
 
-def command_fields(command: Command | Decision) -> tuple[int, int, int]:
+ANSWER_FIELD_BITS = 28
+"""An ANSWER's argument: bits 3..0 the task, bits 31..4 its 28-bit field (SPEC.md §3.5.3)."""
+PLACE_BITS = 14
+"""Each coordinate of a LOCALISATION answer: a signed 14-bit count of 0.01 mm (±81.91 mm)."""
+
+
+def _steps(value: float, task: int, bits: int, signed: bool, what: str) -> int:
+    """``value`` in wire steps of ``task`` (:data:`ANSWER_SCALE`), checked to fit."""
+    v = float(value)
+    lo, hi = (-(1 << (bits - 1)), (1 << (bits - 1)) - 1) if signed else (0, (1 << bits) - 1)
+    n = round(v / ANSWER_SCALE[task]) if math.isfinite(v) else lo - 1
+    if not lo <= n <= hi:
+        raise ProtocolError(f"ANSWER {what} {value!r} is outside "
+                            f"{lo * ANSWER_SCALE[task]:g}..{hi * ANSWER_SCALE[task]:g}")
+    return n & ((1 << bits) - 1)
+
+
+def answer_field(answer: Answer) -> int:
+    """The 32-bit argument of an :class:`Answer` (SPEC.md §3.5.3): task in bits 3..0, its
+    values in bits 31..4; raises ProtocolError for values that do not fit or a wrong count."""
+    task = check_uint(int(answer.task), 4, "ANSWER task")
+    vals = tuple(answer.values)
+    need = {Task.CLASSIFICATION: 1, Task.LOCALISATION: 2, Task.FORCE: 1, Task.SLIP: 0,
+            Task.VIBRATION: 1}.get(task, 1)  # type: ignore[call-overload]
+    if len(vals) != need:
+        raise ProtocolError(f"an ANSWER of task {task} carries {need} value(s), got "
+                            f"{len(vals)}: {vals!r}")
+    if task == Task.CLASSIFICATION:
+        field = check_uint(int(vals[0]), 24, "ANSWER stimulus_id")
+    elif task == Task.LOCALISATION:
+        field = (_steps(vals[0], task, PLACE_BITS, True, "x_mm")
+                 | _steps(vals[1], task, PLACE_BITS, True, "y_mm") << PLACE_BITS)
+    elif task in (Task.FORCE, Task.VIBRATION):
+        field = _steps(vals[0], task, ANSWER_FIELD_BITS, False, "value")
+    elif task == Task.SLIP:
+        field = 0
+    else:
+        field = check_uint(int(vals[0]), ANSWER_FIELD_BITS, "ANSWER field")
+    return task | field << 4
+
+
+def answer_record(token: int, bits: int) -> Answer:
+    """The :class:`Answer` a 32-bit ANSWER argument carries (the inverse of
+    :func:`answer_field`; reserved bits ignored)."""
+    task, field = bits & 0xF, bits >> 4
+    values: tuple[float, ...]
+    if task == Task.CLASSIFICATION:
+        values = (field & 0xFFFFFF,)
+    elif task == Task.LOCALISATION:
+        half = 1 << (PLACE_BITS - 1)
+        x = ((field & 0x3FFF) ^ half) - half
+        y = (((field >> PLACE_BITS) & 0x3FFF) ^ half) - half
+        values = (x * ANSWER_SCALE[task], y * ANSWER_SCALE[task])
+    elif task in (Task.FORCE, Task.VIBRATION):
+        values = (field * ANSWER_SCALE[task],)
+    elif task == Task.SLIP:
+        values = ()
+    else:
+        values = (field,)
+    return Answer(token, enum_or_int(Task, task), values)
+
+
+def command_fields(command: Command | Decision | Answer) -> tuple[int, int, int]:
     """(token, opcode, 32-bit argument) of a COMMAND unit; a :class:`Decision` packs its
-    stimulus id in bits 23..0 and its confidence in bits 31..24 (SPEC.md §3.5)."""
+    stimulus id in bits 23..0 and its confidence in bits 31..24 (SPEC.md §3.5), an
+    :class:`Answer` its task and values (§3.5.3)."""
     token = check_uint(command.token, 16, "token")
+    if isinstance(command, Answer):
+        return token, int(CommandCode.ANSWER), answer_field(command)
     if isinstance(command, Decision):
         sid = check_uint(command.stimulus_id, 24, "DECISION stimulus_id")
         if command.confidence is None:
@@ -63,14 +131,18 @@ def command_fields(command: Command | Decision) -> tuple[int, int, int]:
         return token, int(CommandCode.DECISION), sid | conf << 24
     if int(command.opcode) == CommandCode.DECISION:
         raise ProtocolError("a DECISION is sent as a protocols.Decision record, not a Command")
+    if int(command.opcode) == CommandCode.ANSWER:
+        raise ProtocolError("an ANSWER is sent as a protocols.Answer record, not a Command")
     opcode = check_uint(int(command.opcode), 8, "opcode")
     return token, opcode, arg_bits(opcode, command.arg)
 
 
-def command_record(token: int, opcode: int, bits: int) -> Command | Decision:
+def command_record(token: int, opcode: int, bits: int) -> Command | Decision | Answer:
     """The record a COMMAND unit carries: a :class:`Decision` for opcode ``DECISION``
-    (a confidence byte 255 means none; 255 is the only value above 254), else a
-    :class:`Command`."""
+    (a confidence byte 255 means none; 255 is the only value above 254), an
+    :class:`Answer` for ``ANSWER``, else a :class:`Command`."""
+    if opcode == CommandCode.ANSWER:
+        return answer_record(token, bits)
     if opcode == CommandCode.DECISION:
         conf = bits >> 24
         return Decision(token, bits & 0xFFFFFF,

@@ -35,6 +35,8 @@ class CommandCode(enum.IntEnum):
     """The decoder under test's answer: a :class:`Decision` (stimulus id, confidence)."""
     QUERY_SESSION = 9
     """Ask for the session record and the stimulus table now (sent right after the ACK)."""
+    ANSWER = 10
+    """The decoder under test's answer to a task: an :class:`Answer` (task id, values)."""
 
 
 class NackReason(enum.IntEnum):
@@ -50,6 +52,10 @@ class NackReason(enum.IntEnum):
     INTERNAL_ERROR = 7
     REPLAYING = 8
     """The link is playing a recording (``serve --replay``): no command is executed."""
+    UNKNOWN_TASK = 9
+    """An ANSWER names a task id this document does not define (5..15)."""
+    TASK_NOT_POSED = 10
+    """An ANSWER names a task the board does not score in this run (no truth for it)."""
 
 
 class MarkerPhase(enum.IntEnum):
@@ -224,7 +230,53 @@ class Decision:
         return CommandCode.DECISION
 
 
-Record = Status | Marker | Command | Decision | Ack | Session | StimulusEntry | RunEnd
+class Task(enum.IntEnum):
+    """What an :class:`Answer` answers (4 bits on the wire, SPEC.md §3.5.3)."""
+
+    CLASSIFICATION = 0
+    """Which stimulus: values ``(stimulus_id,)`` (a DECISION without confidence)."""
+    LOCALISATION = 1
+    """Where the touch is: values ``(x_mm, y_mm)``, skin coordinates (mm)."""
+    FORCE = 2
+    """How hard: values ``(force_n,)``, the normal force (N)."""
+    SLIP = 3
+    """The object slips now: no values (the answer's arrival is what is scored)."""
+    VIBRATION = 4
+    """What vibrates: values ``(frequency_hz,)`` (Hz)."""
+
+
+ANSWER_UNITS: dict[int, tuple[str, ...]] = {
+    Task.CLASSIFICATION: ("stimulus_id",), Task.LOCALISATION: ("x_mm", "y_mm"),
+    Task.FORCE: ("force_n",), Task.SLIP: (), Task.VIBRATION: ("frequency_hz",)}
+"""The names (with units) of each task's values, in order."""
+ANSWER_SCALE: dict[int, float] = {
+    Task.CLASSIFICATION: 1.0, Task.LOCALISATION: 0.01, Task.FORCE: 1e-6,
+    Task.VIBRATION: 1e-3}
+"""One wire step of each task's values: 1 id, 0.01 mm, 1 µN, 1 mHz (SPEC.md §3.5.3)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Answer:
+    """The decoder under test's answer to a task (host→board COMMAND of opcode ``ANSWER``).
+
+    ``task`` a :class:`Task` (an unknown id decodes as a plain int, to be NACKed);
+    ``values`` the task's values in the units of :data:`ANSWER_UNITS` (an id; mm; N; none;
+    Hz), sent in the steps of :data:`ANSWER_SCALE`; an unknown task carries its raw 28-bit
+    field as its one value. ``token`` (0..65535) is echoed in the ACK.
+    """
+
+    token: int
+    task: Task | int
+    values: tuple[float, ...] = ()
+
+    @property
+    def opcode(self) -> CommandCode:
+        """Always :attr:`CommandCode.ANSWER` (so an Answer is answered like a command)."""
+        return CommandCode.ANSWER
+
+
+Record = (Status | Marker | Command | Decision | Answer | Ack | Session | StimulusEntry
+          | RunEnd)
 """Any non-event record a decoder returns."""
 
 COMMAND_KEY_DTYPE = np.dtype([("token", "<u2"), ("opcode", "u1")])

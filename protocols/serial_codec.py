@@ -31,6 +31,7 @@ from protocols.record_fields import check_uint, command_fields, command_record, 
 from protocols.records import (
     COMMAND_KEY_DTYPE,
     Ack,
+    Answer,
     Command,
     CommandCode,
     Decision,
@@ -161,7 +162,7 @@ class SerialEncoder:
                             check_uint(int(marker.phase), 8, "marker phase"))
         return self._packet(body)
 
-    def command(self, command: Command | Decision) -> bytes:
+    def command(self, command: Command | Decision | Answer) -> bytes:
         """A COMMAND packet (host→board): a command or the decoder under test's decision."""
         token, opcode, arg = command_fields(command)
         body = _COMMAND.pack(k.T_COMMAND << 5, 0, token, opcode, arg)

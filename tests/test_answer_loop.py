@@ -77,7 +77,7 @@ def _play(receiver: Receiver, link_args: list[str], tmp_path: Path) -> dict[str,
     duration = _schedule(tmp_path / "schedule.toml")
     window_s = receiver.scoreboard.match_window_us * 1e-6 + WAY_BACK_S
     cmd = serve_command([*link_args, "--schedule", str(tmp_path / "schedule.toml"),
-                         "--response-window", f"{window_s:.6f}", "--score", str(score)],
+                         "--response-window", f"{window_s:.6f}", "--score", str(score), "--markers"],
                         duration, SNR_DB, seed=3)
     try:
         status, _, err = run_against_board(receiver, cmd)
@@ -197,7 +197,7 @@ def test_listen_answer_on_the_command_line(tmp_path: Path) -> None:
     board, listen = host_beside_serve(
         tmp_path, [sys.executable, "-m", "skinhil", "listen", "--port", "{HOST}", "--model",
                    str(tmp_path / "model.npz"), "--answer", "--json"],
-        ["--duration", "5", "--snr-db", "inf", "--score", str(tmp_path / "score.json"),
+        ["--duration", "5", "--snr-db", "inf", "--score", str(tmp_path / "score.json"), "--markers",
          "--json"], own_end_s=10.0)
     assert board.returncode == 0, board.stderr
     assert listen.returncode == 0, listen.stderr  # it ends by itself at the board's RUN_END

@@ -63,7 +63,7 @@ def test_c_decoder_against_serve_on_a_pty(decoder: Path, tmp_path: Path) -> None
         dut = subprocess.Popen([str(decoder), "--tty", host_end], stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, text=True)
         board = run_serve("--port", board_end, "--duration", str(DURATION_S), "--seed", "3",
-                          "--score", str(score), "--json", timeout_s=DURATION_S + 60)
+                          "--score", str(score), "--markers", "--json", timeout_s=DURATION_S + 60)
         assert board.returncode == 0, board.stderr
         out, err = dut.communicate(timeout=20)  # it ends by itself at the RUN_END record
     finally:

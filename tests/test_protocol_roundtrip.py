@@ -12,6 +12,7 @@ from protocol_examples import distinct_events, framed
 
 from protocols import (
     Ack,
+    Answer,
     CanDecoder,
     CanEncoder,
     Command,
@@ -23,6 +24,7 @@ from protocols import (
     SerialDecoder,
     SerialEncoder,
     Status,
+    Task,
 )
 from protocols.records import CONFIDENCE_STEPS, DECISION_MAX_STIMULUS_ID
 from skinhil.errors import ProtocolError
@@ -149,7 +151,8 @@ markers = st.builds(Marker, t_us=st.integers(0, 2**40 - 1), stimulus_id=st.integ
 commands = st.one_of(
     st.builds(Command, token=st.integers(0, 65535),
               opcode=st.sampled_from([c for c in CommandCode
-                                      if c not in (CommandCode.SET_SNR, CommandCode.DECISION)]),
+                                      if c not in (CommandCode.SET_SNR, CommandCode.DECISION,
+                                                   CommandCode.ANSWER)]),
               arg=st.integers(0, 2**32 - 1)),
     st.builds(Command, token=st.integers(0, 65535), opcode=st.just(CommandCode.SET_SNR),
               arg=st.sampled_from([math.inf, 0.0, -5.5, 10.0, 42.25])))
@@ -157,13 +160,25 @@ decisions = st.builds(Decision, token=st.integers(0, 65535),
                       stimulus_id=st.integers(0, DECISION_MAX_STIMULUS_ID),
                       confidence=st.one_of(st.none(), st.integers(0, CONFIDENCE_STEPS).map(
                           lambda v: v / CONFIDENCE_STEPS)))
+_tok = st.integers(0, 65535)
+_i14 = st.integers(-(1 << 13), (1 << 13) - 1)
+_u28 = st.integers(0, (1 << 28) - 1)
+answers = st.one_of(  # values on the wire's steps: they come back exactly
+    st.builds(lambda t, s: Answer(t, Task.CLASSIFICATION, (s,)), _tok,
+              st.integers(0, DECISION_MAX_STIMULUS_ID)),
+    st.builds(lambda t, x, y: Answer(t, Task.LOCALISATION, (x * 0.01, y * 0.01)), _tok, _i14,
+              _i14),
+    st.builds(lambda t, n: Answer(t, Task.FORCE, (n * 1e-6,)), _tok, _u28),
+    st.builds(lambda t: Answer(t, Task.SLIP, ()), _tok),
+    st.builds(lambda t, n: Answer(t, Task.VIBRATION, (n * 1e-3,)), _tok, _u28),
+    st.builds(lambda t, k, n: Answer(t, k, (n,)), _tok, st.integers(5, 15), _u28))
 acks = st.builds(Ack, token=st.integers(0, 65535), opcode=st.sampled_from(CommandCode),
                  ok=st.booleans(), reason=st.sampled_from(NackReason))
 
 
 @pytest.mark.parametrize("layout", LAYOUTS)
 @SETTINGS
-@given(records=st.lists(st.one_of(markers, commands, decisions, acks), max_size=8),
+@given(records=st.lists(st.one_of(markers, commands, decisions, answers, acks), max_size=8),
        status=statuses,
        where=st.integers(0, 8))
 def test_records_round_trip(layout: str, records: list, status: Status, where: int) -> None:
@@ -176,7 +191,7 @@ def test_records_round_trip(layout: str, records: list, status: Status, where: i
     got = []
     for rec in records:  # commands come from a host: their own sequence numbers (SPEC.md §6)
         method = {Status: enc.status, Marker: enc.marker, Command: host.command,
-                  Decision: host.command, Ack: enc.ack}[type(rec)]
+                  Decision: host.command, Answer: host.command, Ack: enc.ack}[type(rec)]
         got += dec.feed(method(rec)).records
     assert got == records
     assert dec.counters.frames_lost == 0
@@ -209,6 +224,22 @@ def test_bad_decisions_raise_protocol_error(layout: str) -> None:
             host.command(Decision(1, 3, bad))
     with pytest.raises(ProtocolError, match="protocols.Decision"):
         host.command(Command(1, CommandCode.DECISION, 3))
+
+
+@pytest.mark.parametrize("layout", LAYOUTS)
+def test_bad_answers_raise_protocol_error(layout: str) -> None:
+    """Values outside a task's field, or a wrong count of them, are refused by the encoder."""
+    host = SerialEncoder() if layout == "serial" else CanEncoder(fd=layout == "canfd")
+    for bad in (Answer(1, Task.LOCALISATION, (81.92, 0.0)), Answer(1, Task.FORCE, (-0.001,)),
+                Answer(1, Task.FORCE, (math.nan,)), Answer(1, Task.VIBRATION, (3e5,))):
+        with pytest.raises(ProtocolError, match="outside"):
+            host.command(bad)
+    with pytest.raises(ProtocolError, match="carries 2 value"):
+        host.command(Answer(1, Task.LOCALISATION, (1.0,)))
+    with pytest.raises(ProtocolError, match="does not fit 4"):
+        host.command(Answer(1, 16, (0,)))
+    with pytest.raises(ProtocolError, match="protocols.Answer"):
+        host.command(Command(1, CommandCode.ANSWER, 3))
 
 
 def test_status_counters_unwrap_across_modulo() -> None:

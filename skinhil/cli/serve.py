@@ -43,7 +43,7 @@ from skinhil.recording import (
     link_recorder,
     open_recording,
 )
-from skinhil.scoring import DecisionScoreboard, scoreboard_text
+from skinhil.scoring import DecisionScoreboard, scoreboard_text, truth_lines
 
 LIVE_WINDOW_TICKS = 1000
 """The live status's lateness p99 is over this many most recent ticks (its max is over the
@@ -130,8 +130,17 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                         f"0..{MAX_RESPONSE_WINDOW_S:g} (default: "
                         f"{DEFAULT_RESPONSE_WINDOW_S:g}; protocols/SPEC.md §3.5.2)")
     p.add_argument("--score", type=Path, metavar="FILE",
-                   help="write the decoder under test's scoreboard here at the end (JSON, "
-                        "with every decision)")
+                   help="score the decoder under test on a blind link (no MARKER on it: "
+                        "the truth stays on the board, see --truth) and write its scoreboard "
+                        "here at the end (JSON, with every decision; its ANSWERs per task "
+                        "under \"tasks\")")
+    p.add_argument("--markers", action="store_true",
+                   help="with --score: send the ground-truth MARKERs on the link all the same "
+                        "(a decoder that calibrates on them, the reference receiver scoring "
+                        "itself)")
+    p.add_argument("--truth", type=Path, metavar="FILE",
+                   help="write the ground truth here at the end, for the operator: every "
+                        "stimulus marker and every trial of the contact tasks (JSON lines)")
     out = p.add_mutually_exclusive_group()
     out.add_argument("--quiet", action="store_true", help="print nothing but errors")
     out.add_argument("--json", action="store_true",
@@ -154,6 +163,7 @@ def _config(args: argparse.Namespace) -> BoardConfig:
                        size=args.size, threads=args.threads, schedule_mode=mode, rest_s=args.rest_s,
                        start_running=not args.stopped, reconnect=args.reconnect,
                        response_window_s=args.response_window_s,
+                       markers=args.score is None or args.markers,
                        spin_s=REALTIME_SPIN_S if args.realtime else 0.0).check()
 
 
@@ -307,6 +317,9 @@ def run_replay(args: argparse.Namespace) -> int:
         raise ConfigError(f"replaying '{args.replay}' ({recording.duration_s:.3g} s recorded) "
                           f"at speed {args.speed:g} would take {lasts_s:.3g} s, more than "
                           f"{MAX_DURATION_S:g} s — give a larger --speed")
+    if args.truth is not None:
+        raise ConfigError("--truth writes a live board's truth: a replay's truth is the "
+                          "recording's markers; drop --truth")
     score_path = check_output_path(args.score) if args.score is not None else None
     scoreboard = DecisionScoreboard(args.response_window_s)
     _claim_cpu(args)
@@ -329,11 +342,25 @@ def run_replay(args: argparse.Namespace) -> int:
     return 0
 
 
-def write_score(path: Path, scoreboard: DecisionScoreboard) -> None:
-    """Write ``scoreboard`` with every decision to ``path`` (JSON), whole or not at all."""
+def write_score(path: Path, scoreboard: DecisionScoreboard,
+                tasks: dict[str, Any] | None = None) -> None:
+    """Write ``scoreboard`` with every decision to ``path`` (JSON), and the ANSWERs' scores
+    per task under ``"tasks"``, whole or not at all."""
     with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(scoreboard.summary(with_log=True), indent=1) + "\n",
-                       encoding="utf-8")
+        tmp.write_text(json.dumps({**scoreboard.summary(with_log=True), "tasks": tasks or {}},
+                                  indent=1) + "\n", encoding="utf-8")
+
+
+def write_truth(path: Path, board: Board) -> None:
+    """Write the board's ground truth to ``path`` (JSON lines), whole or not at all: one
+    line per stimulus marker that fell due (``"type": "marker"``), one per trial of each
+    contact task (``"type": "trial"``, :mod:`skinhil.scoring.tasks`)."""
+    lines = [json.dumps({"type": "marker", "t_us": m.t_us, "stimulus_id": m.stimulus_id,
+                         "phase": m.phase}) for m in board.truth_markers]
+    if board.tasks is not None:
+        lines += truth_lines(board.tasks)
+    with atomic_path(path) as tmp:
+        tmp.write_text("".join(line + "\n" for line in lines), encoding="utf-8")
 
 
 def _snr_text(snr_db: float) -> str:
@@ -380,6 +407,7 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
             print(("\n" if tty else "") + f"skinhil serve: {msg}", file=sys.stderr, flush=True)
 
     score_path = check_output_path(args.score) if args.score is not None else None
+    truth_path = check_output_path(args.truth) if args.truth is not None else None
     board = Board(config, open_link, schedule, on_link, scene)
     if made is not None:
         made.append(board)
@@ -419,7 +447,9 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
         if tty:
             sys.stderr.write("\n")
     if score_path is not None:
-        write_score(score_path, board.scoreboard)
+        write_score(score_path, board.scoreboard, summary.tasks)
+    if truth_path is not None:
+        write_truth(truth_path, board)
     if args.json:
         print(json.dumps({"type": "summary", **summary.as_dict()}), flush=True)
     elif not args.quiet:

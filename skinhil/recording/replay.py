@@ -166,7 +166,7 @@ class Replayer:
         if not data:
             return
         for record in self._commands.feed(data).records:
-            if isinstance(record, protocols.Command | protocols.Decision):
+            if isinstance(record, protocols.Command | protocols.Decision | protocols.Answer):
                 answer = self._answers.ack(self.handle(record))
                 for unit in (answer if self.is_can else [answer]):
                     self._stream.answer(unit)

@@ -1,0 +1,249 @@
+"""The board's scoring of ANSWERs (``protocols/SPEC.md`` §3.5.3, §3.5.4): localisation,
+force, slip and vibration, against the world's ground truth of every tick.
+
+Trials come from the truth (:mod:`skinhil.world.truth`), one row per contact per tick:
+
+- a **touch** of a contact starts at the first tick it touches (``nodes`` > 0) after at least
+  :data:`TOUCH_GAP_US` without touching; LOCALISATION and FORCE answer touches, VIBRATION
+  the touches of contacts that vibrate;
+- a **slip** of a contact starts at the first tick of gross slip (``slip`` = gross) after at
+  least :data:`SLIP_GAP_US` without it; SLIP answers slips.
+
+An answer is matched to the latest trial onset of its task by the one rule of
+:mod:`skinhil.scoring.matching` (response window ``W``). A matched answer is scored against
+the trial's truth at the answer's tick (the last tick of the trial once it has ended):
+
+- LOCALISATION: error = distance (mm) from the contact's centroid; right when at most
+  ``tolerance_mm``;
+- FORCE: error = |answer − normal force| (N); right when at most ``tolerance_n``;
+- VIBRATION: the class is the frequency played in the scene nearest the answer; right when
+  it is the trial's (the error in Hz is kept too);
+- SLIP: a matched answer is a detection (``right``), its latency the score.
+
+Every answer lands in exactly one counter: right, wrong, duplicates, late, false_alarms,
+while_stopped; every trial is matched, missed or pending.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+import protocols
+from skinhil.scoring.matching import MatchKind, OnsetMatcher
+from skinhil.world.truth import SLIP_STATES, T_NODES, T_NORMAL, T_SLIP, T_X, T_Y
+
+TOUCH_GAP_US = 20_000
+"""A contact's touch ends only after this long (µs) without touching: a vibration's brief
+lift-offs stay one touch."""
+SLIP_GAP_US = 50_000
+"""A slip ends only after this long (µs) without gross slip: stick-slip chatter is one slip."""
+GROSS = SLIP_STATES.index("gross")
+DEFAULT_TOLERANCE_MM = 1.0
+"""A localisation answer within this distance (mm) of the centroid is right: one spacing of
+the paper's skin."""
+DEFAULT_TOLERANCE_N = 0.05
+"""A force answer within this (N) of the normal force is right."""
+
+OUTCOMES = ("right", "wrong", "duplicates", "late", "false_alarms", "while_stopped")
+"""The counters every answer of a task lands in, one each."""
+
+
+@dataclass
+class Trial:
+    """One trial of a task: contact ``contact`` from ``t0_us``; its truth now (or at its
+    last tick): centroid (mm), normal force (N), frequency (Hz)."""
+
+    t0_us: int
+    contact: int
+    x_mm: float = math.nan
+    y_mm: float = math.nan
+    normal_n: float = math.nan
+    frequency_hz: float = 0.0
+    last_us: int = 0
+
+
+@dataclass
+class TaskScore:
+    """One task's counters, errors and latencies."""
+
+    task: protocols.Task
+    matcher: OnsetMatcher
+    trials: list[Trial] = field(default_factory=list)
+    counts: Counter[str] = field(default_factory=Counter)
+    errors: list[float] = field(default_factory=list)
+    """Per matched answer: the error (mm, N or Hz; none for SLIP)."""
+    latencies_us: list[int] = field(default_factory=list)
+    """Per matched answer: onset → arrival (µs, board time)."""
+
+    def add_trial(self, trial: Trial) -> None:
+        self.matcher.add_onset(trial.t0_us, len(self.trials))
+        self.trials.append(trial)
+
+
+class TaskScoreboard:
+    """Scores ANSWERs of LOCALISATION, FORCE, SLIP and VIBRATION against the truth.
+
+    ``frequencies_hz[c]`` is contact ``c``'s vibration frequency (0: none);
+    ``response_window_s`` as the DECISION scoreboard's. Call :meth:`observe` once per tick
+    with the tick's truth rows, :meth:`answer` for each ANSWER, :meth:`advance` as board
+    time moves on.
+    """
+
+    def __init__(self, frequencies_hz: list[float], response_window_s: float,
+                 tolerance_mm: float = DEFAULT_TOLERANCE_MM,
+                 tolerance_n: float = DEFAULT_TOLERANCE_N) -> None:
+        self.frequencies_hz = [float(f) for f in frequencies_hz]
+        self.classes_hz = sorted({f for f in self.frequencies_hz if f > 0})
+        self.tolerance_mm = float(tolerance_mm)
+        self.tolerance_n = float(tolerance_n)
+        window_us = int(round(response_window_s * 1e6))
+        posed = [protocols.Task.LOCALISATION, protocols.Task.FORCE, protocols.Task.SLIP]
+        if self.classes_hz:
+            posed.append(protocols.Task.VIBRATION)
+        self.tasks = {t: TaskScore(t, OnsetMatcher(window_us)) for t in posed}
+        n = len(self.frequencies_hz)
+        self._touch_last = np.full(n, -10**12, dtype=np.int64)
+        self._slip_last = np.full(n, -10**12, dtype=np.int64)
+        self._touch_trial: list[list[Trial]] = [[] for _ in range(n)]
+        """Per contact: its open touch trials (one per touch task)."""
+        self._slip_trial: list[Trial | None] = [None] * n
+        self.board_us = 0
+        self.not_posed: Counter[int] = Counter()
+
+    def posed(self, task: int) -> bool:
+        """Whether ``task`` is scored here."""
+        return task in self.tasks
+
+    def observe(self, t_us: int, raw: np.ndarray) -> None:
+        """The truth of the tick at board time ``t_us`` (µs): the kernel's rows
+        (n_contacts, RAW_FIELDS), SI units."""
+        touching = raw[:, T_NODES] > 0
+        gross = raw[:, T_SLIP] == GROSS
+        for c in np.flatnonzero(touching).tolist():
+            row = raw[c]
+            if t_us - self._touch_last[c] > TOUCH_GAP_US:
+                self._touch_trial[c] = self._new_touch(t_us, c)
+            for trial in self._touch_trial[c]:
+                trial.x_mm, trial.y_mm = row[T_X] * 1e3, row[T_Y] * 1e3
+                trial.normal_n = float(row[T_NORMAL])
+                trial.last_us = t_us
+            self._touch_last[c] = t_us
+            if gross[c]:
+                if t_us - self._slip_last[c] > SLIP_GAP_US:
+                    trial = Trial(t_us, c)
+                    self.tasks[protocols.Task.SLIP].add_trial(trial)
+                self._slip_last[c] = t_us
+
+    def _new_touch(self, t_us: int, c: int) -> list[Trial]:
+        out = []
+        for task in (protocols.Task.LOCALISATION, protocols.Task.FORCE,
+                     protocols.Task.VIBRATION):
+            if task == protocols.Task.VIBRATION and not self.frequencies_hz[c] > 0:
+                continue
+            trial = Trial(t_us, c, frequency_hz=self.frequencies_hz[c])
+            self.tasks[task].add_trial(trial)
+            out.append(trial)
+        return out
+
+    def answer(self, answer: Any, t_us: int, running: bool = True) -> str:
+        """Score ``answer`` (:class:`protocols.Answer` of a posed task) arriving at board
+        time ``t_us`` (µs); return (and count) its outcome, one of :data:`OUTCOMES`."""
+        score = self.tasks[int(answer.task)]  # type: ignore[index]
+        if not running:
+            outcome = "while_stopped"
+        else:
+            m = score.matcher.match(int(t_us))
+            if m.kind is MatchKind.MATCHED:
+                assert m.onset is not None
+                trial = score.trials[m.onset.stimulus_id]
+                score.latencies_us.append(int(t_us) - trial.t0_us)
+                outcome = self._verdict(score, trial, answer.values)
+            else:
+                outcome = {MatchKind.DUPLICATE: "duplicates", MatchKind.LATE: "late",
+                           MatchKind.NO_STIMULUS: "false_alarms"}[m.kind]
+        score.counts[outcome] += 1
+        return outcome
+
+    def _verdict(self, score: TaskScore, trial: Trial, values: tuple[float, ...]) -> str:
+        task = score.task
+        if task == protocols.Task.SLIP:
+            return "right"
+        if task == protocols.Task.LOCALISATION:
+            err = math.hypot(values[0] - trial.x_mm, values[1] - trial.y_mm)
+            score.errors.append(err)
+            return "right" if err <= self.tolerance_mm else "wrong"
+        if task == protocols.Task.FORCE:
+            err = abs(values[0] - trial.normal_n)
+            score.errors.append(err)
+            return "right" if err <= self.tolerance_n else "wrong"
+        err = abs(values[0] - trial.frequency_hz)
+        score.errors.append(err)
+        nearest = min(self.classes_hz, key=lambda f: abs(f - values[0]))
+        return "right" if nearest == trial.frequency_hz else "wrong"
+
+    def advance(self, t_us: int) -> None:
+        """Board time is now ``t_us`` (µs): trials whose window passed become misses."""
+        self.board_us = int(t_us)
+        for score in self.tasks.values():
+            score.matcher.resolve(int(t_us))
+
+    def summary(self) -> dict[str, dict[str, Any]]:
+        """Per task name: counters, accuracy, error and latency percentiles (JSON-ready)."""
+        out: dict[str, dict[str, Any]] = {}
+        minutes = self.board_us / 60e6
+        for task, s in self.tasks.items():
+            matched = s.counts["right"] + s.counts["wrong"]
+            scored = matched + s.matcher.misses
+            d: dict[str, Any] = {
+                "trials": s.matcher.onsets, "answers": sum(s.counts.values()),
+                **{o: s.counts[o] for o in OUTCOMES},
+                "matched": matched, "misses": s.matcher.misses, "pending": s.matcher.pending,
+                "accuracy": s.counts["right"] / scored if scored else None,
+                "latency_ms": _percentiles([v * 1e-3 for v in s.latencies_us]),
+            }
+            unit = {protocols.Task.LOCALISATION: "mm", protocols.Task.FORCE: "n",
+                    protocols.Task.VIBRATION: "hz"}.get(task)
+            if unit is not None:
+                err = _percentiles(s.errors)
+                d[f"median_error_{unit}"] = err["p50"]
+                d[f"p90_error_{unit}"] = err["p90"]
+            if task == protocols.Task.SLIP:
+                d["false_alarms_per_min"] = (round(s.counts["false_alarms"] / minutes, 3)
+                                             if minutes > 0 else None)
+            if task == protocols.Task.VIBRATION:
+                d["classes_hz"] = self.classes_hz
+            out[task.name.lower()] = d
+        for task, n in sorted(self.not_posed.items()):
+            name = (protocols.Task(task).name.lower() if task in protocols.Task._value2member_map_
+                    else f"task{task}")
+            out.setdefault(name, {})["not_posed"] = n
+        return out
+
+
+def _percentiles(values: list[float]) -> dict[str, float | None]:
+    if not values:
+        return {"p50": None, "p90": None}
+    p50, p90 = np.percentile(np.asarray(values, dtype=float), [50, 90])
+    return {"p50": round(float(p50), 4), "p90": round(float(p90), 4)}
+
+
+def truth_lines(board_tasks: TaskScoreboard) -> list[str]:
+    """One JSON line per trial of each task: its task, onset (µs), contact and truth."""
+    out = []
+    for task, score in board_tasks.tasks.items():
+        for t in score.trials:
+            out.append(json.dumps({
+                "type": "trial", "task": task.name.lower(), "t_us": t.t0_us,
+                "contact": t.contact, "x_mm": _num(t.x_mm), "y_mm": _num(t.y_mm),
+                "normal_n": _num(t.normal_n), "frequency_hz": t.frequency_hz}))
+    return out
+
+
+def _num(v: float) -> float | None:
+    return None if math.isnan(v) else round(float(v), 6)
