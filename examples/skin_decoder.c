@@ -255,6 +255,16 @@ static void take_record(decoder_t *D, const unsigned char *d, int m) {
         if (op == 8) {
             printf("{\"record\":{\"type\":\"DECISION\",\"token\":%u,\"stimulus_id\":%u,"
                    "\"confidence\":%u}}\n", token, arg & 0xFFFFFF, arg >> 24);
+        } else if (op == 10) {                   /* §3.5.3: ANSWER, task in bits 3..0 */
+            unsigned task = arg & 0xF, f = arg >> 4;
+            printf("{\"record\":{\"type\":\"ANSWER\",\"token\":%u,\"task\":%u,\"values\":[",
+                   token, task);
+            if (task == 0) printf("%u", f & 0xFFFFFF);
+            else if (task == 1)                  /* two signed 14-bit steps of 0.01 mm */
+                printf("%d,%d", (int)((f & 0x3FFF) ^ 0x2000) - 0x2000,
+                       (int)(((f >> 14) & 0x3FFF) ^ 0x2000) - 0x2000);
+            else if (task != 3) printf("%u", f); /* SLIP carries no value */
+            printf("]}}\n");
         } else {
             printf("{\"record\":{\"type\":\"COMMAND\",\"token\":%u,\"opcode\":%u,\"arg\":",
                    token, op);

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from protocol_examples import (
     ACK,
+    ANSWERS,
     BURST,
     COMMAND,
     DECISION,
@@ -30,6 +31,8 @@ from protocol_examples import (
 )
 
 from protocols import (
+    ANSWER_SCALE,
+    Answer,
     Command,
     CommandCode,
     Decision,
@@ -37,6 +40,7 @@ from protocols import (
     RunEndReason,
     SerialEncoder,
     Status,
+    Task,
 )
 from skinhil.events import make_events
 
@@ -49,7 +53,12 @@ COUNTERS = ("frames_ok", "crc_errors", "malformed", "resyncs", "bytes_discarded"
 def record_json(rec: Any) -> dict[str, Any]:
     """A record as the file writes it: its type and wire fields (enums and flags as
     integers, a SET_SNR argument or SNR as a number or "inf", a DECISION's confidence as its
-    byte 0..255); a STATUS has no ``link_events`` (the decoder's own use, §7)."""
+    byte 0..255, an ANSWER's values as signed integers of its task's steps); a STATUS has no ``link_events`` (the decoder's own use, §7)."""
+    if isinstance(rec, Answer):  # values in wire steps (SPEC.md §3.5.3)
+        task = int(rec.task)
+        scale = ANSWER_SCALE.get(task, 1.0)
+        return {"type": "ANSWER", "token": rec.token, "task": task,
+                "values": [round(v / scale) for v in rec.values]}
     if isinstance(rec, Decision):
         conf = 255 if rec.confidence is None else round(rec.confidence * 254)
         return {"type": "DECISION", "token": rec.token, "stimulus_id": rec.stimulus_id,
@@ -142,6 +151,14 @@ def cases() -> list[dict[str, Any]]:
         "stimulus 3 at confidence 127/254, QUERY_SESSION).", cmds, [],
         [record_json(COMMAND), record_json(DECISION),
          record_json(Command(7, CommandCode.QUERY_SESSION, 0))], frames_ok=3))
+    host = SerialEncoder()
+    answers = (*ANSWERS, Answer(0x123A, Task.CLASSIFICATION, (12,)), Answer(0x123B, 7, (5,)))
+    out.append(_case(
+        "answers", "§3.5.3", "ANSWERs of a host: LOCALISATION (1.25, -2.5) mm, FORCE 0.3 N, "
+        "SLIP, VIBRATION 100 Hz, CLASSIFICATION of stimulus 12, and one of the reserved task "
+        "7 (its 28-bit field as its one value: the board NACKs it UNKNOWN_TASK).",
+        b"".join(host.command(a) for a in answers), [], [record_json(a) for a in answers],
+        frames_ok=6))
     enc = SerialEncoder()
     end = RunEnd(t_us=20_000_000, reason=RunEndReason.DURATION)
     sess = b"".join(enc.session_record(r) for r in (SESSION, *TABLE, end))

@@ -14,6 +14,7 @@ import numpy as np
 
 from protocols import (
     Ack,
+    Answer,
     CanEncoder,
     CanFrame,
     Command,
@@ -29,6 +30,7 @@ from protocols import (
     SessionReason,
     Status,
     StimulusEntry,
+    Task,
     table_digest,
 )
 from skinhil.events import make_events
@@ -41,6 +43,10 @@ MARKER = Marker(t_us=250_000, stimulus_id=3, phase=MarkerPhase.ONSET)
 COMMAND = Command(token=0x1234, opcode=CommandCode.SET_SNR, arg=10.0)
 DECISION = Decision(token=0x1235, stimulus_id=3, confidence=0.5)
 """The decoder under test decided on stimulus 3, confidence 0.5 (127 / 254)."""
+ANSWERS = (Answer(0x1236, Task.LOCALISATION, (1.25, -2.5)), Answer(0x1237, Task.FORCE, (0.3,)),
+           Answer(0x1238, Task.SLIP, ()), Answer(0x1239, Task.VIBRATION, (100.0,)))
+"""A decoder under test's ANSWERs (SPEC.md §3.5.3): a touch at (1.25, -2.5) mm, of 0.3 N, a
+slip, a vibration of 100 Hz."""
 ACK = Ack(token=0x1234, opcode=CommandCode.SET_STIMULUS, ok=False,
           reason=NackReason.UNKNOWN_STIMULUS)
 EVENTS = make_events([0, 0, 300, 900], [5, 17, 337, 2])
@@ -120,6 +126,7 @@ EXAMPLES: dict[str, Callable[[], str]] = {
     "serial-command": _serial(lambda e: e.command(COMMAND)),
     "serial-ack": _serial(lambda e: e.ack(ACK)),
     "serial-decision": _serial(lambda e: e.command(DECISION)),
+    "serial-answers": _serial(lambda e: b"".join(e.command(a) for a in ANSWERS)),
     "serial-session": _serial(lambda e: b"".join(e.session_record(r) for r in SESSION_RECORDS)),
     "serial-run-end": _serial(lambda e: e.session_record(RUN_END)),
 }
@@ -131,6 +138,7 @@ for _fd, _tag in ((False, "can"), (True, "canfd")):
     EXAMPLES[f"{_tag}-command"] = _can(_fd, lambda e: e.command(COMMAND))
     EXAMPLES[f"{_tag}-ack"] = _can(_fd, lambda e: e.ack(ACK))
     EXAMPLES[f"{_tag}-decision"] = _can(_fd, lambda e: e.command(DECISION))
+    EXAMPLES[f"{_tag}-answers"] = _can(_fd, lambda e: [f for a in ANSWERS for f in e.command(a)])
     EXAMPLES[f"{_tag}-session"] = _can(_fd, lambda e: [
         f for r in SESSION_RECORDS for f in e.session_record(r)])
     EXAMPLES[f"{_tag}-run-end"] = _can(_fd, lambda e: e.session_record(RUN_END))

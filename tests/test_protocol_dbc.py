@@ -246,3 +246,27 @@ def test_cantools_encodes_and_decodes_decisions(fd: bool) -> None:
     (frame,) = CanEncoder(board_id=9, fd=fd).command(
         protocols.Command(4, protocols.CommandCode.SET_STIMULUS, 11))
     assert msg.decode(frame.data) == {"Seq": 0, "Opcode": "SET_STIMULUS", "Token": 4, "Arg": 11}
+
+
+@pytest.mark.parametrize("fd", [False, True])
+def test_cantools_encodes_and_decodes_answers(fd: bool) -> None:
+    """An ANSWER's fields, multiplexed by AnswerTask inside opcode ANSWER, come out of
+    cantools in physical units, and cantools encodes the codec's frame from them."""
+    db = cantools.database.load_string(dbc_text(9, fd), database_format="dbc")
+    msg = db.get_message_by_name("SKIN_COMMAND")
+    task = protocols.Task
+    cases = [(protocols.Answer(1, task.LOCALISATION, (1.25, -2.5)),
+              {"AnswerXmm": 1.25, "AnswerYmm": -2.5}),
+             (protocols.Answer(2, task.FORCE, (0.3,)), {"AnswerForceN": 0.3}),
+             (protocols.Answer(3, task.SLIP, ()), {}),
+             (protocols.Answer(4, task.VIBRATION, (100.0,)), {"AnswerFrequencyHz": 100.0}),
+             (protocols.Answer(5, task.CLASSIFICATION, (7,)), {"AnswerStimulusId": 7})]
+    for answer, values in cases:
+        (frame,) = CanEncoder(board_id=9, fd=fd).command(answer)
+        fields = {"Seq": 0, "Opcode": "ANSWER", "Token": answer.token,
+                  "AnswerTask": answer.task.name, **values}
+        got = msg.decode(frame.data)
+        assert got.keys() == fields.keys()
+        assert all(got[k] == pytest.approx(v) if isinstance(v, float) else got[k] == v
+                   for k, v in fields.items()), got
+        assert msg.encode(fields) == frame.data
