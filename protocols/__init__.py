@@ -3,8 +3,9 @@
 - Serial: :class:`SerialEncoder` / :class:`SerialDecoder` (COBS-framed packets, CRC-16).
 - CAN and CAN FD: :class:`CanEncoder` / :class:`CanDecoder` over :class:`CanFrame`.
 - Records: :class:`Status`, :class:`Marker`, :class:`Command`, :class:`Decision` and
-  :class:`Answer` (the decoder under test's answers to a task), :class:`Ack`; the session records :class:`Session`,
-  :class:`StimulusEntry` (one row of the stimulus table) and :class:`RunEnd`.
+  :class:`Answer` (the decoder under test's answers to a task), :class:`Ack`; the session
+  records :class:`Session`, :class:`StimulusEntry` (one row of the stimulus table) and
+  :class:`RunEnd`.
 - Wire time: :func:`serial_seconds`, :func:`can_frame_seconds`.
 
 The normative layout is ``protocols/SPEC.md``; the CAN databases are ``protocols/skinhil.dbc``

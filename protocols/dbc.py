@@ -86,7 +86,8 @@ def _camel(name: str) -> str:
 
 
 def _enum_choices(enum: type[CommandCode] | type[NackReason] | type[MarkerPhase]
-                  | type[SessionReason] | type[RunEndReason] | type[Task]) -> tuple[tuple[int, str], ...]:
+                  | type[SessionReason] | type[RunEndReason] | type[Task]
+                  ) -> tuple[tuple[int, str], ...]:
     return tuple(sorted({int(m): m.name for m in enum}.items()))
 
 

@@ -53,7 +53,8 @@ COUNTERS = ("frames_ok", "crc_errors", "malformed", "resyncs", "bytes_discarded"
 def record_json(rec: Any) -> dict[str, Any]:
     """A record as the file writes it: its type and wire fields (enums and flags as
     integers, a SET_SNR argument or SNR as a number or "inf", a DECISION's confidence as its
-    byte 0..255, an ANSWER's values as signed integers of its task's steps); a STATUS has no ``link_events`` (the decoder's own use, §7)."""
+    byte 0..255, an ANSWER's values as signed integers of its task's steps); a STATUS has
+    no ``link_events`` (the decoder's own use, §7)."""
     if isinstance(rec, Answer):  # values in wire steps (SPEC.md §3.5.3)
         task = int(rec.task)
         scale = ANSWER_SCALE.get(task, 1.0)

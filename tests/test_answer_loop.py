@@ -77,7 +77,8 @@ def _play(receiver: Receiver, link_args: list[str], tmp_path: Path) -> dict[str,
     duration = _schedule(tmp_path / "schedule.toml")
     window_s = receiver.scoreboard.match_window_us * 1e-6 + WAY_BACK_S
     cmd = serve_command([*link_args, "--schedule", str(tmp_path / "schedule.toml"),
-                         "--response-window", f"{window_s:.6f}", "--score", str(score), "--markers"],
+                         "--response-window", f"{window_s:.6f}", "--score", str(score),
+                         "--markers"],
                         duration, SNR_DB, seed=3)
     try:
         status, _, err = run_against_board(receiver, cmd)

@@ -106,7 +106,8 @@ def test_scripted_dut_lands_in_every_counter(pty_pair, tmp_path: Path) -> None:
     window_s = 0.3
     score = tmp_path / "score.json"
     serve = ServeProcess("--port", pty_pair.path, "--host-driven", "--snr", "inf",
-                         "--response-window", str(window_s), "--score", str(score), "--markers", "--json")
+                         "--response-window", str(window_s), "--score", str(score),
+                         "--markers", "--json")
     peer = PtyPeer(pty_pair.master)
     try:
         assert peer.wait_for(lambda p: p.of(protocols.Status) or serve.exited, 30)

@@ -33,8 +33,8 @@ def test_example_dut_is_scored_above_chance_on_a_pty(tmp_path: Path) -> None:
     score = tmp_path / "score.json"
     board, dut = host_beside_serve(
         tmp_path, [sys.executable, str(EXAMPLE), "--port", "{HOST}"],
-        ["--duration", str(DURATION_S), "--seed", "2", "--snr-db", "10", "--score", str(score), "--markers",
-         "--quiet"], timeout_s=DURATION_S + 60)
+        ["--duration", str(DURATION_S), "--seed", "2", "--snr-db", "10", "--score", str(score),
+         "--markers", "--quiet"], timeout_s=DURATION_S + 60)
     assert board.returncode == 0, board.stderr
     assert dut.returncode == 0, dut.stderr
     out = dut.stdout

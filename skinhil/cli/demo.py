@@ -183,7 +183,8 @@ def run(args: argparse.Namespace) -> int:
     score_dir = tempfile.TemporaryDirectory(prefix="skinhil-demo-")
     score = Path(score_dir.name) / "score.json"
     cmd = serve_command(["--port", link.slave_path, "--baud", str(args.baud), "--score",
-                         str(score), "--markers"], args.duration_s, args.snr_db, args.seed, DEMO_REST_S)
+                         str(score), "--markers"], args.duration_s, args.snr_db, args.seed,
+                        DEMO_REST_S)
     names = class_names()
     receiver = Receiver(link, decoder)
     answerer = DecisionAnswerer(receiver)

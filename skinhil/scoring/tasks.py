@@ -6,8 +6,9 @@ Trials come from the truth (:mod:`skinhil.world.truth`), one row per contact per
 - a **touch** of a contact starts at the first tick it touches (``nodes`` > 0) after at least
   :data:`TOUCH_GAP_US` without touching; LOCALISATION and FORCE answer touches, VIBRATION
   the touches of contacts that vibrate;
-- a **slip** of a contact starts at the first tick of gross slip (``slip`` = gross) after at
-  least :data:`SLIP_GAP_US` without it; SLIP answers slips.
+- a **slip** of a contact starts at the first tick of gross slip (``slip`` = gross) once its
+  touch has lasted :data:`SETTLE_US` (the touch-down, where nodes slide as they land, is no
+  slip) and at least :data:`SLIP_GAP_US` after its last gross slip; SLIP answers slips.
 
 An answer is matched to the latest trial onset of its task by the one rule of
 :mod:`skinhil.scoring.matching` (response window ``W``). A matched answer is scored against
@@ -41,8 +42,11 @@ from skinhil.world.truth import SLIP_STATES, T_NODES, T_NORMAL, T_SLIP, T_X, T_Y
 TOUCH_GAP_US = 20_000
 """A contact's touch ends only after this long (µs) without touching: a vibration's brief
 lift-offs stay one touch."""
-SLIP_GAP_US = 50_000
-"""A slip ends only after this long (µs) without gross slip: stick-slip chatter is one slip."""
+SLIP_GAP_US = 200_000
+"""A slip ends only after this long (µs) without gross slip: stick-slip chatter, and the
+unloading slip as a sliding object is lifted, belong to the slip before."""
+SETTLE_US = 20_000
+"""Gross slip in a touch's first this long (µs) is its touch-down, no slip."""
 GROSS = SLIP_STATES.index("gross")
 DEFAULT_TOLERANCE_MM = 1.0
 """A localisation answer within this distance (mm) of the centroid is right: one spacing of
@@ -110,6 +114,7 @@ class TaskScoreboard:
         n = len(self.frequencies_hz)
         self._touch_last = np.full(n, -10**12, dtype=np.int64)
         self._slip_last = np.full(n, -10**12, dtype=np.int64)
+        self._touch_t0 = np.zeros(n, dtype=np.int64)
         self._touch_trial: list[list[Trial]] = [[] for _ in range(n)]
         """Per contact: its open touch trials (one per touch task)."""
         self._slip_trial: list[Trial | None] = [None] * n
@@ -129,15 +134,15 @@ class TaskScoreboard:
             row = raw[c]
             if t_us - self._touch_last[c] > TOUCH_GAP_US:
                 self._touch_trial[c] = self._new_touch(t_us, c)
+                self._touch_t0[c] = t_us
             for trial in self._touch_trial[c]:
                 trial.x_mm, trial.y_mm = row[T_X] * 1e3, row[T_Y] * 1e3
                 trial.normal_n = float(row[T_NORMAL])
                 trial.last_us = t_us
             self._touch_last[c] = t_us
-            if gross[c]:
+            if gross[c] and t_us - self._touch_t0[c] >= SETTLE_US:
                 if t_us - self._slip_last[c] > SLIP_GAP_US:
-                    trial = Trial(t_us, c)
-                    self.tasks[protocols.Task.SLIP].add_trial(trial)
+                    self.tasks[protocols.Task.SLIP].add_trial(Trial(t_us, c))
                 self._slip_last[c] = t_us
 
     def _new_touch(self, t_us: int, c: int) -> list[Trial]:
@@ -219,9 +224,8 @@ class TaskScoreboard:
             if task == protocols.Task.VIBRATION:
                 d["classes_hz"] = self.classes_hz
             out[task.name.lower()] = d
-        for task, n in sorted(self.not_posed.items()):
-            name = (protocols.Task(task).name.lower() if task in protocols.Task._value2member_map_
-                    else f"task{task}")
+        for code, n in sorted(self.not_posed.items()):
+            name = protocols.Task(code).name.lower()
             out.setdefault(name, {})["not_posed"] = n
         return out
 
