@@ -42,6 +42,7 @@ from skinhil.receiver import (
 )
 from skinhil.receiver.bus import MAX_UDP_SOURCES, BoardKey
 from skinhil.receiver.model_file import load_window_decoder
+from skinhil.receiver.task_answer import ANSWERERS, TaskAnswerer
 from skinhil.recording import SessionRecorder
 
 STATUS_PERIOD_S = 1.0
@@ -71,8 +72,17 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="save events (tonic-compatible), markers and decisions to this .npz, "
                         "or to NWB if it ends in .nwb (pip install \"skinhil[nwb]\")")
     p.add_argument("--answer", action="store_true",
-                   help="send each decision back to the board as a DECISION, so the board "
-                        "scores this receiver as a decoder under test (serve --score)")
+                   help="send each decision back to the board as a DECISION and, at each "
+                        "onset, ANSWERs of the contact tasks (where, how hard, slip, "
+                        "vibration), so the board scores this receiver as a decoder under "
+                        "test (serve --score; protocols/SPEC.md §3.5.3)")
+    p.add_argument("--answer-with", choices=ANSWERERS, default="reference",
+                   help="with --answer: who answers the contact tasks: the reference "
+                        "decoders (default), random values at the same onsets, or the "
+                        "oracle (the truth of --oracle-truth, through the same link)")
+    p.add_argument("--oracle-truth", type=Path, metavar="FILE",
+                   help="with --answer-with oracle: the truth of an earlier run of the same "
+                        "scenario (serve --truth FILE)")
     p.add_argument("--udp-max-sources", type=integer(1, 4096, "count"),
                    default=None, metavar="N",
                    help=f"with --udp: decode at most N sending boards; datagrams of further "
@@ -321,15 +331,21 @@ def run(args: argparse.Namespace) -> int:
     receiver = Receiver(transport, decoder, board_id=args.board_ids[0],
                         reopen=lambda: open_transport(args))
     receiver.add_listener(LivePrinter(receiver, args.json, names))
-    answerer = DecisionAnswerer(receiver) if args.answer else None
-    if answerer is not None:
-        receiver.add_listener(answerer)
+    if not args.answer and (args.answer_with != "reference" or args.oracle_truth is not None):
+        raise ConfigError("--answer-with and --oracle-truth choose who answers: add --answer")
+    answerer = (DecisionAnswerer(receiver) if args.answer and args.answer_with == "reference"
+                else None)
+    tasks = (TaskAnswerer(receiver, args.answer_with, args.oracle_truth) if args.answer
+             else None)
+    for listener in (answerer, tasks):
+        if listener is not None:
+            receiver.add_listener(listener)
     if record is None:
-        info = listen_one(args, receiver, names, answerer)
+        info = listen_one(args, receiver, names, answerer, tasks)
     else:
         with SessionRecorder(record.parent) as recorder:
             receiver.add_listener(recorder)
-            info = listen_one(args, receiver, names, answerer)
+            info = listen_one(args, receiver, names, answerer, tasks)
             save_session(args, recorder, names, info, receiver)
     if args.json:
         print(json.dumps(info), flush=True)
@@ -339,11 +355,16 @@ def run(args: argparse.Namespace) -> int:
             a = info["answers"]
             print(f"answers: {a['sent']} DECISIONs sent to the board ({a['acked']} ACK, "
                   f"{a['nacked']} NACK, {a['unsent']} not sent)")
+        if tasks is not None:
+            t = info["task_answers"]
+            print(f"task answers ({t['answerer']}): sent {t['sent']}, ACK {t['acked']}, "
+                  f"NACK {t['nacked']}, {t['unsent']} not sent")
     return 0
 
 
 def listen_one(args: argparse.Namespace, receiver: Receiver, names: dict[int, str],
-               answerer: DecisionAnswerer | None = None) -> dict[str, Any]:
+               answerer: DecisionAnswerer | None = None,
+               tasks: TaskAnswerer | None = None) -> dict[str, Any]:
     """Receive until Ctrl-C or --duration; the summary (with ``answerer``'s DECISION counts
     when the receiver answers the board)."""
     if not args.json:
@@ -358,6 +379,8 @@ def listen_one(args: argparse.Namespace, receiver: Receiver, names: dict[int, st
     info = summary(receiver, time.monotonic() - t0)
     if answerer is not None:
         info["answers"] = answerer.as_dict()
+    if tasks is not None:
+        info["task_answers"] = tasks.as_dict()
     return info
 
 

@@ -45,6 +45,8 @@ lift-offs stay one touch."""
 SLIP_GAP_US = 200_000
 """A slip ends only after this long (µs) without gross slip: stick-slip chatter, and the
 unloading slip as a sliding object is lifted, belong to the slip before."""
+SAMPLE_US = 50_000
+"""The truth file's values of a touch are those this long (µs) after its onset."""
 SETTLE_US = 20_000
 """Gross slip in a touch's first this long (µs) is its touch-down, no slip."""
 GROSS = SLIP_STATES.index("gross")
@@ -70,6 +72,9 @@ class Trial:
     normal_n: float = math.nan
     frequency_hz: float = 0.0
     last_us: int = 0
+    sample: tuple[float, float, float] | None = None
+    """(x_mm, y_mm, normal_n) at :data:`SAMPLE_US` after the onset: the settled touch the
+    operator's truth file gives."""
 
 
 @dataclass
@@ -139,6 +144,8 @@ class TaskScoreboard:
                 trial.x_mm, trial.y_mm = row[T_X] * 1e3, row[T_Y] * 1e3
                 trial.normal_n = float(row[T_NORMAL])
                 trial.last_us = t_us
+                if trial.sample is None and t_us - trial.t0_us >= SAMPLE_US:
+                    trial.sample = (trial.x_mm, trial.y_mm, trial.normal_n)
             self._touch_last[c] = t_us
             if gross[c] and t_us - self._touch_t0[c] >= SETTLE_US:
                 if t_us - self._slip_last[c] > SLIP_GAP_US:
@@ -238,14 +245,16 @@ def _percentiles(values: list[float]) -> dict[str, float | None]:
 
 
 def truth_lines(board_tasks: TaskScoreboard) -> list[str]:
-    """One JSON line per trial of each task: its task, onset (µs), contact and truth."""
+    """One JSON line per trial of each task: its task, onset (µs), contact and truth (a
+    touch's centroid and normal force :data:`SAMPLE_US` after its onset, or at its end)."""
     out = []
     for task, score in board_tasks.tasks.items():
         for t in score.trials:
+            x, y, n = t.sample if t.sample is not None else (t.x_mm, t.y_mm, t.normal_n)
             out.append(json.dumps({
                 "type": "trial", "task": task.name.lower(), "t_us": t.t0_us,
-                "contact": t.contact, "x_mm": _num(t.x_mm), "y_mm": _num(t.y_mm),
-                "normal_n": _num(t.normal_n), "frequency_hz": t.frequency_hz}))
+                "contact": t.contact, "x_mm": _num(x), "y_mm": _num(y),
+                "normal_n": _num(n), "frequency_hz": t.frequency_hz}))
     return out
 
 

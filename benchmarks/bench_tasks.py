@@ -1,0 +1,136 @@
+"""The README's task table: per contact task, the board's score of the reference receiver,
+of a random answerer and of the oracle (the truth through the same link).
+
+For each task scenario (examples/scenarios/task_*.toml) it runs ``skinhil serve --score
+--truth`` on one end of a socat pty pair and ``skinhil listen --answer --answer-with WHO`` on
+the other: first the reference (its run's truth file feeds the oracle; the world's mechanics
+do not depend on the noise, so every run of a scenario has the same truth), then random,
+then oracle. Prints a markdown table and writes the scores as JSON.
+
+    python benchmarks/bench_tasks.py --snr-db 10 [--tasks force,slip] [--out scores.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+TASKS = ("localisation", "force", "slip", "vibration")
+WHO = ("reference", "random", "oracle")
+METRIC = {"localisation": ("median_error_mm", "mm"), "force": ("median_error_n", "N"),
+          "slip": ("latency_ms", "ms"), "vibration": ("median_error_hz", "Hz")}
+
+
+@contextlib.contextmanager
+def pty_pair(folder: Path) -> Iterator[tuple[str, str]]:
+    board, host = folder / "ttyBOARD", folder / "ttyHOST"
+    socat = subprocess.Popen(["socat", f"pty,raw,echo=0,link={board}",
+                              f"pty,raw,echo=0,link={host}"])
+    try:
+        end = time.monotonic() + 10
+        while not (board.exists() and host.exists()):
+            if time.monotonic() > end:
+                raise SystemExit("socat made no pty pair (apt-get install socat)")
+            time.sleep(0.05)
+        yield str(board), str(host)
+    finally:
+        socat.kill()
+        socat.wait()
+
+
+def skinhil(*args: str) -> list[str]:
+    return [sys.executable, "-m", "skinhil", *args]
+
+
+def quick_model(path: Path) -> None:
+    """A classification model (listen needs one; the contact tasks do not use it)."""
+    sys.path.insert(0, str(REPO))
+    from skinhil.decoding.model_file import save_decoder
+    from skinhil.receiver.training import train_decoder
+
+    decoder, _ = train_decoder(math.inf, reps=1, seed=0, rest_s=0.05, cross_validation=False)
+    save_decoder(decoder, path)
+
+
+def run(task: str, who: str, folder: Path, model: Path, snr_db: float, seed: int) -> dict:
+    scenario = REPO / "examples" / "scenarios" / f"task_{task}.toml"
+    score, truth = folder / f"{task}-{who}.json", folder / f"{task}-truth.jsonl"
+    listen_args = ["--answer", "--answer-with", who, "--json"]
+    if who == "oracle":
+        listen_args += ["--oracle-truth", str(truth)]
+    env = {**os.environ, "PYTHONPATH": str(REPO)}
+    with pty_pair(folder) as (board_end, host_end):
+        listen = subprocess.Popen(skinhil("listen", "--port", host_end, "--model", str(model),
+                                          *listen_args), env=env, stdout=subprocess.PIPE,
+                                  stderr=subprocess.PIPE, text=True)
+        time.sleep(3.0)  # listen is up before the run starts
+        serve = subprocess.run(skinhil("serve", "--port", board_end, "--schedule",
+                                       str(scenario), "--snr-db", str(snr_db), "--seed",
+                                       str(seed), "--score", str(score), "--quiet",
+                                       *(["--truth", str(truth)] if who == "reference" else [])),
+                               env=env, capture_output=True, text=True, timeout=600)
+        try:
+            listen.communicate(timeout=60)
+        except subprocess.TimeoutExpired:
+            listen.kill()
+            listen.communicate()
+    if serve.returncode:
+        raise SystemExit(f"serve failed: {serve.stderr}")
+    return json.loads(score.read_text())["tasks"].get(task, {})
+
+
+def cell(s: dict, task: str) -> str:
+    if not s:
+        return "n/a"
+    key, unit = METRIC[task]
+    value = s.get(key)
+    if isinstance(value, dict):
+        value = value.get("p50")
+    acc = s.get("accuracy")
+    acc_text = "n/a" if acc is None else f"{100 * acc:.0f} %"
+    extra = (f", {s['false_alarms_per_min']:.1f} FA/min" if task == "slip"
+             and s.get("false_alarms_per_min") is not None else "")
+    metric = "" if value is None else f"; {key.replace('_', ' ')} {value:.3g} {unit}"
+    return f"{acc_text} ({s['right']}/{s['trials']}{extra}){metric}"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--snr-db", type=float, default=10.0)
+    ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("--tasks", default=",".join(TASKS))
+    ap.add_argument("--out", type=Path)
+    args = ap.parse_args()
+    tasks = [t for t in args.tasks.split(",") if t]
+    results: dict[str, dict[str, dict]] = {}
+    with tempfile.TemporaryDirectory(prefix="skinhil-tasks-") as tmp:
+        folder = Path(tmp)
+        model = folder / "model.npz"
+        quick_model(model)
+        for task in tasks:
+            results[task] = {}
+            for who in WHO:
+                t0 = time.monotonic()
+                results[task][who] = run(task, who, folder, model, args.snr_db, args.seed)
+                print(f"{task} {who}: {cell(results[task][who], task)} "
+                      f"({time.monotonic() - t0:.0f} s)", file=sys.stderr, flush=True)
+    print(f"| task (SNR {args.snr_db:g} dB) | reference | random | oracle |")
+    print("|---|---|---|---|")
+    for task in tasks:
+        print(f"| {task} | " + " | ".join(cell(results[task][w], task) for w in WHO) + " |")
+    if args.out is not None:
+        args.out.write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,61 @@
+"""Writes the task scenarios of this folder (task_*.toml): trials that spread decoders'
+scores (neighbouring places, threshold forces, slips at several speeds, close vibration
+frequencies), in a seeded shuffled order. Run: python examples/scenarios/make_task_scenarios.py
+"""
+
+from __future__ import annotations
+
+import random
+from pathlib import Path
+
+HERE = Path(__file__).parent
+
+
+def _write(name: str, about: str, indenter: str, contacts: list[dict[str, object]]) -> None:
+    lines = [f"# {about}", f"# Written by {Path(__file__).name}; the board scores it with "
+             "serve --score (protocols/SPEC.md §3.5.4).", "", indenter.strip(), ""]
+    for c in contacts:
+        lines.append("[[contact]]")
+        lines += [f"{k} = {v!r}".replace("'", '"') for k, v in c.items()]
+        lines.append("")
+    (HERE / f"task_{name}.toml").write_text("\n".join(lines), encoding="utf-8")
+
+
+def main() -> None:
+    rng = random.Random(30)
+    places = [(x, y) for x in (-1.0, 0.0, 1.0) for y in (-1.0, 0.0, 1.0)] * 2
+    rng.shuffle(places)
+    _write("localisation", "18 presses of a 3 mm sphere, 1 mm deep for 0.1 s, at the 9 "
+           "places of a 1 mm grid around the centre (twice each), one every 0.6 s.",
+           '[[indenter]]\nname = "probe"\nshape = "sphere"\nradius_mm = 3.0',
+           [{"indenter": "probe", "start_s": round(0.1 + 0.6 * i, 3), "motion": "press",
+             "x_mm": x, "y_mm": y, "depth_mm": 1.0, "ramp_s": 0.01, "hold_s": 0.1}
+            for i, (x, y) in enumerate(places)])
+    loads = [0.1, 0.15, 0.2, 0.3, 0.4, 0.5] * 3
+    rng.shuffle(loads)
+    _write("force", "18 presses of a 3 mm sphere at the centre under normal loads of 0.1 to "
+           "0.5 N (threshold steps of 0.05-0.1 N, three each), held 0.15 s, one every 0.6 s.",
+           '[[indenter]]\nname = "probe"\nshape = "sphere"\nradius_mm = 3.0',
+           [{"indenter": "probe", "start_s": round(0.1 + 0.6 * i, 3), "motion": "press",
+             "load_n": load, "ramp_s": 0.02, "hold_s": 0.15} for i, load in enumerate(loads)])
+    speeds = [5.0, 10.0, 20.0, 40.0] * 3
+    rng.shuffle(speeds)
+    _write("slip", "12 slides of a 5 mm ball held by 0.3 N and dragged 2 mm along x with low "
+           "friction at 5, 10, 20 or 40 mm/s (three each): each sticks, then slips; one every "
+           "1.0 s.", '[[indenter]]\nname = "ball"\nshape = "sphere"\nradius_mm = 5.0',
+           [{"indenter": "ball", "start_s": round(0.1 + 1.0 * i, 3), "motion": "slide",
+             "x_mm": -1.0, "to_x_mm": 1.0, "speed_mm_per_s": v, "load_n": 0.3,
+             "ramp_s": 0.03, "dwell_s": 0.1, "mu_static": 0.4, "mu_kinetic": 0.3}
+            for i, v in enumerate(speeds)])
+    freqs = [50.0, 100.0, 200.0, 300.0] * 4
+    rng.shuffle(freqs)
+    _write("vibration", "16 presses of a flat 1.5 mm pad, 0.8 mm deep for 0.3 s, vibrating "
+           "0.1 mm along z at 50, 100, 200 or 300 Hz (four each), one every 0.6 s.",
+           '[[indenter]]\nname = "pad"\nshape = "flat"\nradius_mm = 1.5',
+           [{"indenter": "pad", "start_s": round(0.1 + 0.6 * i, 3), "motion": "press",
+             "depth_mm": 0.8, "ramp_s": 0.02, "hold_s": 0.3, "vibration_mm": 0.1,
+             "vibration_hz": f} for i, f in enumerate(freqs)])
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,202 @@
+"""The reference receiver answers the contact tasks (``skinhil listen --answer``): at each
+onset it detects (no ground truth), it sends ANSWERs (``protocols/SPEC.md`` §3.5.3) of
+LOCALISATION, FORCE and VIBRATION, or a SLIP when the onset falls inside the touch before
+it, computed by :mod:`skinhil.receiver.task_decoders` from the decision window's spikes.
+
+Two bounds to compare it with, through the same link and the same answer path:
+
+- ``random``: the same onsets, each value drawn at random (a place on the skin, a force of
+  0.05..0.6 N, a frequency of the vibration band), a slip at random (p = 0.5) between them;
+- ``oracle``: the truth of an earlier run of the same scenario (``serve --truth FILE``, the
+  world's mechanics do not depend on the noise): each trial answered with its true values
+  :data:`ORACLE_DELAY_S` after its onset, timed by the board time the stream shows.
+
+A task the board NACKs as TASK_NOT_POSED is not answered again.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+from collections import Counter, deque
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import protocols
+from skinhil.errors import ConfigError, TransportError
+from skinhil.receiver.answer import SEND_TIMEOUT_S, host_encoder
+from skinhil.receiver.receiver import Receiver, ReceiverListener
+from skinhil.receiver.scoring import ScoredDecision
+from skinhil.receiver.task_decoders import (
+    VIBRATION_BAND_HZ,
+    force_n,
+    frequency_hz,
+    is_slip,
+    locate_mm,
+    sensor_xy_mm,
+)
+
+log = logging.getLogger(__name__)
+
+ANSWERERS = ("reference", "random", "oracle")
+"""Who answers the tasks (``listen --answer-with``)."""
+ORACLE_DELAY_S = 0.05
+"""The oracle answers each trial this long (s) after its onset: the reference's window."""
+KEEP_EVENTS_S = 1.0
+"""Events kept for the next decision window (s of board time)."""
+TOUCH_TASKS = (protocols.Task.LOCALISATION, protocols.Task.FORCE, protocols.Task.VIBRATION)
+
+
+class TaskAnswerer(ReceiverListener):
+    """Sends ANSWERs of the contact tasks for ``receiver``'s detected onsets (``reference``
+    or ``random``) or from a truth file (``oracle``, ``truth_path``)."""
+
+    def __init__(self, receiver: Receiver, answerer: str = "reference",
+                 truth_path: Path | None = None, seed: int = 0) -> None:
+        if answerer not in ANSWERERS:
+            raise ConfigError(f"answerer {answerer!r}: give one of {', '.join(ANSWERERS)}")
+        if (answerer == "oracle") != (truth_path is not None):
+            raise ConfigError("the oracle answers from a truth file (serve --truth FILE): "
+                              "give both, or neither")
+        self.receiver = receiver
+        self.answerer = answerer
+        self.encoder = host_encoder(receiver.transport, receiver.board_id)
+        self._rng = np.random.default_rng(seed)
+        self._events: deque[np.ndarray] = deque()
+        self._xy_mm: np.ndarray | None = None
+        self._touch_us: int | None = None
+        self._token = 0
+        self._pending: dict[int, int] = {}
+        """token → task of the ANSWERs not yet ACKed."""
+        self.off: set[int] = set()
+        """Tasks the board does not pose (NACKed TASK_NOT_POSED): no longer answered."""
+        self.sent: Counter[str] = Counter()
+        self.acked: Counter[str] = Counter()
+        self.nacked: Counter[str] = Counter()
+        self.unsent = 0
+        self._oracle: list[tuple[int, int, tuple[float, ...]]] = (
+            _oracle_answers(truth_path) if truth_path is not None else [])
+
+    # -- listener -------------------------------------------------------------------------
+    def on_session(self, session: Any) -> None:
+        if session.rows and session.cols:
+            self._xy_mm = sensor_xy_mm((int(session.rows), int(session.cols)))
+
+    def on_events(self, events: np.ndarray, host_time_s: float) -> None:
+        if self.answerer == "oracle":
+            self._play_oracle()
+            return
+        self._events.append(events)
+        last = int(events["t"][-1])
+        while len(self._events) > 1 and int(self._events[0]["t"][-1]) < last - KEEP_EVENTS_S * 1e6:
+            self._events.popleft()
+
+    def on_status(self, status: Any) -> None:
+        if self.answerer == "oracle":
+            self._play_oracle()
+
+    def on_decision(self, decision: ScoredDecision) -> None:
+        if self.answerer == "oracle":
+            return
+        p = decision.prediction
+        if is_slip(p.detect_t_us, self._touch_us):
+            if self.answerer == "reference" or self._rng.random() < 0.5:
+                self._send(protocols.Task.SLIP, ())
+            return
+        self._touch_us = p.detect_t_us
+        ev = self._window(p.window_t_us, p.decided_t_us)
+        if self.answerer == "reference":
+            xy = self._xy_mm if self._xy_mm is not None else sensor_xy_mm((6, 6))
+            ok = ev["addr"] < xy.shape[0]
+            values = {protocols.Task.LOCALISATION: locate_mm(ev["addr"][ok], xy),
+                      protocols.Task.FORCE: (force_n(ev.shape[0]),),
+                      protocols.Task.VIBRATION: (frequency_hz(ev["t"]),)}
+        else:
+            rows, cols = self._size()
+            values = {protocols.Task.LOCALISATION: (
+                          float(self._rng.uniform(-(cols - 1) / 2, (cols - 1) / 2)),
+                          float(self._rng.uniform(-(rows - 1) / 2, (rows - 1) / 2))),
+                      protocols.Task.FORCE: (float(self._rng.uniform(0.05, 0.6)),),
+                      protocols.Task.VIBRATION: (float(self._rng.uniform(*VIBRATION_BAND_HZ)),)}
+        for task in TOUCH_TASKS:
+            self._send(task, tuple(round(v, 2) for v in values[task]))
+
+    def on_ack(self, ack: Any) -> None:
+        if ack.opcode != protocols.CommandCode.ANSWER or ack.token not in self._pending:
+            return
+        task = self._pending.pop(ack.token)
+        name = protocols.Task(task).name.lower()
+        if ack.ok:
+            self.acked[name] += 1
+        else:
+            self.nacked[name] += 1
+            if ack.reason == protocols.NackReason.TASK_NOT_POSED:
+                self.off.add(task)
+
+    # -- helpers --------------------------------------------------------------------------
+    def _size(self) -> tuple[int, int]:
+        s = self.receiver.session
+        return (int(s.rows), int(s.cols)) if s is not None and s.rows else (6, 6)
+
+    def _window(self, start_us: int, end_us: int) -> np.ndarray:
+        if not self._events:
+            return np.zeros(0, dtype=[("t", "<i8"), ("addr", "<u2")])
+        ev = np.concatenate(list(self._events))
+        return ev[(ev["t"] >= start_us) & (ev["t"] < end_us)]
+
+    def _play_oracle(self) -> None:
+        now = self.receiver.known_board_time_us()
+        while self._oracle and self._oracle[0][0] <= now:
+            _, task, values = self._oracle.pop(0)
+            self._send(protocols.Task(task), values)
+
+    def _send(self, task: protocols.Task, values: tuple[float, ...]) -> None:
+        if task in self.off:
+            return
+        self._token = (self._token + 1) % 65536
+        try:
+            payload = self.encoder.command(protocols.Answer(self._token, task, values))
+            done = self.receiver.transport.send(payload, timeout=SEND_TIMEOUT_S)
+        except (TransportError, protocols.errors.ProtocolError) as exc:
+            log.warning("ANSWER of %s not sent: %s", task.name, exc)
+            done = -1
+        if done < 1:
+            self.unsent += 1
+            return
+        self._pending[self._token] = int(task)
+        self.sent[task.name.lower()] += 1
+
+    def as_dict(self) -> dict[str, Any]:
+        """The answers per task: sent, acked, nacked; and how many could not be sent."""
+        return {"answerer": self.answerer, "sent": dict(self.sent), "acked": dict(self.acked),
+                "nacked": dict(self.nacked), "unsent": self.unsent}
+
+
+def _oracle_answers(path: Path) -> list[tuple[int, int, tuple[float, ...]]]:
+    """(due board time µs, task, values) of every trial of a ``serve --truth`` file, in
+    time order."""
+    out = []
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except OSError as exc:
+        raise ConfigError(f"cannot read the truth file {path}: {exc.strerror}") from None
+    for i, line in enumerate(lines, 1):
+        try:
+            row = json.loads(line)
+        except json.JSONDecodeError:
+            raise ConfigError(f"{path}: line {i} is not JSON: give a serve --truth file") \
+                from None
+        if row.get("type") != "trial":
+            continue
+        task = protocols.Task[str(row["task"]).upper()]
+        values: tuple[float, ...] = {
+            protocols.Task.LOCALISATION: (row["x_mm"], row["y_mm"]),
+            protocols.Task.FORCE: (row["normal_n"],), protocols.Task.SLIP: (),
+            protocols.Task.VIBRATION: (row["frequency_hz"],)}[task]
+        if any(v is None for v in values):
+            continue
+        out.append((int(row["t_us"]) + int(ORACLE_DELAY_S * 1e6), int(task),
+                    tuple(round(float(v), 2) for v in values)))
+    return sorted(out)
