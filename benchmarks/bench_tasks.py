@@ -64,6 +64,10 @@ def quick_model(path: Path) -> None:
 
 def run(task: str, who: str, folder: Path, model: Path, snr_db: float, seed: int) -> dict:
     scenario = REPO / "examples" / "scenarios" / f"task_{task}.toml"
+    sys.path.insert(0, str(REPO))
+    from skinhil.world.scenario_file import load_scenario
+
+    duration_s = load_scenario(scenario).duration_s + 0.6  # the last answers' window
     score, truth = folder / f"{task}-{who}.json", folder / f"{task}-truth.jsonl"
     listen_args = ["--answer", "--answer-with", who, "--json"]
     if who == "oracle":
@@ -76,7 +80,8 @@ def run(task: str, who: str, folder: Path, model: Path, snr_db: float, seed: int
         time.sleep(3.0)  # listen is up before the run starts
         serve = subprocess.run(skinhil("serve", "--port", board_end, "--schedule",
                                        str(scenario), "--snr-db", str(snr_db), "--seed",
-                                       str(seed), "--score", str(score), "--quiet",
+                                       str(seed), "--duration", f"{duration_s:.3f}",
+                                       "--score", str(score), "--quiet",
                                        *(["--truth", str(truth)] if who == "reference" else [])),
                                env=env, capture_output=True, text=True, timeout=600)
         try:

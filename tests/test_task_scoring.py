@@ -4,6 +4,7 @@ counter of the board's score; on the blind link no byte of truth reaches it."""
 
 from __future__ import annotations
 
+import json
 import os
 import select
 import threading
@@ -14,7 +15,7 @@ import protocols
 from firmware_sim.board import Board, BoardConfig
 from protocols import Answer, Task
 from skinhil.cli.parser import build_parser
-from skinhil.cli.serve import _config
+from skinhil.cli.serve import _config, write_truth
 from skinhil.model.timeline import Timeline
 from skinhil.transports import SerialTransport
 from skinhil.world.scenario_file import parse_scenario
@@ -177,6 +178,15 @@ def test_scripted_decoder_lands_in_every_counter_on_a_blind_link(pty_pair, tmp_p
     assert [m.phase for m in board.truth_markers] == ["onset", "end"]  # kept for the operator
     acks = [r for r in records if isinstance(r, protocols.Ack)]
     assert len(acks) == sum(len(v) for v in sent.values()) and all(a.ok for a in acks)
+    # the operator's truth file: the markers and every trial, with its values
+    write_truth(tmp_path / "truth.jsonl", board)
+    rows = [json.loads(line) for line in (tmp_path / "truth.jsonl").read_text().splitlines()]
+    assert [r["phase"] for r in rows if r["type"] == "marker"] == ["onset", "end"]
+    trials = [r for r in rows if r["type"] == "trial"]
+    assert sorted({r["task"] for r in trials}) == ["force", "localisation", "slip", "vibration"]
+    assert len(trials) == 12
+    force = [r["normal_n"] for r in trials if r["task"] == "force"]
+    assert all(abs(f - 0.3) < 0.05 for f in force), force  # the load, settled at 50 ms
 
 
 def test_serve_score_is_blind_unless_markers_are_asked_for() -> None:
