@@ -27,7 +27,7 @@ def test_frequency_finds_the_rhythm_of_the_spikes() -> None:
     rng = np.random.default_rng(0)
     for hz in (50.0, 120.0, 300.0):
         cycles = np.arange(int(0.05 * hz))
-        t_us = np.sort(((cycles + 0.25) / hz * 1e6 + rng.normal(0, 100, cycles.size)))
+        t_us = np.sort((cycles + 0.25) / hz * 1e6 + rng.normal(0, 100, cycles.size))
         t_us = np.concatenate([t_us, rng.uniform(0, 5e4, 3)])  # a few noise spikes
         assert abs(frequency_hz(np.sort(t_us).astype(np.int64)) - hz) <= 0.1 * hz
 

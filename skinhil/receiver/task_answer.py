@@ -1,7 +1,8 @@
 """The reference receiver answers the contact tasks (``skinhil listen --answer``): at each
 onset it detects (no ground truth), it sends ANSWERs (``protocols/SPEC.md`` §3.5.3) of
-LOCALISATION, FORCE and VIBRATION, or a SLIP when the onset falls inside the touch before
-it, computed by :mod:`skinhil.receiver.task_decoders` from the decision window's spikes.
+LOCALISATION and FORCE at the end of the decision window and VIBRATION once the touch's
+vibration window has passed, or a SLIP when the onset falls inside the touch before it,
+computed by :mod:`skinhil.receiver.task_decoders` from the spikes.
 
 Two bounds to compare it with, through the same link and the same answer path:
 
@@ -31,6 +32,7 @@ from skinhil.receiver.receiver import Receiver, ReceiverListener
 from skinhil.receiver.scoring import ScoredDecision
 from skinhil.receiver.task_decoders import (
     VIBRATION_BAND_HZ,
+    VIBRATION_WINDOW_S,
     force_n,
     frequency_hz,
     is_slip,
@@ -46,7 +48,6 @@ ORACLE_DELAY_S = 0.05
 """The oracle answers each trial this long (s) after its onset: the reference's window."""
 KEEP_EVENTS_S = 1.0
 """Events kept for the next decision window (s of board time)."""
-TOUCH_TASKS = (protocols.Task.LOCALISATION, protocols.Task.FORCE, protocols.Task.VIBRATION)
 
 
 class TaskAnswerer(ReceiverListener):
@@ -67,6 +68,8 @@ class TaskAnswerer(ReceiverListener):
         self._events: deque[np.ndarray] = deque()
         self._xy_mm: np.ndarray | None = None
         self._touch_us: int | None = None
+        self._vibration: deque[int] = deque()
+        """Onsets (µs) whose VIBRATION answer waits for its window's spikes."""
         self._token = 0
         self._pending: dict[int, int] = {}
         """token → task of the ANSWERs not yet ACKed."""
@@ -92,6 +95,13 @@ class TaskAnswerer(ReceiverListener):
         last = int(events["t"][-1])
         while len(self._events) > 1 and int(self._events[0]["t"][-1]) < last - KEEP_EVENTS_S * 1e6:
             self._events.popleft()
+        window_us = int(VIBRATION_WINDOW_S * 1e6)
+        while self._vibration and self._vibration[0] + window_us <= last:
+            t0 = self._vibration.popleft()
+            ev = self._window(t0, t0 + window_us)
+            hz = (frequency_hz(ev["t"]) if self.answerer == "reference"
+                  else float(self._rng.uniform(*VIBRATION_BAND_HZ)))
+            self._send(protocols.Task.VIBRATION, (round(hz, 2),))
 
     def on_status(self, status: Any) -> None:
         if self.answerer == "oracle":
@@ -111,17 +121,17 @@ class TaskAnswerer(ReceiverListener):
             xy = self._xy_mm if self._xy_mm is not None else sensor_xy_mm((6, 6))
             ok = ev["addr"] < xy.shape[0]
             values = {protocols.Task.LOCALISATION: locate_mm(ev["addr"][ok], xy),
-                      protocols.Task.FORCE: (force_n(ev.shape[0]),),
-                      protocols.Task.VIBRATION: (frequency_hz(ev["t"]),)}
+                      protocols.Task.FORCE: (force_n(ev.shape[0]),)}
         else:
             rows, cols = self._size()
             values = {protocols.Task.LOCALISATION: (
                           float(self._rng.uniform(-(cols - 1) / 2, (cols - 1) / 2)),
                           float(self._rng.uniform(-(rows - 1) / 2, (rows - 1) / 2))),
-                      protocols.Task.FORCE: (float(self._rng.uniform(0.05, 0.6)),),
-                      protocols.Task.VIBRATION: (float(self._rng.uniform(*VIBRATION_BAND_HZ)),)}
-        for task in TOUCH_TASKS:
-            self._send(task, tuple(round(v, 2) for v in values[task]))
+                      protocols.Task.FORCE: (float(self._rng.uniform(0.05, 0.6)),)}
+        for task, vals in values.items():
+            self._send(task, tuple(round(v, 3) for v in vals))
+        if protocols.Task.VIBRATION not in self.off:
+            self._vibration.append(p.window_t_us)
 
     def on_ack(self, ack: Any) -> None:
         if ack.opcode != protocols.CommandCode.ANSWER or ack.token not in self._pending:

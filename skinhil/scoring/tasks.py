@@ -50,9 +50,9 @@ SAMPLE_US = 50_000
 SETTLE_US = 20_000
 """Gross slip in a touch's first this long (µs) is its touch-down, no slip."""
 GROSS = SLIP_STATES.index("gross")
-DEFAULT_TOLERANCE_MM = 1.0
-"""A localisation answer within this distance (mm) of the centroid is right: one spacing of
-the paper's skin."""
+DEFAULT_TOLERANCE_MM = 0.5
+"""A localisation answer within this distance (mm) of the centroid is right: half a spacing
+of the paper's skin (neighbouring nodes told apart)."""
 DEFAULT_TOLERANCE_N = 0.05
 """A force answer within this (N) of the normal force is right."""
 
