@@ -1,5 +1,5 @@
 """Writes the task scenarios of this folder (task_*.toml): trials that spread decoders'
-scores (neighbouring places, threshold forces, slips at several speeds, close vibration
+scores (neighbouring places and forces, slips at several speeds, close vibration
 frequencies), in a seeded shuffled order. Run: python examples/scenarios/make_task_scenarios.py
 """
 
@@ -31,13 +31,13 @@ def main() -> None:
            [{"indenter": "probe", "start_s": round(0.1 + 0.6 * i, 3), "motion": "press",
              "x_mm": x, "y_mm": y, "depth_mm": 1.0, "ramp_s": 0.01, "hold_s": 0.1}
             for i, (x, y) in enumerate(places)])
-    loads = [0.1, 0.15, 0.2, 0.3, 0.4, 0.5] * 3
-    rng.shuffle(loads)
-    _write("force", "18 presses of a 3 mm sphere at the centre under normal loads of 0.1 to "
-           "0.5 N (threshold steps of 0.05-0.1 N, three each), held 0.15 s, one every 0.6 s.",
+    depths = [0.6, 0.8, 1.0, 1.2, 1.4, 1.6] * 3
+    rng.shuffle(depths)
+    _write("force", "18 presses of a 3 mm sphere at the centre, 0.6 to 1.6 mm deep in steps "
+           "of 0.2 mm (three each: neighbouring forces), held 0.15 s, one every 0.6 s.",
            '[[indenter]]\nname = "probe"\nshape = "sphere"\nradius_mm = 3.0',
            [{"indenter": "probe", "start_s": round(0.1 + 0.6 * i, 3), "motion": "press",
-             "load_n": load, "ramp_s": 0.02, "hold_s": 0.15} for i, load in enumerate(loads)])
+             "depth_mm": d, "ramp_s": 0.01, "hold_s": 0.15} for i, d in enumerate(depths)])
     speeds = [5.0, 10.0, 20.0, 40.0] * 3
     rng.shuffle(speeds)
     _write("slip", "12 slides of a 5 mm ball held by 0.3 N and dragged 2 mm along x with low "

@@ -99,7 +99,7 @@ class TaskAnswerer(ReceiverListener):
         while self._vibration and self._vibration[0] + window_us <= last:
             t0 = self._vibration.popleft()
             ev = self._window(t0, t0 + window_us)
-            hz = (frequency_hz(ev["t"]) if self.answerer == "reference"
+            hz = (frequency_hz(ev["t"], ev["addr"]) if self.answerer == "reference"
                   else float(self._rng.uniform(*VIBRATION_BAND_HZ)))
             self._send(protocols.Task.VIBRATION, (round(hz, 2),))
 

@@ -6,10 +6,11 @@ decision window (the onset rule of :mod:`skinhil.receiver.onset`, no ground trut
   midpoints, :func:`skinhil.model.geometry.sensor_positions`) weighted by their spikes in the
   window;
 - FORCE (:func:`force_n`): a line through the window's spike count, ``FORCE_OFFSET_N +
-  FORCE_N_PER_SPIKE · spikes``, fitted by least squares on a calibration run (below);
+  FORCE_N_PER_SPIKE · spikes``, fitted by least squares on a calibration run
+  (``benchmarks/fit_force_line.py``);
 - VIBRATION (:func:`frequency_hz`): the frequency in :data:`VIBRATION_BAND_HZ` at which the
-  spike times of the touch's first :data:`VIBRATION_WINDOW_S` phase-lock most (the peak of
-  their Rayleigh periodogram, 1 Hz steps);
+  spike times of the touch's first :data:`VIBRATION_WINDOW_S` on its most active channels
+  phase-lock most (the peak of their Rayleigh periodogram, 1 Hz steps);
 - SLIP (:func:`is_slip`): a second onset detected while the touch before it lasts
   (:data:`TOUCH_S`): the burst of a contact that starts to slide.
 """
@@ -22,20 +23,24 @@ from skinhil.model.geometry import MeshSize, build_mesh, sensor_positions
 
 SPACING_M = 1e-3
 """The skin's node spacing (m) the positions assume (:class:`skinhil.model.skin.SkinParams`)."""
-FORCE_OFFSET_N = -0.184
+FORCE_OFFSET_N = 0.4774
 """FORCE: the line's offset (N); with :data:`FORCE_N_PER_SPIKE`, the least-squares fit of
-the normal force 50 ms after each touch's onset on the spikes of [onset, onset + 50 ms] over
-the 18 presses of ``examples/scenarios/task_force.toml`` (0.09-0.5 N) simulated at the
-paper's 10 dB with seed 1 (``skinhil simulate --schedule ... --snr-db 10 --seed 1``; 12-31
-spikes, of them about 15 the noise's; correlation 0.83). Another SNR or skin needs its own
-fit; the README's runs use other seeds."""
-FORCE_N_PER_SPIKE = 0.0233
+the normal force at the end of each detected touch's decision window on the window's spikes,
+over the presses of ``examples/scenarios/task_force.toml`` simulated at the paper's 10 dB
+with seed 1: ``python benchmarks/fit_force_line.py --snr-db 10 --seed 1`` (15 touches of 22
+onsets, correlation −0.36, median |error| 0.087 N: the deeper presses give fewer spikes, the
+springs under them compressed, and compression inhibits). Another SNR or skin needs its own
+fit; the README's runs use another seed."""
+FORCE_N_PER_SPIKE = -0.0020
 """FORCE: newtons per spike of the window (the fit above)."""
-VIBRATION_BAND_HZ = (20.0, 500.0)
+VIBRATION_BAND_HZ = (40.0, 500.0)
 """VIBRATION: the frequencies (Hz) searched."""
 VIBRATION_WINDOW_S = 0.25
 """VIBRATION: the spikes of this long (s) from the touch's onset are read (the answer leaves
 then, within the board's default 0.5 s response window)."""
+VIBRATION_CHANNELS = 20
+"""VIBRATION: only the spikes of the window's this many most active channels are read (the
+touched sensors; the noise spreads over all of them)."""
 TOUCH_S = 0.5
 """SLIP: an onset this soon (s) after the touch's onset belongs to that touch: a slip."""
 
@@ -59,10 +64,15 @@ def force_n(spikes: int) -> float:
     return max(FORCE_OFFSET_N + FORCE_N_PER_SPIKE * max(int(spikes), 0), 0.0)
 
 
-def frequency_hz(t_us: np.ndarray) -> float:
-    """VIBRATION: the frequency (Hz) at which spike times ``t_us`` (µs) lock in phase most;
-    the band's low end when fewer than 3 spikes."""
+def frequency_hz(t_us: np.ndarray, addr: np.ndarray | None = None) -> float:
+    """VIBRATION: the frequency (Hz) at which spike times ``t_us`` (µs) lock in phase most,
+    of the :data:`VIBRATION_CHANNELS` most active channels of ``addr`` when given; the
+    band's low end when fewer than 3 spikes."""
     lo, hi = VIBRATION_BAND_HZ
+    if addr is not None and t_us.shape[0]:
+        counts = np.bincount(np.asarray(addr, dtype=np.int64))
+        top = np.argsort(counts, kind="stable")[::-1][:VIBRATION_CHANNELS]
+        t_us = t_us[np.isin(addr, top)]
     if t_us.shape[0] < 3:
         return lo
     t = (np.asarray(t_us, dtype=np.float64) - float(t_us[0])) * 1e-6

@@ -1,0 +1,67 @@
+"""Fits the reference FORCE decoder's line (skinhil/receiver/task_decoders.py): the normal
+force at the end of each detected touch's decision window against the window's spikes, by
+least squares, on a calibration run of examples/scenarios/task_force.toml.
+
+The calibration run is ``skinhil simulate`` (offline, no link) at the given SNR and seed, its
+onsets found by the receiver's own rule (skinhil/receiver/onset.py, default parameters) and
+its windows as the receiver's (from 3 ms before the detection, 50 ms long):
+
+    python benchmarks/fit_force_line.py --snr-db 10 --seed 1
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from skinhil.receiver.onset import OnsetDetector  # noqa: E402
+from skinhil.receiver.params import OnsetParams  # noqa: E402
+
+WINDOW_US = 50_000
+STEP_US = 100
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--snr-db", type=float, default=10.0)
+    ap.add_argument("--seed", type=int, default=1)
+    args = ap.parse_args()
+    scenario = REPO / "examples" / "scenarios" / "task_force.toml"
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "cal.npz"
+        subprocess.run([sys.executable, "-m", "skinhil", "simulate", "--schedule", str(scenario),
+                        "--out", str(out), "--no-progress", "--no-forces", "--snr-db",
+                        str(args.snr_db), "--seed", str(args.seed)], check=True,
+                       capture_output=True)
+        z = np.load(out)
+        ev, truth = z["events"], z["truth"]
+    n_steps = int(truth["t_us"].max() // STEP_US) + 1
+    counts = np.bincount(ev["t"] // STEP_US, minlength=n_steps)[:n_steps]
+    params = OnsetParams()
+    lookback = int(round(params.lookback_s * 1e6))
+    onsets = [s * STEP_US - lookback for s in OnsetDetector(STEP_US * 1e-6, params).process(counts)]
+    touching = truth[truth["nodes"] > 0]
+    spikes, force = [], []
+    for t0 in onsets:
+        at = touching[(touching["t_us"] >= t0) & (touching["t_us"] <= t0 + WINDOW_US)]
+        if not len(at):
+            continue  # a noise onset: no touch to fit
+        spikes.append(int(((ev["t"] >= t0) & (ev["t"] < t0 + WINDOW_US)).sum()))
+        force.append(float(at["normal_n"][-1]))
+    x, y = np.array(spikes, dtype=float), np.array(force)
+    slope, offset = np.polyfit(x, y, 1)
+    err = np.abs(slope * x + offset - y)
+    print(f"{len(x)} touches of {len(onsets)} onsets; N = {slope:.4f} * spikes + {offset:.4f}; "
+          f"correlation {np.corrcoef(x, y)[0, 1]:.2f}; median |error| {np.median(err):.3f} N")
+
+
+if __name__ == "__main__":
+    main()
