@@ -16,9 +16,10 @@ from pathlib import Path
 
 from skinhil.errors import ConfigError
 
-INPUT_OPTIONS: tuple[str, ...] = ("schedule", "replay", "model")
-"""``args`` attributes of files a command reads (``--schedule``, ``--replay``, ``--model``)."""
-OUTPUT_OPTIONS: tuple[str, ...] = ("out", "record", "score", "nwb")
+INPUT_OPTIONS: tuple[str, ...] = ("schedule", "replay", "model", "oracle_truth")
+"""``args`` attributes of files a command reads (``--schedule``, ``--replay``, ``--model``,
+``--oracle-truth``)."""
+OUTPUT_OPTIONS: tuple[str, ...] = ("out", "record", "score", "truth", "nwb")
 """``args`` attributes of files a command writes."""
 
 

@@ -308,6 +308,11 @@ def run(args: argparse.Namespace) -> int:
     if several and args.answer:
         raise ConfigError("--answer sends one board its decisions: use it with one board on "
                           "--port or --can")
+    if not args.answer and (args.answer_with != "reference" or args.oracle_truth is not None):
+        raise ConfigError("--answer-with and --oracle-truth choose who answers: add --answer")
+    if (args.answer_with == "oracle") != (args.oracle_truth is not None):
+        raise ConfigError("the oracle answers from a truth file: give --answer-with oracle "
+                          "with --oracle-truth FILE (serve --truth FILE), or neither")
     record = None if args.record is None else check_output_path(args.record, (".npz", ".nwb"))
     args.nwb_meta = nwb_metadata(args, record is not None and record.suffix.lower() == ".nwb")
     if record is not None and record.suffix.lower() == ".nwb":
@@ -331,8 +336,6 @@ def run(args: argparse.Namespace) -> int:
     receiver = Receiver(transport, decoder, board_id=args.board_ids[0],
                         reopen=lambda: open_transport(args))
     receiver.add_listener(LivePrinter(receiver, args.json, names))
-    if not args.answer and (args.answer_with != "reference" or args.oracle_truth is not None):
-        raise ConfigError("--answer-with and --oracle-truth choose who answers: add --answer")
     answerer = (DecisionAnswerer(receiver) if args.answer and args.answer_with == "reference"
                 else None)
     tasks = (TaskAnswerer(receiver, args.answer_with, args.oracle_truth) if args.answer
