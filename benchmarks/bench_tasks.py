@@ -77,7 +77,7 @@ def run(task: str, who: str, folder: Path, model: Path, snr_db: float, seed: int
         listen = subprocess.Popen(skinhil("listen", "--port", host_end, "--model", str(model),
                                           *listen_args), env=env, stdout=subprocess.PIPE,
                                   stderr=subprocess.PIPE, text=True)
-        time.sleep(3.0)  # listen is up before the run starts
+        time.sleep(6.0)  # listen is up before the run starts
         serve = subprocess.run(skinhil("serve", "--port", board_end, "--schedule",
                                        str(scenario), "--snr-db", str(snr_db), "--seed",
                                        str(seed), "--duration", f"{duration_s:.3f}",
