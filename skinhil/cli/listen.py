@@ -338,8 +338,9 @@ def run(args: argparse.Namespace) -> int:
     receiver.add_listener(LivePrinter(receiver, args.json, names))
     answerer = (DecisionAnswerer(receiver) if args.answer and args.answer_with == "reference"
                 else None)
-    tasks = (TaskAnswerer(receiver, args.answer_with, args.oracle_truth) if args.answer
-             else None)
+    tasks = (TaskAnswerer(receiver, args.answer_with, args.oracle_truth,
+                          encoder=answerer.encoder if answerer is not None else None)
+             if args.answer else None)
     for listener in (answerer, tasks):
         if listener is not None:
             receiver.add_listener(listener)

@@ -52,10 +52,11 @@ KEEP_EVENTS_S = 1.0
 
 class TaskAnswerer(ReceiverListener):
     """Sends ANSWERs of the contact tasks for ``receiver``'s detected onsets (``reference``
-    or ``random``) or from a truth file (``oracle``, ``truth_path``)."""
+    or ``random``) or from a truth file (``oracle``, ``truth_path``); ``encoder`` the host's
+    encoder when another listener sends commands on the link too."""
 
     def __init__(self, receiver: Receiver, answerer: str = "reference",
-                 truth_path: Path | None = None, seed: int = 0) -> None:
+                 truth_path: Path | None = None, seed: int = 0, encoder: Any = None) -> None:
         if answerer not in ANSWERERS:
             raise ConfigError(f"answerer {answerer!r}: give one of {', '.join(ANSWERERS)}")
         if (answerer == "oracle") != (truth_path is not None):
@@ -63,7 +64,9 @@ class TaskAnswerer(ReceiverListener):
                               "give both, or neither")
         self.receiver = receiver
         self.answerer = answerer
-        self.encoder = host_encoder(receiver.transport, receiver.board_id)
+        self.encoder = encoder or host_encoder(receiver.transport, receiver.board_id)
+        """The host's COMMAND encoder: shared with a :class:`DecisionAnswerer` on the same
+        link, so the host's sequence numbers stay one count (SPEC.md §3.5)."""
         self._rng = np.random.default_rng(seed)
         self._events: deque[np.ndarray] = deque()
         self._xy_mm: np.ndarray | None = None
