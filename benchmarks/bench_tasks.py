@@ -114,9 +114,13 @@ def main() -> None:
     ap.add_argument("--snr-db", type=float, default=10.0)
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--tasks", default=",".join(TASKS))
+    ap.add_argument("--who", default=",".join(WHO),
+                    help="answerers to run (the oracle needs the reference's truth file, "
+                         "which the reference run of the same invocation writes)")
     ap.add_argument("--out", type=Path)
     args = ap.parse_args()
     tasks = [t for t in args.tasks.split(",") if t]
+    who = [w for w in args.who.split(",") if w]
     results: dict[str, dict[str, dict]] = {}
     with tempfile.TemporaryDirectory(prefix="skinhil-tasks-") as tmp:
         folder = Path(tmp)
@@ -124,15 +128,15 @@ def main() -> None:
         quick_model(model)
         for task in tasks:
             results[task] = {}
-            for who in WHO:
+            for w in who:
                 t0 = time.monotonic()
-                results[task][who] = run(task, who, folder, model, args.snr_db, args.seed)
-                print(f"{task} {who}: {cell(results[task][who], task)} "
+                results[task][w] = run(task, w, folder, model, args.snr_db, args.seed)
+                print(f"{task} {w}: {cell(results[task][w], task)} "
                       f"({time.monotonic() - t0:.0f} s)", file=sys.stderr, flush=True)
-    print(f"| task (SNR {args.snr_db:g} dB) | reference | random | oracle |")
-    print("|---|---|---|---|")
+    print(f"| task (SNR {args.snr_db:g} dB) | " + " | ".join(who) + " |")
+    print("|---|" + "---|" * len(who))
     for task in tasks:
-        print(f"| {task} | " + " | ".join(cell(results[task][w], task) for w in WHO) + " |")
+        print(f"| {task} | " + " | ".join(cell(results[task][w], task) for w in who) + " |")
     if args.out is not None:
         args.out.write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
 
