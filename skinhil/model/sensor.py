@@ -4,13 +4,13 @@ This is the model half of the sensor board: per block of steps, external forces 
 spring forces (N) → spikes. The board's real-time loop and the offline ``simulate`` command
 both step it.
 
-With the modal linear stepper (linear mechanics without baseline tension on small meshes, the
-default 6x6) or the leapfrog linear stepper (larger meshes) a block, and under a schedule also
-its forces, is one compiled call that runs the schedule's, the stepper's and the population's
-own kernels in turn: per-block Python work would otherwise cost about as much as the
-arithmetic of a 1 ms block. Other mechanics, and any stepper when the neurons run on several
-threads (``threads``), step through ``SkinStepper.advance`` and
-``NeuronPopulation.step_block``. Every step costs O(springs) with the leapfrog and the
+With the modal linear stepper (linear mechanics without baseline tension on small meshes),
+the leapfrog linear stepper (larger meshes) or the geometric mechanics (the default up to
+10x10) a block, and under a schedule also its forces, is one compiled call that runs the
+schedule's, the stepper's and the population's own kernels in turn: per-block Python work
+would otherwise cost about as much as the arithmetic of a 1 ms block. The full state-space
+linear stepper, and any stepper when the neurons run on several threads (``threads``), step
+through ``SkinStepper.advance`` and ``NeuronPopulation.step_block``. Every step costs O(springs) with the leapfrog and the
 geometric mechanics, and the neurons O(channels).
 """
 
@@ -23,6 +23,7 @@ import numpy as np
 
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import format_size
+from skinhil.model.mechanics.geometric import GeometricMechanics, GeometricOperands, rk4_kernel
 from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, LeapfrogOperands, leapfrog_kernel
 from skinhil.model.mechanics.linear import LinearMechanics, ModalOperands, _advance_modal_kernel
 from skinhil.model.neurons import (
@@ -94,6 +95,36 @@ def _scheduled_leapfrog_sensor_kernel(
     _leapfrog_sensor_kernel(forces, springs, spikes, dt_s, substeps, mechanics, neurons)
 
 
+@numba.njit(cache=True)
+def _geometric_sensor_kernel(forces: np.ndarray, springs: np.ndarray, spikes: np.ndarray,
+                             dt_s: float, mechanics: GeometricOperands,
+                             neurons: KernelOperands) -> None:  # pragma: no cover - compiled
+    # forces (n, 3, n_slots) N by slot → springs (n, n_springs) N → spikes over steps
+    # of dt_s (s); mechanics is GeometricMechanics.operands, neurons
+    # NeuronPopulation.kernel_operands()
+    rk4_kernel(forces, springs, dt_s, *mechanics)
+    n_steps, n = springs.shape
+    _izhikevich_kernel(springs.reshape(n_steps, 1, n), dt_s * 1e3,
+                       spikes.reshape(n_steps, 1, n), *neurons)
+
+
+@numba.njit(cache=True)
+def _scheduled_geometric_sensor_kernel(
+        first_step: int, dt_s: float, t_offset_s: float, slots: np.ndarray, n_slots: int,
+        springs: np.ndarray, spikes: np.ndarray, schedule: ScheduleOperands,
+        mechanics: GeometricOperands, neurons: KernelOperands) -> None:  # pragma: no cover
+    # the schedule's forces (N) for steps first_step.. of dt_s (s), schedule time 0 at
+    # t_offset_s (s), on the masses' slots (GeometricMechanics.slots), then
+    # _geometric_sensor_kernel; schedule is Schedule.kernel_operands
+    n_steps = springs.shape[0]
+    t = (first_step + np.arange(n_steps)) * dt_s - t_offset_s
+    forces = np.zeros((n_steps, 3, n_slots))
+    starts, onsets, ends, which, stim_onsets, stim_ends, taus, ptr, pushed, peaks = schedule
+    add_schedule_forces(forces.transpose(0, 2, 1), t, starts, onsets, ends, which,
+                        stim_onsets, stim_ends, taus, ptr, slots[pushed], peaks)
+    _geometric_sensor_kernel(forces, springs, spikes, dt_s, mechanics, neurons)
+
+
 class SkinSensor:
     """Skin mechanics plus one noisy Izhikevich neuron per spring, at step ``dt_s`` (s);
     ``noise`` and ``threads`` as in :class:`~skinhil.model.neurons.NeuronPopulation`."""
@@ -124,6 +155,8 @@ class SkinSensor:
                        if fused and isinstance(self.stepper, LinearMechanics) else None)
         self._leapfrog = (self.stepper if fused and isinstance(self.stepper, LeapfrogMechanics)
                           else None)
+        self._geometric = (self.stepper
+                           if fused and isinstance(self.stepper, GeometricMechanics) else None)
         self._checked: Schedule | None = None
 
     def reset(self) -> None:
@@ -150,6 +183,11 @@ class SkinSensor:
             _leapfrog_sensor_kernel(forces, springs, spikes, self.dt_s,
                                     self._leapfrog.substeps, self._leapfrog.operands,
                                     self.neurons.kernel_operands())
+        elif self._geometric is not None:
+            forces = self._geometric.by_slot(forces_n)
+            springs, spikes = self._outputs(forces.shape[0])
+            _geometric_sensor_kernel(forces, springs, spikes, self.dt_s,
+                                     self._geometric.operands, self.neurons.kernel_operands())
         else:
             springs = self.stepper.advance(forces_n)
             spikes = self.neurons.step_block(springs, self.dt_s)
@@ -171,7 +209,7 @@ class SkinSensor:
         if schedule is not self._checked:
             self.model.check_schedule(schedule)
             self._checked = schedule
-        if self._modal is None and self._leapfrog is None:
+        if self._modal is None and self._leapfrog is None and self._geometric is None:
             t = (self.step_index + np.arange(n_steps)) * self.dt_s - t_offset_s
             return self.advance(schedule.force_at(t, self.model.size))
         springs, spikes = self._outputs(n_steps)
@@ -181,6 +219,11 @@ class SkinSensor:
                 self._leapfrog.state.shape[2], springs, spikes, schedule.kernel_operands,
                 self._leapfrog.substeps,
                 self._leapfrog.operands, self.neurons.kernel_operands())
+        elif self._geometric is not None:
+            _scheduled_geometric_sensor_kernel(
+                self.step_index, self.dt_s, float(t_offset_s), self._geometric.slots,
+                self._geometric.state.shape[2], springs, spikes, schedule.kernel_operands,
+                self._geometric.operands, self.neurons.kernel_operands())
         else:
             assert self._modal is not None
             _scheduled_modal_sensor_kernel(self.step_index, self.dt_s, float(t_offset_s),

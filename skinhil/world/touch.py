@@ -20,7 +20,7 @@ import numba
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.model.mechanics.geometric import GeometricMechanics, rk4_steps
+from skinhil.model.mechanics.geometric import GeometricMechanics, rk4_kernel
 from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, leapfrog_kernel
 from skinhil.model.neurons import _izhikevich_kernel
 from skinhil.model.sensor import SkinSensor
@@ -56,34 +56,26 @@ def _leapfrog_touch_kernel(first_step, dt, t_offset, scene_offset, slots, n_slot
 
 
 @numba.njit(cache=True, nogil=True)
-def _geometric_touch_kernel(first_step, dt, t_offset, scene_offset, n_masses, springs,
-                            schedule, mechanics, operands, state,
+def _geometric_touch_kernel(first_step, dt, t_offset, scene_offset, slots, n_slots, springs,
+                            spikes, schedule, mechanics, neurons, operands, state,
                             truth):  # pragma: no cover - compiled
-    # the schedule's forces, then per step the contact on the state at its start and one
-    # RK4 step of the geometric mechanics (mechanics: _rk4_kernel's operands but f_ext, out)
+    # the schedule's forces by slot (as _scheduled_geometric_sensor_kernel), then per step the
+    # contact on the state at its start and one RK4 step of the geometric mechanics; then
+    # the neurons
     n_steps = springs.shape[0]
     t = (first_step + np.arange(n_steps)) * dt
-    forces = np.zeros((n_steps, n_masses, 3))
-    add_schedule_forces(forces, t - t_offset, *schedule)
-    (p, v, links, rest, k, c, tension, preload, free, inv_m, dt_, rest_p, ke, length,
-     live) = mechanics
-    q_t = np.zeros((3, n_masses))
-    v_t = np.zeros((3, n_masses))
-    fbuf = np.empty((n_masses, 3))
-    kp = np.zeros((4, n_masses, 3))
-    kv = np.zeros((4, n_masses, 3))
-    ps = p.copy()
-    vs = v.copy()
-    for s in range(n_steps):
-        for m in range(n_masses):
-            for a in range(3):
-                q_t[a, m] = p[m, a] - rest_p[m, a]
-                v_t[a, m] = v[m, a]
-        contact_forces(t[s] - scene_offset, dt, q_t, v_t, forces[s].T, operands, state,
-                       truth[s])
-        rk4_steps(p, v, links, rest, k, c, tension, preload, free, inv_m, dt_,
-                  forces[s:s + 1], springs[s:s + 1], rest_p, ke, length, live, fbuf, kp, kv,
-                  ps, vs)
+    forces = np.zeros((n_steps, 3, n_slots))
+    starts, onsets, ends, which, stim_onsets, stim_ends, taus, ptr, pushed, peaks = schedule
+    add_schedule_forces(forces.transpose(0, 2, 1), t - t_offset, starts, onsets, ends, which,
+                        stim_onsets, stim_ends, taus, ptr, slots[pushed], peaks)
+    q = mechanics[13]
+    v = mechanics[14]
+    for k in range(n_steps):
+        contact_forces(t[k] - scene_offset, dt, q, v, forces[k], operands, state, truth[k])
+        rk4_kernel(forces[k:k + 1], springs[k:k + 1], dt, *mechanics)
+    n = springs.shape[1]
+    _izhikevich_kernel(springs.reshape(n_steps, 1, n), dt * 1e3,
+                       spikes.reshape(n_steps, 1, n), *neurons)
 
 
 class TouchSensor:
@@ -108,10 +100,7 @@ class TouchSensor:
         rows, cols = model.size
         n_top = rows * cols
         fixed = model.fixed[:n_top]
-        if isinstance(stepper, LeapfrogMechanics):
-            index = np.where(fixed, -1, stepper.slots[:n_top])
-        else:
-            index = np.where(fixed, -1, np.arange(n_top))
+        index = np.where(fixed, -1, stepper.slots[:n_top])
         self.world = World(scene, index, model.positions[:n_top, :2], model.size,
                            model.params.spacing_m, self.params)
         self.scene_offset_s = IDLE_OFFSET_S
@@ -161,14 +150,11 @@ class TouchSensor:
         else:
             assert isinstance(stepper, GeometricMechanics)
             springs = np.empty(shape)
-            g = stepper
             _geometric_touch_kernel(
-                s.step_index, s.dt_s, float(t_offset_s), self.scene_offset_s,
-                s.model.n_masses, springs, schedule.kernel_operands,
-                (g.p, g.v, g.springs, g.rest_lengths, g.k, g.c, g.t, g.preload, g.free,
-                 g.inv_m, g.dt_s, g.rest_positions, g.ke, g.readout == "length", g.live),
-                self.world.operands, self.world.state, truth)
-            spikes = s.neurons.step_block(springs, s.dt_s)
+                s.step_index, s.dt_s, float(t_offset_s), self.scene_offset_s, stepper.slots,
+                stepper.state.shape[2], springs, spikes, schedule.kernel_operands,
+                stepper.operands, s.neurons.kernel_operands(), self.world.operands,
+                self.world.state, truth)
         s.step_index += n_steps
         return springs, spikes, truth
 

@@ -21,6 +21,28 @@ The sensor signal is ``k (L − L0)`` (N): Hooke's force of the spring alone, wi
 (the length readout); ``readout="axial"`` reports ``k e0ᵀ(q_j − q_i)`` instead, with ``e0`` the
 rest direction and ``q`` the displacements from rest, the small-displacement form the linear
 mechanics can also report (:mod:`skinhil.model.mechanics.readout`, which computes both).
+
+Layout (as the leapfrog's, :mod:`skinhil.model.mechanics.leapfrog`): the state is the
+displacement ``q = p − p0`` and the velocity, stored by component and grid slot
+(:func:`~skinhil.model.mechanics.leapfrog.strip_layout`), and each force pass walks the
+springs strip by strip: the springs of one kind join masses a constant number of slots apart
+and share their rest vector ``L0·e0``, so a strip reads ``d = L0·e0 + q_j − q_i`` from
+contiguous slices and the compiler vectorises it. With ``u = 1/|d|`` the force on ``i`` is
+
+    f_s e = (k − (k L0 − T)·u + c·(dᵀ(v_j − v_i))·u²) · d
+
+(the formula above, ``e = d·u``): one square root and one division per spring, nothing else
+per spring that the rest directions do not fix. A spring of zero length pushes nothing (its
+``d`` is 0), as before. The net force at rest (the preload) is this pass's own at ``q = 0``,
+so rest stays exactly at rest. Each RK4 stage is one pass over the strips and one over the
+bands of moving slots, which also accumulates the RK4 sum, so a step holds no per-stage
+arrays. State components below :data:`~skinhil.model.mechanics.leapfrog.TINY` (1e-150 m or
+m/s) are flushed to zero when the step ends: subnormals are ~100x slower on x86, and the
+former formulation in absolute positions (~1e-3 m) did not resolve 1e-19 m anyway. The
+results are the former per-spring formulation's (absolute positions, ``e = d/L``, forces
+scattered spring by spring) to rounding: tests/test_core_geometric_kernel.py pins them to
+within 1e-9 of the peak force. Per step at 6x6 (338 springs, 201 of them with a free end):
+see docs/performance.md.
 """
 
 from __future__ import annotations
@@ -31,100 +53,174 @@ import numba
 import numpy as np
 
 from skinhil.model.geometry import Mesh
-from skinhil.model.mechanics.readout import Readout, spring_signal
+from skinhil.model.mechanics.leapfrog import TINY, strip_layout, to_slots, write_readouts
+from skinhil.model.mechanics.linear import spring_frames
+from skinhil.model.mechanics.readout import Readout, length_signal
 
 RK4_STABILITY_RADIUS = 2.5
 """|λ|·dt bound used for RK4 (its real-axis limit is 2.785, imaginary-axis 2.828)."""
 
+TINY_F64 = TINY[np.dtype(np.float64)]
+"""State components below this (m, m/s) are flushed to zero when a step ends."""
+
+LANES = 8
+"""Each strip's force loop runs over a multiple of this many pairs (the vector lanes of
+double precision at 512 bits), so that no pair of it runs in the compiler's scalar loop."""
+
+SHORTEST_SQUARED = 1e-300
+"""|d|² is taken at least this (m²): a spring of zero length then has a finite ``u`` and,
+its ``d`` being 0, pushes nothing."""
+
+GeometricOperands = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                          np.ndarray, bool, float, float, float, np.ndarray, np.ndarray,
+                          np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                          np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+"""``GeometricMechanics.operands``: the strip table, each strip's reach (its length rounded
+up to :data:`LANES`), the readout plan
+(:class:`~skinhil.model.mechanics.leapfrog.StripLayout`), each strip's rest unit vector and
+rest length (m), the springs between fixed masses, whether the readout is the length change,
+k (N/m), c (N·s/m), T (N), the bands of moving slots, 1/m per slot (0 where fixed, 1/kg), the
+preload (3, n_slots) N; then the state q (m) and v (m/s) (3, n_slots each) and scratch: the
+stage's q and v, the RK4 sums of q' and v', the springs' net force (3, n_slots each), the
+readouts (n_strips, longest reach) and the forces (3, longest reach). Arrays updated in
+place, double precision; the slots extend :data:`LANES` past the grid's (never moving)."""
+
 
 @numba.njit(inline="always", fastmath=True)
-def _spring_vector(p: np.ndarray, springs: np.ndarray,
-                   s: int) -> tuple[float, float, float, float]:  # pragma: no cover - compiled
-    """The vector from spring ``s``'s first mass to its second, and its length (m)."""
-    i = springs[s, 0]
-    j = springs[s, 1]
-    dx = p[j, 0] - p[i, 0]
-    dy = p[j, 1] - p[i, 1]
-    dz = p[j, 2] - p[i, 2]
-    return dx, dy, dz, np.sqrt(dx * dx + dy * dy + dz * dz)
+def _pull(dx: float, dy: float, dz: float, rate: float, k: float, c: float,
+          pull: float) -> tuple[float, float]:  # pragma: no cover - compiled
+    # (f_s/L, 1/L) of a spring along d (m) with dᵀ(v_j − v_i) = rate (m²/s), pull = k L0 − T
+    u = 1.0 / math.sqrt(max(dx * dx + dy * dy + dz * dz, SHORTEST_SQUARED))
+    return k - pull * u + c * rate * u * u, u
 
 
-@numba.njit(cache=True, fastmath=True)
-def _spring_forces(p: np.ndarray, v: np.ndarray, springs: np.ndarray, rest: np.ndarray,
-                   k: float, c: float, t: float, live: np.ndarray,
-                   out: np.ndarray) -> None:  # pragma: no cover
-    # the springs' net force (N) on every mass, from the springs ``live`` only
+@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
+def strip_forces(q: np.ndarray, v: np.ndarray, out: np.ndarray, strips: np.ndarray,
+                 reach: np.ndarray, run_e: np.ndarray, run_l0: np.ndarray, k: float, c: float,
+                 t: float, scratch: np.ndarray, signals: np.ndarray, readout: bool,
+                 length: bool) -> None:  # pragma: no cover - compiled
+    """The springs' net force (N) on every slot into ``out`` (3, n_slots) from the
+    displacements ``q`` (m) and velocities ``v`` (m/s), (3, n_slots) each (module
+    docstring); with ``readout`` also each strip's readouts (the length change if
+    ``length``, else the axial projection; N) into ``signals``. Strip ``r`` is computed
+    over ``reach[r]`` >= its length pairs (a whole number of vector lanes: the pairs past
+    its end are computed, never added), so the arrays extend that far; ``scratch`` (3,
+    longest reach)."""
     out[:] = 0.0
-    for s in live:
-        i = springs[s, 0]
-        j = springs[s, 1]
-        dx, dy, dz, length = _spring_vector(p, springs, s)
-        if length <= 0.0:
-            continue
-        ex = dx / length
-        ey = dy / length
-        ez = dz / length
-        vel = ex * (v[j, 0] - v[i, 0]) + ey * (v[j, 1] - v[i, 1]) + ez * (v[j, 2] - v[i, 2])
-        f = k * (length - rest[s]) + t + c * vel
-        out[i, 0] += f * ex
-        out[i, 1] += f * ey
-        out[i, 2] += f * ez
-        out[j, 0] -= f * ex
-        out[j, 1] -= f * ey
-        out[j, 2] -= f * ez
+    qx, qy, qz = q[0], q[1], q[2]
+    vx, vy, vz = v[0], v[1], v[2]
+    gx, gy, gz = out[0], out[1], out[2]
+    fx_s, fy_s, fz_s = scratch[0], scratch[1], scratch[2]
+    for r in range(strips.shape[0]):
+        i0, j0, n, nn = strips[r, 0], strips[r, 1], strips[r, 2], reach[r]
+        l0 = run_l0[r]
+        ex, ey, ez = run_e[r, 0], run_e[r, 1], run_e[r, 2]
+        bx, by, bz = l0 * ex, l0 * ey, l0 * ez
+        pull = k * l0 - t
+        qxi, qyi, qzi = qx[i0:i0 + nn], qy[i0:i0 + nn], qz[i0:i0 + nn]
+        qxj, qyj, qzj = qx[j0:j0 + nn], qy[j0:j0 + nn], qz[j0:j0 + nn]
+        vxi, vyi, vzi = vx[i0:i0 + nn], vy[i0:i0 + nn], vz[i0:i0 + nn]
+        vxj, vyj, vzj = vx[j0:j0 + nn], vy[j0:j0 + nn], vz[j0:j0 + nn]
+        if readout:  # the same pass, and the readout of its d − L0·e
+            sig = signals[r]
+            kex, key, kez = k * ex, k * ey, k * ez
+            for m in range(nn):
+                ux = qxj[m] - qxi[m]
+                uy = qyj[m] - qyi[m]
+                uz = qzj[m] - qzi[m]
+                dx, dy, dz = bx + ux, by + uy, bz + uz
+                g, u = _pull(dx, dy, dz, dx * (vxj[m] - vxi[m]) + dy * (vyj[m] - vyi[m])
+                             + dz * (vzj[m] - vzi[m]), k, c, pull)
+                fx_s[m] = g * dx
+                fy_s[m] = g * dy
+                fz_s[m] = g * dz
+                proj = kex * ux + key * uy + kez * uz
+                if length:
+                    sig[m] = length_signal(proj, ux * ux + uy * uy + uz * uz,
+                                           (dx * dx + dy * dy + dz * dz) * u, k, l0)
+                else:
+                    sig[m] = proj
+        else:
+            for m in range(nn):
+                dx = bx + (qxj[m] - qxi[m])
+                dy = by + (qyj[m] - qyi[m])
+                dz = bz + (qzj[m] - qzi[m])
+                g, u = _pull(dx, dy, dz, dx * (vxj[m] - vxi[m]) + dy * (vyj[m] - vyi[m])
+                             + dz * (vzj[m] - vzi[m]), k, c, pull)
+                fx_s[m] = g * dx
+                fy_s[m] = g * dy
+                fz_s[m] = g * dz
+        # +f on mass i, −f on mass j: two loops, since the masses i of a strip may be its j
+        gxi, gyi, gzi = gx[i0:i0 + n], gy[i0:i0 + n], gz[i0:i0 + n]
+        gxj, gyj, gzj = gx[j0:j0 + n], gy[j0:j0 + n], gz[j0:j0 + n]
+        for m in range(n):
+            gxi[m] += fx_s[m]
+            gyi[m] += fy_s[m]
+            gzi[m] += fz_s[m]
+        for m in range(n):
+            gxj[m] -= fx_s[m]
+            gyj[m] -= fy_s[m]
+            gzj[m] -= fz_s[m]
 
 
-@numba.njit(cache=True, fastmath=True, nogil=True)
-def _rk4_kernel(p: np.ndarray, v: np.ndarray, springs: np.ndarray, rest: np.ndarray,
-                k: float, c: float, t: float, preload: np.ndarray, free: np.ndarray,
-                inv_m: float, dt: float, f_ext: np.ndarray, out: np.ndarray,
-                rest_p: np.ndarray, ke: np.ndarray, length: bool,
-                live: np.ndarray) -> None:  # pragma: no cover - compiled
-    n = p.shape[0]
-    rk4_steps(p, v, springs, rest, k, c, t, preload, free, inv_m, dt, f_ext, out, rest_p, ke,
-              length, live, np.empty((n, 3)), np.zeros((4, n, 3)), np.zeros((4, n, 3)),
-              p.copy(), v.copy())
-
-
-@numba.njit(cache=True, fastmath=True, nogil=True)
-def rk4_steps(p: np.ndarray, v: np.ndarray, springs: np.ndarray, rest: np.ndarray,
-              k: float, c: float, t: float, preload: np.ndarray, free: np.ndarray,
-              inv_m: float, dt: float, f_ext: np.ndarray, out: np.ndarray,
-              rest_p: np.ndarray, ke: np.ndarray, length: bool, live: np.ndarray,
-              fbuf: np.ndarray, kp: np.ndarray, kv: np.ndarray, ps: np.ndarray,
-              vs: np.ndarray) -> None:  # pragma: no cover - compiled
-    """:func:`_rk4_kernel`'s steps with its scratch given (fbuf (n, 3), kp and kv (4, n, 3),
-    ps and vs (n, 3)): a caller stepping one step at a time allocates it once."""
-    weights = (0.5, 0.5, 1.0)
-    for step in range(f_ext.shape[0]):
-        for s in range(springs.shape[0]):  # the readout of d = q_j − q_i, q = p − rest_p
-            i = springs[s, 0]
-            j = springs[s, 1]
-            out[step, s] = spring_signal(
-                ke[s, 0], ke[s, 1], ke[s, 2], p[j, 0] - p[i, 0] - (rest_p[j, 0] - rest_p[i, 0]),
-                p[j, 1] - p[i, 1] - (rest_p[j, 1] - rest_p[i, 1]),
-                p[j, 2] - p[i, 2] - (rest_p[j, 2] - rest_p[i, 2]), k, rest[s], length)
+@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
+def rk4_kernel(forces: np.ndarray, out: np.ndarray, dt: float, strips: np.ndarray,
+               reach: np.ndarray, plan: np.ndarray, run_e: np.ndarray, run_l0: np.ndarray,
+               still: np.ndarray, length: bool, k: float, c: float, t: float,
+               span: np.ndarray, inv_m: np.ndarray, preload: np.ndarray, q: np.ndarray,
+               v: np.ndarray, qs: np.ndarray, vs: np.ndarray, sq: np.ndarray, sv: np.ndarray,
+               net: np.ndarray, signals: np.ndarray,
+               scratch: np.ndarray) -> None:  # pragma: no cover - compiled
+    """forces (n, 3, n_slots) N by component and slot (:meth:`GeometricMechanics.by_slot`),
+    each held over a step of ``dt`` (s) → out (n, n_springs) N, the readouts at the start of
+    each step; the operands after ``dt`` are :attr:`GeometricMechanics.operands`."""
+    half_dt = 0.5 * dt
+    sixth_dt = dt / 6.0
+    m0, m1 = span[0], span[1]
+    width = m1 - m0
+    for step in range(forces.shape[0]):
+        fs = forces[step]
+        row = out[step]
+        for s in still:  # between fixed masses: never stretched
+            row[s] = 0.0
         for stage in range(4):
-            if stage == 0:
-                ps[:] = p
-                vs[:] = v
+            if stage == 0:  # the state at the step's start: its readouts too
+                strip_forces(q, v, net, strips, reach, run_e, run_l0, k, c, t, scratch,
+                             signals, True, length)
+                write_readouts(row, signals, plan)
             else:
-                h = weights[stage - 1] * dt
-                for m in free:
-                    for a in range(3):
-                        ps[m, a] = p[m, a] + h * kp[stage - 1, m, a]
-                        vs[m, a] = v[m, a] + h * kv[stage - 1, m, a]
-            _spring_forces(ps, vs, springs, rest, k, c, t, live, fbuf)
-            for m in free:
-                for a in range(3):
-                    kp[stage, m, a] = vs[m, a]
-                    kv[stage, m, a] = (fbuf[m, a] - preload[m, a] + f_ext[step, m, a]) * inv_m
-        for m in free:
-            for a in range(3):
-                p[m, a] += dt / 6.0 * (kp[0, m, a] + 2.0 * kp[1, m, a] + 2.0 * kp[2, m, a]
-                                       + kp[3, m, a])
-                v[m, a] += dt / 6.0 * (kv[0, m, a] + 2.0 * kv[1, m, a] + 2.0 * kv[2, m, a]
-                                       + kv[3, m, a])
+                strip_forces(qs, vs, net, strips, reach, run_e, run_l0, k, c, t, scratch,
+                             signals, False, length)
+            h = dt if stage == 2 else half_dt
+            for a in range(3):  # the moving slots' span (a fixed one's 1/m is 0)
+                qa, va = q[a, m0:m1], v[a, m0:m1]
+                qsa, vsa = qs[a, m0:m1], vs[a, m0:m1]
+                sqa, sva = sq[a, m0:m1], sv[a, m0:m1]
+                na, pa, fa = net[a, m0:m1], preload[a, m0:m1], fs[a, m0:m1]
+                ima = inv_m[m0:m1]
+                if stage == 0:  # k1; the sums start
+                    for m in range(width):
+                        acc = (na[m] - pa[m] + fa[m]) * ima[m]
+                        vel = va[m]
+                        sqa[m] = vel
+                        sva[m] = acc
+                        qsa[m] = qa[m] + h * vel
+                        vsa[m] = vel + h * acc
+                elif stage < 3:  # k2, k3: twice into the sums
+                    for m in range(width):
+                        acc = (na[m] - pa[m] + fa[m]) * ima[m]
+                        vel = vsa[m]
+                        sqa[m] += 2.0 * vel
+                        sva[m] += 2.0 * acc
+                        qsa[m] = qa[m] + h * vel
+                        vsa[m] = va[m] + h * acc
+                else:  # k4: the step, dt/6 (k1 + 2 k2 + 2 k3 + k4)
+                    for m in range(width):
+                        acc = (na[m] - pa[m] + fa[m]) * ima[m]
+                        qm = qa[m] + sixth_dt * (sqa[m] + vsa[m])
+                        vm = va[m] + sixth_dt * (sva[m] + acc)
+                        qa[m] = qm if abs(qm) > TINY_F64 else 0.0
+                        va[m] = vm if abs(vm) > TINY_F64 else 0.0
 
 
 def max_stable_dt(mesh: Mesh, mass_kg: float, stiffness_n_per_m: float,
@@ -158,51 +254,89 @@ class GeometricMechanics:
         self.readout = readout
         """What each spring reports (:mod:`skinhil.model.mechanics.readout`)."""
         self.rest_positions = mesh.positions.copy()
+        """Every mass's rest position (n_masses, 3) m."""
         self.springs = np.ascontiguousarray(mesh.springs)
-        d = mesh.positions[mesh.springs[:, 1]] - mesh.positions[mesh.springs[:, 0]]
-        self.rest_lengths = np.linalg.norm(d, axis=1)
-        self.ke = stiffness_n_per_m * d / self.rest_lengths[:, None]
+        e, self.rest_lengths = spring_frames(mesh)
         self.k, self.c, self.t = stiffness_n_per_m, damping_n_s_per_m, tension_n
         self.inv_m = 1.0 / mass_kg
         self.mass_kg = mass_kg
         self.dt_s = dt_s
         self.free = np.ascontiguousarray(mesh.free)
-        self.live = np.flatnonzero(~mesh.fixed[mesh.springs].all(axis=1))
-        """The springs with a free end: a spring between two fixed masses never moves and
-        pulls on fixed masses only, so the dynamics skip it (137 of 338 at 6x6)."""
-        self.preload = np.empty_like(mesh.positions)
-        _spring_forces(self.rest_positions, np.zeros_like(self.rest_positions), self.springs,
-                       self.rest_lengths, self.k, self.c, self.t, self.live, self.preload)
-        self.p = self.rest_positions.copy()
-        self.v = np.zeros_like(self.p)
+        self.n_springs = int(self.springs.shape[0])
+        layout = strip_layout(mesh, e, tension_n / self.rest_lengths, self.rest_lengths)
+        self.slots = layout.slots
+        """Each mass's slot in :attr:`state`
+        (:func:`~skinhil.model.mechanics.leapfrog.grid_slots`)."""
+        strips = layout.strips
+        reach = -(-strips[:, 2] // LANES) * LANES
+        n_slots = layout.fixed.size + LANES  # the strips' reach: the slots past stay 0
+        self.state = np.zeros((2, 3, n_slots))
+        """Displacement q (m) and velocity v (m/s) by component and slot; updated in place."""
+        moving = layout.moving
+        span = (np.array([moving[0, 0], moving[-1, 0] + moving[-1, 1]], dtype=np.int64)
+                if len(moving) else np.zeros(2, dtype=np.int64))
+        longest = int(reach.max(initial=LANES))
+        scratch = np.zeros((3, longest))
+        signals = np.zeros((len(strips), longest))
+        preload = np.zeros((3, n_slots))
+        strip_forces(self.state[0], self.state[1], preload, strips, reach, layout.run_e,
+                     layout.run_l0, float(self.k), float(self.c), float(self.t), scratch,
+                     signals, False, True)
+        self.operands: GeometricOperands = (
+            strips, reach, layout.plan, layout.run_e, layout.run_l0, layout.still,
+            readout == "length", float(self.k), float(self.c), float(self.t), span,
+            np.append(np.where(layout.fixed, 0.0, self.inv_m), np.zeros(LANES)), preload,
+            self.state[0], self.state[1], np.zeros((3, n_slots)), np.zeros((3, n_slots)),
+            np.zeros((3, n_slots)), np.zeros((3, n_slots)), np.zeros((3, n_slots)), signals,
+            scratch)
+
+    @property
+    def preload(self) -> np.ndarray:
+        """The springs' net force at rest on every mass (n_masses, 3) N, held by the
+        surrounding tissue (module docstring)."""
+        return self.operands[12][:, self.slots].T.copy()
+
+    def by_slot(self, forces_n: np.ndarray) -> np.ndarray:
+        """External forces (n, n_masses, 3) N as :func:`rk4_kernel` reads them: (n, 3,
+        n_slots), by component and slot."""
+        return to_slots(forces_n, self.slots, self.state.shape[2], np.float64)
 
     def reset(self) -> None:
         """Back to rest: rest positions, zero velocity."""
-        self.p[:] = self.rest_positions
-        self.v[:] = 0.0
+        self.state[:] = 0.0
 
     def displacement_m(self) -> np.ndarray:
         """Every mass's displacement from rest now (n_masses, 3) m; fixed masses 0."""
-        return self.p - self.rest_positions
+        return self.state[0][:, self.slots].T.copy()
+
+    @property
+    def p(self) -> np.ndarray:
+        """Every mass's position now (n_masses, 3) m."""
+        return self.rest_positions + self.displacement_m()
+
+    @property
+    def v(self) -> np.ndarray:
+        """Every mass's velocity now (n_masses, 3) m/s."""
+        return self.state[1][:, self.slots].T.copy()
 
     def advance(self, forces_n: np.ndarray) -> np.ndarray:
-        """Step ``len(forces_n)`` steps; ``forces_n`` is (n, 77, 3) N; returns (n, 338) N.
+        """Step ``len(forces_n)`` steps; ``forces_n`` is (n, n_masses, 3) N; returns
+        (n, n_springs) N.
 
         Row ``j`` of the result is the spring forces at the start of step ``j``; input ``j`` is
         then held over the step.
         """
-        f_ext = np.ascontiguousarray(forces_n, dtype=np.float64)
-        out = np.empty((f_ext.shape[0], self.springs.shape[0]))
-        _rk4_kernel(self.p, self.v, self.springs, self.rest_lengths, self.k, self.c, self.t,
-                    self.preload, self.free, self.inv_m, self.dt_s, f_ext, out,
-                    self.rest_positions, self.ke, self.readout == "length", self.live)
+        forces = self.by_slot(forces_n)
+        out = np.empty((forces.shape[0], self.n_springs))
+        rk4_kernel(forces, out, self.dt_s, *self.operands)
         return out
 
     def energy_j(self) -> float:
         """Mechanical energy (J): kinetic + Σ ½k(L − L0)² + T(L − L0) + preload·(p − p0)."""
-        d = self.p[self.springs[:, 1]] - self.p[self.springs[:, 0]]
+        p, v = self.p, self.v
+        d = p[self.springs[:, 1]] - p[self.springs[:, 0]]
         ext = np.linalg.norm(d, axis=1) - self.rest_lengths
-        kinetic = 0.5 * self.mass_kg * float(np.sum(self.v[self.free] ** 2))
+        kinetic = 0.5 * self.mass_kg * float(np.sum(v[self.free] ** 2))
         elastic = float(np.sum(0.5 * self.k * ext**2 + self.t * ext))
-        moved = (self.p - self.rest_positions)[self.free]
+        moved = (p - self.rest_positions)[self.free]
         return kinetic + elastic + float(np.sum(self.preload[self.free] * moved))

@@ -71,6 +71,7 @@ share it), so the loop stays vectorised.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numba
 import numpy as np
@@ -275,8 +276,66 @@ def readout_plan(strips: np.ndarray, segments: np.ndarray) -> np.ndarray:
     return np.array(plan, dtype=np.int64).reshape(-1, PLAN_FIELDS)
 
 
+@dataclass(frozen=True)
+class StripLayout:
+    """Where a strip stepper (:func:`leapfrog_kernel`, the geometric mechanics'
+    :func:`skinhil.model.mechanics.geometric.rk4_kernel`) keeps each mass and how it walks
+    the springs (:func:`strip_layout`)."""
+
+    slots: np.ndarray
+    """Each mass's slot (:func:`grid_slots`)."""
+    fixed: np.ndarray
+    """(n_slots,) bool: the slots that never move (fixed masses, unused slots)."""
+    strips: np.ndarray
+    """The strip table (:func:`join_runs`) of the runs with a free mass."""
+    plan: np.ndarray
+    """The readout plan (:func:`readout_plan`)."""
+    run_e: np.ndarray
+    """Each strip's rest unit vector (n_strips, 3)."""
+    run_tl: np.ndarray
+    """Each strip's T/L (N/m)."""
+    run_l0: np.ndarray
+    """Each strip's rest length (m)."""
+    still: np.ndarray
+    """The springs between fixed masses (int64): they never stretch and read 0."""
+    moving: np.ndarray
+    """The bands of slots stepped (:func:`moving_bands`)."""
+
+
+def strip_layout(mesh: Mesh, e: np.ndarray, t_over_l: np.ndarray,
+                 length: np.ndarray) -> StripLayout:
+    """The strips of ``mesh`` for springs of rest unit vectors ``e`` (n_springs, 3), T/L
+    (N/m) and rest lengths (m): runs (:func:`spring_runs`) on the grid slots, those between
+    fixed masses only set aside (never stretched), the rest joined into strips
+    (:func:`join_runs`), with their readout plan and the bands of moving slots."""
+    slots = grid_slots(mesh)
+    n_slots = 3 * mesh.size[0] * mesh.size[1]
+    fixed = np.ones(n_slots, dtype=bool)  # the unused slots never move
+    fixed[slots] = mesh.fixed
+    runs, run_e, run_tl, run_l0 = spring_runs(slots[mesh.springs], e, t_over_l, length)
+    # a run between fixed masses only is never stretched: its springs' force stays 0
+    live = np.array([not (fixed[i0:i0 + n].all() and fixed[j0:j0 + n].all())
+                     for _, _, i0, j0, n in runs], dtype=bool)
+    still = np.concatenate([s0 + ds * np.arange(n) for s0, ds, _, _, n in runs[~live]]
+                           + [np.zeros(0, dtype=np.int64)]).astype(np.int64)
+    runs, run_e, run_tl, run_l0 = runs[live], run_e[live], run_tl[live], run_l0[live]
+    strips, segments, first = join_runs(runs, fixed, run_kinds(run_e, run_tl, run_l0))
+    return StripLayout(slots, fixed, strips, readout_plan(strips, segments), run_e[first],
+                       run_tl[first], run_l0[first], still, moving_bands(fixed))
+
+
+def to_slots(forces_n: np.ndarray, slots: np.ndarray, n_slots: int,
+             dtype: np.dtype | type[np.floating]) -> np.ndarray:
+    """External forces (n, n_masses, 3) N as the strip kernels read them: (n, 3, n_slots),
+    by component and slot (``slots``, :func:`grid_slots`), in ``dtype``."""
+    f = np.asarray(forces_n)
+    out = np.zeros((f.shape[0], 3, n_slots), dtype=dtype)
+    out[:, :, slots] = f.transpose(0, 2, 1)
+    return out
+
+
 @numba.njit(inline="always")
-def _write_readouts(row: np.ndarray, signals: np.ndarray,
+def write_readouts(row: np.ndarray, signals: np.ndarray,
                     plan: np.ndarray) -> None:  # pragma: no cover - compiled
     # the strips' readouts (signals, by strip) into the spring-ordered row, by the plan
     for p in range(plan.shape[0]):
@@ -365,7 +424,7 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
                     gyj[t] -= fy_s[t]
                     gzj[t] -= fz_s[t]
             if sub == 0:
-                _write_readouts(row, signals, plan)
+                write_readouts(row, signals, plan)
             for a in range(3):  # the bands of moving masses (a fixed one's 1/m is 0)
                 for mr in range(moving.shape[0]):
                     m0, nm = moving[mr, 0], moving[mr, 1]
@@ -429,32 +488,21 @@ class LeapfrogMechanics:
         self.substeps = substeps_for(self.omega_max, self.gamma_max, dt_s)
         self.n_masses = n
         self.n_springs = mesh.springs.shape[0]
-        self.slots = grid_slots(mesh)
+        layout = strip_layout(mesh, e, tension_n / length, length)
+        self.slots = layout.slots
         """Each mass's slot in :attr:`state` (:func:`grid_slots`)."""
-        n_slots = 3 * mesh.size[0] * mesh.size[1]
-        fixed = np.ones(n_slots, dtype=bool)  # the unused slots never move
-        fixed[self.slots] = mesh.fixed
-        runs, run_e, run_tl, run_l0 = spring_runs(self.slots[mesh.springs], e,
-                                                  tension_n / length, length)
-        # a run between fixed masses only is never stretched: its springs' force stays 0
-        live = np.array([not (fixed[i0:i0 + n].all() and fixed[j0:j0 + n].all())
-                         for _, _, i0, j0, n in runs], dtype=bool)
-        still = np.concatenate([s0 + ds * np.arange(n) for s0, ds, _, _, n in runs[~live]]
-                               + [np.zeros(0, dtype=np.int64)]).astype(np.int64)
-        runs, run_e, run_tl, run_l0 = runs[live], run_e[live], run_tl[live], run_l0[live]
-        strips, segments, first = join_runs(runs, fixed, run_kinds(run_e, run_tl, run_l0))
-        run_e, run_tl, run_l0 = run_e[first], run_tl[first], run_l0[first]
+        n_slots, strips = layout.fixed.size, layout.strips
         self.state = np.zeros((4, 3, n_slots), dtype=self.dtype)
         """Displacement q (m), velocity v (m/s) at the half step and w at the step start,
         and the last input (N), by component and slot (:attr:`slots`); updated in place."""
         longest = int(strips[:, 2].max(initial=1))
         state = self.state
         self.operands: LeapfrogOperands = (
-            strips, readout_plan(strips, segments), run_e.astype(self.dtype),
-            run_tl.astype(self.dtype),
-            run_l0.astype(self.dtype), still, readout == "length", real(stiffness_n_per_m),
-            real(damping_n_s_per_m), moving_bands(fixed),
-            np.where(fixed, 0.0, 1.0 / mass_kg).astype(self.dtype), real(TINY[self.dtype]),
+            strips, layout.plan, layout.run_e.astype(self.dtype),
+            layout.run_tl.astype(self.dtype), layout.run_l0.astype(self.dtype), layout.still,
+            readout == "length", real(stiffness_n_per_m), real(damping_n_s_per_m),
+            layout.moving, np.where(layout.fixed, 0.0, 1.0 / mass_kg).astype(self.dtype),
+            real(TINY[self.dtype]),
             state[0], state[1], state[2], state[3], np.zeros((3, n_slots), dtype=self.dtype),
             np.zeros((len(strips), longest), dtype=self.dtype),
             np.zeros((3, longest), dtype=self.dtype))
@@ -462,10 +510,7 @@ class LeapfrogMechanics:
     def by_slot(self, forces_n: np.ndarray) -> np.ndarray:
         """External forces (n, n_masses, 3) N as :func:`leapfrog_kernel` reads them: (n, 3,
         n_slots), by component and slot, in the stepper's precision."""
-        f = np.asarray(forces_n)
-        out = np.zeros((f.shape[0], 3, self.state.shape[2]), dtype=self.dtype)
-        out[:, :, self.slots] = f.transpose(0, 2, 1)
-        return out
+        return to_slots(forces_n, self.slots, self.state.shape[2], self.dtype)
 
     def reset(self) -> None:
         """Back to rest: zero displacement, velocity and held input."""

@@ -43,7 +43,15 @@ def spring_signal(ke_x: Real, ke_y: Real, ke_z: Real, dx: Real, dy: Real, dz: Re
     if not length:
         return proj
     d2 = dx * dx + dy * dy + dz * dz
-    twice = rest_m + rest_m
-    squared = rest_m * rest_m + twice * proj / k + d2  # |L0·e + d|², >= 0 but for rounding
-    now = math.sqrt(max(squared, d2 - d2))
-    return (twice * proj + k * d2) / (now + rest_m)
+    squared = rest_m * rest_m + (rest_m + rest_m) * proj / k + d2  # |L0·e + d|², >= 0 but
+    return length_signal(proj, d2, math.sqrt(max(squared, d2 - d2)), k, rest_m)  # for rounding
+
+
+@numba.njit(inline="always", fastmath=True)
+def length_signal(proj: Real, d2: Real, now: Real, k: Real,
+                  rest_m: Real) -> Real:  # pragma: no cover - compiled
+    """The length readout (N) of a spring of rest length ``rest_m`` (m) whose relative
+    displacement ``d`` has ``k eᵀd = proj`` (N) and ``|d|² = d2`` (m²) and whose length is
+    ``now`` (m) (a kernel that has the length already passes it):
+    ``k·(2·L0·eᵀd + |d|²) / (now + L0)``, the length change without cancellation."""
+    return ((rest_m + rest_m) * proj + k * d2) / (now + rest_m)
