@@ -10,8 +10,8 @@ the leapfrog linear stepper (larger meshes) or the geometric mechanics (the defa
 schedule's, the stepper's and the population's own kernels in turn: per-block Python work
 would otherwise cost about as much as the arithmetic of a 1 ms block. The full state-space
 linear stepper, and any stepper when the neurons run on several threads (``threads``), step
-through ``SkinStepper.advance`` and ``NeuronPopulation.step_block``. Every step costs O(springs) with the leapfrog and the
-geometric mechanics, and the neurons O(channels).
+through ``SkinStepper.advance`` and ``NeuronPopulation.step_block``. Every step costs
+O(springs) with the leapfrog and the geometric mechanics, and the neurons O(channels).
 """
 
 from __future__ import annotations
