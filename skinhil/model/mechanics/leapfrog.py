@@ -191,10 +191,10 @@ def spring_runs(springs: np.ndarray, e: np.ndarray, t_over_l: np.ndarray,
             np.ascontiguousarray(rest[first]))
 
 
-def join_runs(runs: np.ndarray, fixed: np.ndarray,
-              kinds: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def join_runs(runs: np.ndarray, fixed: np.ndarray, kinds: np.ndarray,
+              max_gap: int = MAX_GAP) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Join the runs of one kind (equal ``kinds``: direction, T/L and rest length) that
-    continue each other across at most :data:`MAX_GAP` pairs of fixed masses into strips.
+    continue each other across at most ``max_gap`` pairs of fixed masses into strips.
 
     The springs of one kind along a grid row are a run of 32 or 33 at 34x34, too short for
     the compiler's vector loops (16 single-precision lanes, unrolled); the next row's run of
@@ -218,7 +218,7 @@ def join_runs(runs: np.ndarray, fixed: np.ndarray,
             si0, sj0, sn, _, _ = strips[-1]
             gap = i0 - (si0 + sn)
             if (kinds[r] == kinds[first_run[-1]] and j0 - i0 == sj0 - si0
-                    and 0 <= gap <= MAX_GAP and fixed[si0 + sn:i0].all()
+                    and 0 <= gap <= max_gap and fixed[si0 + sn:i0].all()
                     and fixed[sj0 + sn:j0].all()):
                 segments.append((sn + gap, s0, ds, n))
                 strips[-1][2] = sn + gap + n
@@ -302,12 +302,13 @@ class StripLayout:
     """The bands of slots stepped (:func:`moving_bands`)."""
 
 
-def strip_layout(mesh: Mesh, e: np.ndarray, t_over_l: np.ndarray,
-                 length: np.ndarray) -> StripLayout:
+def strip_layout(mesh: Mesh, e: np.ndarray, t_over_l: np.ndarray, length: np.ndarray,
+                 max_gap: int = MAX_GAP) -> StripLayout:
     """The strips of ``mesh`` for springs of rest unit vectors ``e`` (n_springs, 3), T/L
     (N/m) and rest lengths (m): runs (:func:`spring_runs`) on the grid slots, those between
-    fixed masses only set aside (never stretched), the rest joined into strips
-    (:func:`join_runs`), with their readout plan and the bands of moving slots."""
+    fixed masses only set aside (never stretched), the rest joined into strips across at
+    most ``max_gap`` fixed pairs (:func:`join_runs`), with their readout plan and the bands
+    of moving slots."""
     slots = grid_slots(mesh)
     n_slots = 3 * mesh.size[0] * mesh.size[1]
     fixed = np.ones(n_slots, dtype=bool)  # the unused slots never move
@@ -319,7 +320,8 @@ def strip_layout(mesh: Mesh, e: np.ndarray, t_over_l: np.ndarray,
     still = np.concatenate([s0 + ds * np.arange(n) for s0, ds, _, _, n in runs[~live]]
                            + [np.zeros(0, dtype=np.int64)]).astype(np.int64)
     runs, run_e, run_tl, run_l0 = runs[live], run_e[live], run_tl[live], run_l0[live]
-    strips, segments, first = join_runs(runs, fixed, run_kinds(run_e, run_tl, run_l0))
+    strips, segments, first = join_runs(runs, fixed, run_kinds(run_e, run_tl, run_l0),
+                                        max_gap)
     return StripLayout(slots, fixed, strips, readout_plan(strips, segments), run_e[first],
                        run_tl[first], run_l0[first], still, moving_bands(fixed))
 
