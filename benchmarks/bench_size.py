@@ -9,7 +9,8 @@ as :meth:`firmware_sim.board.Board.tick` does, without pacing and without a tran
 default 10 dB), spikes to events, and the events encoded for the wire
 (:class:`protocols.SerialEncoder`, wide format above 338 channels). It reports
 
-- per step: mechanics (µs and ns per spring; the leapfrog's kernel on its input by slot),
+- per step: mechanics (µs and ns per spring; the leapfrog's and the geometric mechanics'
+  kernels on their input by slot, as the tick runs them),
   neurons (µs and ns per channel), each timed alone on the same forces, and per tick the
   events and encoding (µs);
 - memory: the peak of the bytes allocated (tracemalloc, kernels compiled beforehand) while
@@ -65,6 +66,7 @@ from machine import describe, load_average  # noqa: E402
 
 import protocols  # noqa: E402
 from skinhil.model.geometry import format_size, parse_size  # noqa: E402
+from skinhil.model.mechanics.geometric import GeometricMechanics, rk4_kernel  # noqa: E402
 from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, leapfrog_kernel  # noqa: E402
 from skinhil.model.pipeline import SensorPipeline  # noqa: E402
 from skinhil.model.sensor import SkinSensor  # noqa: E402
@@ -170,6 +172,10 @@ def measure(size: tuple[int, int], threads: int, snr_db: float, seconds: float,
         slotted, out = stepper.by_slot(forces), np.empty_like(springs)
         mech_us = _best_per_tick(lambda: leapfrog_kernel(slotted, out, DT_S, stepper.substeps,
                                                          *stepper.operands),
+                                 seconds / 4, repeats)
+    elif isinstance(stepper, GeometricMechanics):  # likewise
+        slotted, out = stepper.by_slot(forces), np.empty_like(springs)
+        mech_us = _best_per_tick(lambda: rk4_kernel(slotted, out, DT_S, *stepper.operands),
                                  seconds / 4, repeats)
     else:
         mech_us = _best_per_tick(lambda: stepper.advance(forces), seconds / 4, repeats)
