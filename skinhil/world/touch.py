@@ -20,7 +20,7 @@ import numba
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.model.mechanics.geometric import GeometricMechanics, rk4_kernel
+from skinhil.model.mechanics.geometric import GeometricMechanics, rk4_step
 from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, leapfrog_kernel
 from skinhil.model.neurons import _izhikevich_kernel
 from skinhil.model.sensor import SkinSensor
@@ -72,7 +72,7 @@ def _geometric_touch_kernel(first_step, dt, t_offset, scene_offset, slots, n_slo
     v = mechanics[14]
     for k in range(n_steps):
         contact_forces(t[k] - scene_offset, dt, q, v, forces[k], operands, state, truth[k])
-        rk4_kernel(forces[k:k + 1], springs[k:k + 1], dt, *mechanics)
+        rk4_step(forces[k], springs[k], dt, *mechanics)
     n = springs.shape[1]
     _izhikevich_kernel(springs.reshape(n_steps, 1, n), dt * 1e3,
                        spikes.reshape(n_steps, 1, n), *neurons)

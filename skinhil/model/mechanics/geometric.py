@@ -171,63 +171,72 @@ def strip_forces(q: np.ndarray, v: np.ndarray, out: np.ndarray, strips: np.ndarr
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
-def rk4_kernel(forces: np.ndarray, out: np.ndarray, dt: float, strips: np.ndarray,
-               reach: np.ndarray, plan: np.ndarray, run_e: np.ndarray, run_l0: np.ndarray,
-               still: np.ndarray, length: bool, k: float, c: float, t: float,
-               span: np.ndarray, inv_m: np.ndarray, preload: np.ndarray, q: np.ndarray,
-               v: np.ndarray, qs: np.ndarray, vs: np.ndarray, sq: np.ndarray, sv: np.ndarray,
-               net: np.ndarray, signals: np.ndarray,
-               scratch: np.ndarray) -> None:  # pragma: no cover - compiled
-    """forces (n, 3, n_slots) N by component and slot (:meth:`GeometricMechanics.by_slot`),
-    each held over a step of ``dt`` (s) → out (n, n_springs) N, the readouts at the start of
-    each step; the operands after ``dt`` are :attr:`GeometricMechanics.operands`."""
+def rk4_step(fs: np.ndarray, row: np.ndarray, dt: float, strips: np.ndarray,
+             reach: np.ndarray, plan: np.ndarray, run_e: np.ndarray, run_l0: np.ndarray,
+             still: np.ndarray, length: bool, k: float, c: float, t: float,
+             span: np.ndarray, inv_m: np.ndarray, preload: np.ndarray, q: np.ndarray,
+             v: np.ndarray, qs: np.ndarray, vs: np.ndarray, sq: np.ndarray, sv: np.ndarray,
+             net: np.ndarray, signals: np.ndarray,
+             scratch: np.ndarray) -> None:  # pragma: no cover - compiled
+    """One step: the external forces ``fs`` (3, n_slots) N by component and slot, held over
+    ``dt`` (s) → ``row`` (n_springs,) N, the readouts at the step's start; the operands
+    after ``dt`` are :attr:`GeometricMechanics.operands`. A caller stepping one step at a
+    time (the contact) passes its rows: contiguous, so the loops stay vectorised."""
     half_dt = 0.5 * dt
     sixth_dt = dt / 6.0
     m0, m1 = span[0], span[1]
     width = m1 - m0
+    for s in still:  # between fixed masses: never stretched
+        row[s] = 0.0
+    for stage in range(4):
+        if stage == 0:  # the state at the step's start: its readouts too
+            strip_forces(q, v, net, strips, reach, run_e, run_l0, k, c, t, scratch,
+                         signals, True, length)
+            write_readouts(row, signals, plan)
+        else:
+            strip_forces(qs, vs, net, strips, reach, run_e, run_l0, k, c, t, scratch,
+                         signals, False, length)
+        h = dt if stage == 2 else half_dt
+        for a in range(3):  # the moving slots' span (a fixed one's 1/m is 0)
+            qa, va = q[a, m0:m1], v[a, m0:m1]
+            qsa, vsa = qs[a, m0:m1], vs[a, m0:m1]
+            sqa, sva = sq[a, m0:m1], sv[a, m0:m1]
+            na, pa, fa = net[a, m0:m1], preload[a, m0:m1], fs[a, m0:m1]
+            ima = inv_m[m0:m1]
+            if stage == 0:  # k1; the sums start
+                for m in range(width):
+                    acc = (na[m] - pa[m] + fa[m]) * ima[m]
+                    vel = va[m]
+                    sqa[m] = vel
+                    sva[m] = acc
+                    qsa[m] = qa[m] + h * vel
+                    vsa[m] = vel + h * acc
+            elif stage < 3:  # k2, k3: twice into the sums
+                for m in range(width):
+                    acc = (na[m] - pa[m] + fa[m]) * ima[m]
+                    vel = vsa[m]
+                    sqa[m] += 2.0 * vel
+                    sva[m] += 2.0 * acc
+                    qsa[m] = qa[m] + h * vel
+                    vsa[m] = va[m] + h * acc
+            else:  # k4: the step, dt/6 (k1 + 2 k2 + 2 k3 + k4)
+                for m in range(width):
+                    acc = (na[m] - pa[m] + fa[m]) * ima[m]
+                    qm = qa[m] + sixth_dt * (sqa[m] + vsa[m])
+                    vm = va[m] + sixth_dt * (sva[m] + acc)
+                    qa[m] = qm if abs(qm) > TINY_F64 else 0.0
+                    va[m] = vm if abs(vm) > TINY_F64 else 0.0
+
+@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
+def rk4_kernel(forces: np.ndarray, out: np.ndarray, dt: float,
+               *operands: *GeometricOperands) -> None:  # pragma: no cover - compiled
+    """forces (n, 3, n_slots) N by component and slot (:meth:`GeometricMechanics.by_slot`),
+    each held over a step of ``dt`` (s) → out (n, n_springs) N, the readouts at the start of
+    each step (:func:`rk4_step` step by step); the operands after ``dt`` are
+    :attr:`GeometricMechanics.operands`."""
     for step in range(forces.shape[0]):
-        fs = forces[step]
-        row = out[step]
-        for s in still:  # between fixed masses: never stretched
-            row[s] = 0.0
-        for stage in range(4):
-            if stage == 0:  # the state at the step's start: its readouts too
-                strip_forces(q, v, net, strips, reach, run_e, run_l0, k, c, t, scratch,
-                             signals, True, length)
-                write_readouts(row, signals, plan)
-            else:
-                strip_forces(qs, vs, net, strips, reach, run_e, run_l0, k, c, t, scratch,
-                             signals, False, length)
-            h = dt if stage == 2 else half_dt
-            for a in range(3):  # the moving slots' span (a fixed one's 1/m is 0)
-                qa, va = q[a, m0:m1], v[a, m0:m1]
-                qsa, vsa = qs[a, m0:m1], vs[a, m0:m1]
-                sqa, sva = sq[a, m0:m1], sv[a, m0:m1]
-                na, pa, fa = net[a, m0:m1], preload[a, m0:m1], fs[a, m0:m1]
-                ima = inv_m[m0:m1]
-                if stage == 0:  # k1; the sums start
-                    for m in range(width):
-                        acc = (na[m] - pa[m] + fa[m]) * ima[m]
-                        vel = va[m]
-                        sqa[m] = vel
-                        sva[m] = acc
-                        qsa[m] = qa[m] + h * vel
-                        vsa[m] = vel + h * acc
-                elif stage < 3:  # k2, k3: twice into the sums
-                    for m in range(width):
-                        acc = (na[m] - pa[m] + fa[m]) * ima[m]
-                        vel = vsa[m]
-                        sqa[m] += 2.0 * vel
-                        sva[m] += 2.0 * acc
-                        qsa[m] = qa[m] + h * vel
-                        vsa[m] = va[m] + h * acc
-                else:  # k4: the step, dt/6 (k1 + 2 k2 + 2 k3 + k4)
-                    for m in range(width):
-                        acc = (na[m] - pa[m] + fa[m]) * ima[m]
-                        qm = qa[m] + sixth_dt * (sqa[m] + vsa[m])
-                        vm = va[m] + sixth_dt * (sva[m] + acc)
-                        qa[m] = qm if abs(qm) > TINY_F64 else 0.0
-                        va[m] = vm if abs(vm) > TINY_F64 else 0.0
+        rk4_step(forces[step], out[step], dt, *operands)
+
 
 
 def max_stable_dt(mesh: Mesh, mass_kg: float, stiffness_n_per_m: float,
