@@ -15,7 +15,7 @@ from skinhil.model.stimuli import Schedule, ScheduledStimulus, at_size, paper_st
 TOLERANCE = 1e-11
 """Largest difference allowed, as a fraction of the peak spring force: double precision
 rounds at 1.1e-16 of a value, and the two formulations differ only in the order of their
-operations (measured: at most 1.4e-14 at 10x10 over 2,400 steps)."""
+operations (measured: at most 1.4e-14 of the peak, at 10x10 over 3,000 steps)."""
 
 
 @pytest.mark.parametrize(("size", "tension", "readout"), [

@@ -41,8 +41,8 @@ m/s) are flushed to zero when the step ends: subnormals are ~100x slower on x86,
 former formulation in absolute positions (~1e-3 m) did not resolve 1e-19 m anyway. The
 results are the former per-spring formulation's (absolute positions, ``e = d/L``, forces
 scattered spring by spring) to rounding: tests/test_core_geometric_kernel.py pins them to
-within 1e-9 of the peak force. Per step at 6x6 (338 springs, 201 of them with a free end):
-see docs/performance.md.
+within 1e-11 of the peak force. Per step at 6x6 (338 springs, 201 of them with a free end):
+7.1 µs against 10.5 spring by spring (README, "Performance").
 """
 
 from __future__ import annotations
