@@ -66,19 +66,6 @@ def _scheduled_modal_sensor_kernel(
 
 
 @numba.njit(cache=True)
-def slot_schedule_forces(t: np.ndarray, slots: np.ndarray, n_slots: int, like: np.ndarray,
-                         schedule: ScheduleOperands) -> np.ndarray:  # pragma: no cover
-    """The schedule's forces (N) at schedule times ``t`` (s) by component and slot, (len(t),
-    3, n_slots), in the precision of ``like`` (the stepper's), for the strip steppers
-    (``slots``: each mass's slot); ``schedule`` is Schedule.kernel_operands."""
-    forces = np.zeros((t.shape[0], 3, n_slots), dtype=like.dtype)
-    starts, onsets, ends, which, stim_onsets, stim_ends, taus, ptr, pushed, peaks = schedule
-    add_schedule_forces(forces.transpose(0, 2, 1), t, starts, onsets, ends, which,
-                        stim_onsets, stim_ends, taus, ptr, slots[pushed], peaks)
-    return forces
-
-
-@numba.njit(cache=True)
 def _leapfrog_sensor_kernel(forces: np.ndarray, springs: np.ndarray, spikes: np.ndarray,
                             dt_s: float, substeps: int, mechanics: LeapfrogOperands,
                             neurons: KernelOperands) -> None:  # pragma: no cover - compiled
@@ -101,7 +88,10 @@ def _scheduled_leapfrog_sensor_kernel(
     # _leapfrog_sensor_kernel; schedule is Schedule.kernel_operands
     n_steps = springs.shape[0]
     t = (first_step + np.arange(n_steps)) * dt_s - t_offset_s
-    forces = slot_schedule_forces(t, slots, n_slots, springs, schedule)
+    forces = np.zeros((n_steps, 3, n_slots), dtype=springs.dtype)  # the stepper's precision
+    starts, onsets, ends, which, stim_onsets, stim_ends, taus, ptr, pushed, peaks = schedule
+    add_schedule_forces(forces.transpose(0, 2, 1), t, starts, onsets, ends, which,
+                        stim_onsets, stim_ends, taus, ptr, slots[pushed], peaks)
     _leapfrog_sensor_kernel(forces, springs, spikes, dt_s, substeps, mechanics, neurons)
 
 
@@ -128,7 +118,10 @@ def _scheduled_geometric_sensor_kernel(
     # _geometric_sensor_kernel; schedule is Schedule.kernel_operands
     n_steps = springs.shape[0]
     t = (first_step + np.arange(n_steps)) * dt_s - t_offset_s
-    forces = slot_schedule_forces(t, slots, n_slots, springs, schedule)
+    forces = np.zeros((n_steps, 3, n_slots))
+    starts, onsets, ends, which, stim_onsets, stim_ends, taus, ptr, pushed, peaks = schedule
+    add_schedule_forces(forces.transpose(0, 2, 1), t, starts, onsets, ends, which,
+                        stim_onsets, stim_ends, taus, ptr, slots[pushed], peaks)
     _geometric_sensor_kernel(forces, springs, spikes, dt_s, mechanics, neurons)
 
 

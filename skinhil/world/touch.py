@@ -23,8 +23,8 @@ from skinhil.errors import ConfigError
 from skinhil.model.mechanics.geometric import GeometricMechanics, rk4_step
 from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, leapfrog_kernel
 from skinhil.model.neurons import _izhikevich_kernel
-from skinhil.model.sensor import SkinSensor, slot_schedule_forces
-from skinhil.model.stimuli import Schedule
+from skinhil.model.sensor import SkinSensor
+from skinhil.model.stimuli import Schedule, add_schedule_forces
 from skinhil.world.contact import ContactParams, contact_forces
 from skinhil.world.scene import Scene, World
 from skinhil.world.truth import RAW_FIELDS, truth_records
@@ -41,7 +41,10 @@ def _leapfrog_touch_kernel(first_step, dt, t_offset, scene_offset, slots, n_slot
     # contact on the state at its start and one leapfrog step; then the neurons
     n_steps = springs.shape[0]
     t = (first_step + np.arange(n_steps)) * dt
-    forces = slot_schedule_forces(t - t_offset, slots, n_slots, springs, schedule)
+    forces = np.zeros((n_steps, 3, n_slots), dtype=springs.dtype)
+    starts, onsets, ends, which, stim_onsets, stim_ends, taus, ptr, pushed, peaks = schedule
+    add_schedule_forces(forces.transpose(0, 2, 1), t - t_offset, starts, onsets, ends, which,
+                        stim_onsets, stim_ends, taus, ptr, slots[pushed], peaks)
     q = mechanics[12]
     w = mechanics[14]
     for k in range(n_steps):
@@ -61,7 +64,10 @@ def _geometric_touch_kernel(first_step, dt, t_offset, scene_offset, slots, n_slo
     # the neurons
     n_steps = springs.shape[0]
     t = (first_step + np.arange(n_steps)) * dt
-    forces = slot_schedule_forces(t - t_offset, slots, n_slots, springs, schedule)
+    forces = np.zeros((n_steps, 3, n_slots))
+    starts, onsets, ends, which, stim_onsets, stim_ends, taus, ptr, pushed, peaks = schedule
+    add_schedule_forces(forces.transpose(0, 2, 1), t - t_offset, starts, onsets, ends, which,
+                        stim_onsets, stim_ends, taus, ptr, slots[pushed], peaks)
     q = mechanics[13]
     v = mechanics[14]
     for k in range(n_steps):
