@@ -8,6 +8,7 @@ do not depend on the noise, so every run of a scenario has the same truth), then
 then oracle. Prints a markdown table and writes the scores as JSON.
 
     python benchmarks/bench_tasks.py --snr-db 10 [--tasks force,slip] [--out scores.json]
+    python benchmarks/bench_tasks.py --smoke    # one task, the reference, 1.5 s of board time
 """
 
 from __future__ import annotations
@@ -27,6 +28,8 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 TASKS = ("localisation", "force", "slip", "vibration")
 WHO = ("reference", "random", "oracle")
+SMOKE_DURATION_S = 1.5
+"""--smoke: board time (s) of the scenario played, before the last answers' 0.6 s."""
 METRIC = {"localisation": ("median_error_mm", "mm"), "force": ("median_error_n", "N"),
           "slip": ("latency_ms", "ms"), "vibration": ("median_error_hz", "Hz")}
 
@@ -62,12 +65,17 @@ def quick_model(path: Path) -> None:
     save_decoder(decoder, path)
 
 
-def run(task: str, who: str, folder: Path, model: Path, snr_db: float, seed: int) -> dict:
+def run(task: str, who: str, folder: Path, model: Path, snr_db: float, seed: int,
+        duration_s: float | None = None) -> dict:
+    """The board's score of ``task`` answered by ``who``: the whole scenario, or its first
+    ``duration_s`` s of board time."""
     scenario = REPO / "examples" / "scenarios" / f"task_{task}.toml"
     sys.path.insert(0, str(REPO))
     from skinhil.world.scenario_file import load_scenario
 
-    duration_s = load_scenario(scenario).duration_s + 0.6  # the last answers' window
+    if duration_s is None:
+        duration_s = load_scenario(scenario).duration_s
+    duration_s += 0.6  # the last answers' window
     score, truth = folder / f"{task}-{who}.json", folder / f"{task}-truth.jsonl"
     listen_args = ["--answer", "--answer-with", who, "--json"]
     if who == "oracle":
@@ -118,9 +126,15 @@ def main() -> None:
                     help="answerers to run (the oracle needs the reference's truth file, "
                          "which the reference run of the same invocation writes)")
     ap.add_argument("--out", type=Path)
+    ap.add_argument("--smoke", action="store_true",
+                    help=f"localisation only, the reference only, the scenario's first "
+                         f"{SMOKE_DURATION_S:g} s (a check that the script runs)")
     args = ap.parse_args()
     tasks = [t for t in args.tasks.split(",") if t]
     who = [w for w in args.who.split(",") if w]
+    duration_s = None
+    if args.smoke:
+        tasks, who, duration_s = ["localisation"], ["reference"], SMOKE_DURATION_S
     results: dict[str, dict[str, dict]] = {}
     with tempfile.TemporaryDirectory(prefix="skinhil-tasks-") as tmp:
         folder = Path(tmp)
@@ -130,7 +144,8 @@ def main() -> None:
             results[task] = {}
             for w in who:
                 t0 = time.monotonic()
-                results[task][w] = run(task, w, folder, model, args.snr_db, args.seed)
+                results[task][w] = run(task, w, folder, model, args.snr_db, args.seed,
+                                       duration_s)
                 print(f"{task} {w}: {cell(results[task][w], task)} "
                       f"({time.monotonic() - t0:.0f} s)", file=sys.stderr, flush=True)
     print(f"| task (SNR {args.snr_db:g} dB) | " + " | ".join(who) + " |")

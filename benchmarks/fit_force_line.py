@@ -7,6 +7,7 @@ onsets found by the receiver's own rule (skinhil/receiver/onset.py, default para
 its windows as the receiver's (from 3 ms before the detection, 50 ms long):
 
     python benchmarks/fit_force_line.py --snr-db 10 --seed 1
+    python benchmarks/fit_force_line.py --smoke     # the first 2 s of board time only
 """
 
 from __future__ import annotations
@@ -27,19 +28,25 @@ from skinhil.receiver.params import OnsetParams  # noqa: E402
 
 WINDOW_US = 50_000
 STEP_US = 100
+SMOKE_DURATION_S = 2.0
+"""--smoke: board time (s) simulated, the scenario's first presses."""
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--snr-db", type=float, default=10.0)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--smoke", action="store_true",
+                    help=f"only the first {SMOKE_DURATION_S:g} s of board time (a check that "
+                         "the script runs, not a fit to use)")
     args = ap.parse_args()
+    duration = ["--duration", str(SMOKE_DURATION_S)] if args.smoke else []
     scenario = REPO / "examples" / "scenarios" / "task_force.toml"
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "cal.npz"
         subprocess.run([sys.executable, "-m", "skinhil", "simulate", "--schedule", str(scenario),
                         "--out", str(out), "--no-progress", "--no-forces", "--snr-db",
-                        str(args.snr_db), "--seed", str(args.seed)], check=True,
+                        str(args.snr_db), "--seed", str(args.seed), *duration], check=True,
                        capture_output=True)
         z = np.load(out)
         ev, truth = z["events"], z["truth"]
@@ -57,6 +64,8 @@ def main() -> None:
         spikes.append(int(((ev["t"] >= t0) & (ev["t"] < t0 + WINDOW_US)).sum()))
         force.append(float(at["normal_n"][-1]))
     x, y = np.array(spikes, dtype=float), np.array(force)
+    if len(x) < 2:
+        raise SystemExit(f"{len(x)} touches of {len(onsets)} onsets: too few to fit a line")
     slope, offset = np.polyfit(x, y, 1)
     err = np.abs(slope * x + offset - y)
     print(f"{len(x)} touches of {len(onsets)} onsets; N = {slope:.4f} * spikes + {offset:.4f}; "
