@@ -33,6 +33,7 @@ from skinhil.decoding.model_file import save_decoder
 from skinhil.receiver.training import feature_spec
 
 SMOKE = REPO / "examples" / "campaigns" / "smoke.toml"
+TASKS = REPO / "examples" / "campaigns" / "tasks.toml"
 FAULTS = "corrupt_byte_p=0.01,seed=3"
 
 
@@ -48,8 +49,8 @@ def model(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
-def _bench(*args: str) -> subprocess.Popen[str]:
-    return subprocess.Popen([sys.executable, "-m", "skinhil", "bench", str(SMOKE), "--quiet",
+def _bench(*args: str, campaign: Path = SMOKE) -> subprocess.Popen[str]:
+    return subprocess.Popen([sys.executable, "-m", "skinhil", "bench", str(campaign), "--quiet",
                              *args], cwd=RUN_DIR, env=serve_env(), text=True,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             stdin=subprocess.DEVNULL)
@@ -107,6 +108,24 @@ def test_smoke_campaign_on_a_clean_link(model: Path, tmp_path: Path) -> None:
     assert random_case["outcome"] in ("passed", "failed", "error")
     assert status == 1  # not every case passed
     assert "2 of 2 cases played" in stdout
+
+
+def test_the_task_campaign_scores_a_task(model: Path, tmp_path: Path) -> None:
+    """examples/campaigns/tasks.toml: its criteria read the score file's
+    ``tasks.localisation`` keys, which the board writes (a missing key would be the rig's
+    error); the reference receiver's answers are counted."""
+    out = tmp_path / "run"
+    status, _, stderr = _finish(_bench("--model", str(model), "--out", str(out),
+                                       campaign=TASKS))
+    summary, xml = _read(out)
+    _junit_agrees(summary, xml)
+    (record,) = summary["cases"]
+    assert record["outcome"] in ("passed", "failed"), record["message"]
+    answers, error = record["criteria"]
+    assert answers["criterion"] == "tasks.localisation.answers >= 3"
+    assert error["criterion"] == "tasks.localisation.median_error_mm <= 1.5"
+    assert answers["value"] >= 1, stderr  # the receiver answered the presses
+    assert status == (0 if record["outcome"] == "passed" else 1)
 
 
 def test_faulty_link_is_the_rigs_error_and_resume_plays_the_rest(model: Path,
