@@ -45,9 +45,10 @@ def test_npc_of_dominant_direction() -> None:
 def test_area_between_curves() -> None:
     a = np.array([0.5, 1.0, 1.0])
     b = np.array([1.0, 1.0, 1.0])
-    assert area_between(a, b) == pytest.approx(0.5)
-    assert area_between(b, a) == pytest.approx(-0.5)
-    assert area_between(np.array([0.25, 0.5, 0.75, 1.0]), np.array([1.0])) == pytest.approx(1.5)
+    # the paper's sign: sum(c_ind - c_post), negative when the indentation needs more PCs
+    assert area_between(a, b) == pytest.approx(-0.5)
+    assert area_between(b, a) == pytest.approx(0.5)
+    assert area_between(np.array([0.25, 0.5, 0.75, 1.0]), np.array([1.0])) == pytest.approx(-1.5)
 
 
 def test_sir_known_values() -> None:
@@ -74,7 +75,7 @@ def test_information_measures_phases() -> None:
     m = information_measures(np.concatenate([ind, post], axis=1), dt,
                              PhaseWindows((0.0, 0.5), (0.5, 1.0)))
     assert (m.npc99_ind, m.npc99_post, m.npc_ratio) == (3.0, 1.0, 3.0)
-    assert m.area > 0.5
+    assert m.area < -0.5
     w_ind, w_post = PhaseWindows((0.0, 0.5), (0.5, 1.0)).steps(dt)
     assert (w_ind.start, w_ind.stop, w_post.stop) == (0, 50, 100)
     assert phase_samples(np.zeros((2, 100, 6)), w_post).shape == (100, 6)

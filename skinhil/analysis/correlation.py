@@ -14,6 +14,10 @@ attached to M15) is on 0..1, "0 uncorrelated, 1 identical" as the paper describe
   weigh a barely loaded sensor as much as the most loaded one, and in a skin that follows
   the force quasi-statically every sensor's trace has the force's time course, so per-sensor
   ρ would report little more than the signs;
+- the paper's own index (:func:`similarity_matrix_per_sensor`, what 3F is judged on) is the
+  per-sensor ρ (over time, one per sensor) averaged over the sensors, then ``max(·, 0)``;
+  sensors silent under either input are left out of the mean. The pooled index
+  (:func:`similarity_matrix`) is shown beside it;
 - the index is ``max(ρ, 0)``: 1 for identical responses, 0 for uncorrelated ones. Opposite
   responses (ρ < 0) also get 0: the neurons read the force's sign (tension excites,
   compression inhibits), so opposite forces evoke unrelated spikes, not similar ones.
@@ -58,6 +62,28 @@ def similarity_matrix(responses: np.ndarray) -> np.ndarray:
     for i in range(n):
         for j in range(i, n):
             out[i, j] = out[j, i] = correlation_index(r[i], r[j])
+    return out
+
+
+def per_sensor_index(a: np.ndarray, b: np.ndarray) -> float:
+    """``max(mean_s ρ_s, 0)`` of two responses (n_steps, n_sensors): ρ over time per sensor,
+    averaged over the sensors that respond to both; NaN if none does."""
+    rho = zero_lag_ncc(a, b, axis=0)
+    rho = rho[np.isfinite(rho)]
+    return float("nan") if rho.size == 0 else max(float(rho.mean()), 0.0)
+
+
+def similarity_matrix_per_sensor(responses: np.ndarray) -> np.ndarray:
+    """Responses (n_stim, n_steps, n_sensors) → (n_stim, n_stim) per-sensor mean indices
+    (:func:`per_sensor_index`: the paper's Figure 3F)."""
+    r = np.asarray(responses, dtype=np.float64)
+    if r.ndim != 3:
+        raise ConfigError(f"responses must be (n_stimuli, n_steps, n_sensors), got {r.shape}")
+    n = r.shape[0]
+    out = np.full((n, n), np.nan)
+    for i in range(n):
+        for j in range(i, n):
+            out[i, j] = out[j, i] = per_sensor_index(r[i], r[j])
     return out
 
 

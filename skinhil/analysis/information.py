@@ -3,8 +3,9 @@
 :func:`information_measures` takes the sensor responses of a set of stimuli
 (n_stimuli, n_steps, n_features) sampled every ``dt_s`` and the phase windows, runs the PCA of
 :mod:`skinhil.analysis.pca` on each phase (data matrix of :func:`phase_samples`) and returns
-the area between the variance-explained curves, the nPC99 of each phase and their ratio, and
-the signal-information ratio of each phase and their ratio.
+the area between the variance-explained curves (the paper's sign), the nPC99 of each phase
+and their ratio, and the signal-information ratio of each phase and their ratio (the
+project's reading and the literal eq. 10 one).
 """
 
 from __future__ import annotations
@@ -29,6 +30,10 @@ class InformationMeasures:
     sir_ind: float
     sir_post: float
     sir_ratio: float
+    sir_literal_ind: float = math.nan
+    sir_literal_post: float = math.nan
+    sir_literal_ratio: float = math.nan
+    """The literal eq. 10 SIR of each phase and their ratio (:mod:`skinhil.analysis.pca`)."""
 
     def as_dict(self) -> dict[str, float]:
         """Plain ``{name: value}``."""
@@ -54,7 +59,10 @@ def measures_from_pcas(ind: PhasePCA, post: PhasePCA) -> InformationMeasures:
     area = area_between(ind.curve, post.curve)
     return InformationMeasures(area=area, npc99_ind=ind.npc99, npc99_post=post.npc99,
                                npc_ratio=_ratio(ind.npc99, post.npc99), sir_ind=ind.sir,
-                               sir_post=post.sir, sir_ratio=_ratio(ind.sir, post.sir))
+                               sir_post=post.sir, sir_ratio=_ratio(ind.sir, post.sir),
+                               sir_literal_ind=ind.sir_literal,
+                               sir_literal_post=post.sir_literal,
+                               sir_literal_ratio=_ratio(ind.sir_literal, post.sir_literal))
 
 
 def information_measures(responses: np.ndarray, dt_s: float,

@@ -12,13 +12,20 @@ Conventions (the paper gives the measures, these are the documented choices):
 - **nPC99**: the least k with ``c(k) ≥ 0.99``; the **nPC ratio** is nPC99(indentation) /
   nPC99(post-indentation): above 1 when the indentation phase spreads its variance over more
   dimensions.
-- **Area between the curves**: ``Σ_k [c_post(k) − c_ind(k)]`` over k = 1..n_features (in units
-  of PCs, a unit-spaced Riemann sum); positive when the indentation curve rises more slowly,
-  i.e. the indentation phase holds more independent components (more information).
+- **Area between the curves**: ``Σ_k [c_ind(k) − c_post(k)]`` over k = 1..n_features (in units
+  of PCs, a unit-spaced Riemann sum), the paper's sign: **negative** when the indentation
+  curve rises more slowly, i.e. the indentation phase holds more independent components
+  (more information).
 - **Signal-information ratio (SIR)** of a phase: the raw (uncentred) data projected on each of
   the first 3 principal axes gives a score trace ``z_k``; ``SIR_k = mean|z_k| / std(z_k)``
   (sustained component over its fluctuation) and the phase's SIR is the mean over k = 1, 2,
-  3; the **SIR ratio** is SIR(indentation) / SIR(post-indentation).
+  3; the **SIR ratio** is SIR(indentation) / SIR(post-indentation). This is the project's
+  reading of the paper's "mean/std of the first 3 PCs" (eq. 10).
+- **Literal eq. 10 SIR**: the same words read literally, mean over std of each score trace,
+  ``|mean(z_k)| / std(z_k)`` (the signed mean; its absolute value only because a principal
+  axis' sign is arbitrary), averaged over k = 1, 2, 3. It differs from the reading above
+  where a score oscillates about zero (a ringing post-indentation phase): its mean|z| is
+  large, its signed mean small. Reported beside it, in every table and sweep.
 
 A phase with no variance at all (e.g. a silent post-indentation) has undefined curves: its
 nPC99 and SIR are NaN, as are the ratios and the area that need it.
@@ -61,6 +68,11 @@ class PhasePCA:
         """Signal-information ratio of the first three PCs (see module docstring)."""
         return signal_information_ratio(self.scores)
 
+    @property
+    def sir_literal(self) -> float:
+        """The literal eq. 10 signal-information ratio (see module docstring)."""
+        return signal_information_ratio_literal(self.scores)
+
 
 def phase_pca(samples: np.ndarray) -> PhasePCA:
     """PCA of a data matrix (n_samples, n_features): samples are rows, features columns."""
@@ -96,14 +108,15 @@ def n_components_for(curve: np.ndarray, fraction: float = VARIANCE_TARGET) -> fl
 
 
 def area_between(curve_ind: np.ndarray, curve_post: np.ndarray) -> float:
-    """``Σ_k [curve_post(k) − curve_ind(k)]``; the shorter curve is padded with 1 (a curve of
-    fewer features has reached all of its variance)."""
+    """``Σ_k [curve_ind(k) − curve_post(k)]`` (the paper's sign: negative when the
+    indentation phase needs more components); the shorter curve is padded with 1 (a curve
+    of fewer features has reached all of its variance)."""
     a = np.asarray(curve_ind, dtype=float)
     b = np.asarray(curve_post, dtype=float)
     n = max(a.size, b.size)
     a = np.concatenate([a, np.ones(n - a.size)])
     b = np.concatenate([b, np.ones(n - b.size)])
-    return float(np.sum(b - a))
+    return float(np.sum(a - b))
 
 
 def signal_information_ratio(scores: np.ndarray) -> float:
@@ -115,3 +128,15 @@ def signal_information_ratio(scores: np.ndarray) -> float:
     if np.any(std <= 1e-12 * max(np.abs(z).max(), np.finfo(float).tiny)):
         return math.nan
     return float(np.mean(np.abs(z).mean(axis=0) / std))
+
+
+def signal_information_ratio_literal(scores: np.ndarray) -> float:
+    """Mean over the columns of ``|mean(z)| / std(z)``: eq. 10 read literally (NaN if any
+    column is constant)."""
+    z = np.asarray(scores, dtype=float)
+    if z.ndim != 2 or z.shape[0] < 2:
+        raise ConfigError(f"scores must be (n_samples >= 2, n_components), got {z.shape}")
+    std = z.std(axis=0)
+    if np.any(std <= 1e-12 * max(np.abs(z).max(), np.finfo(float).tiny)):
+        return math.nan
+    return float(np.mean(np.abs(z.mean(axis=0)) / std))

@@ -15,6 +15,9 @@ Per-point simulation (documented choices):
 - ``linear`` with the length readout (the default: not linear in the displacements, so no
   reduced basis is exact) or with tension: :meth:`skinhil.SkinModel.simulate_many`, the same
   exact zero-order hold at the same step;
+- strain: every point also stores the strain of its runs (``max_strain``, ``median_strain``,
+  :func:`skinhil.model.strain.strain_summary`), so each verdict on a sweep says how far the
+  springs were taken;
 - ``geometric``: :meth:`skinhil.SkinModel.simulate_many`; the
   geometric mechanics' explicit integrator needs ``dt`` below its stability limit, so a point
   uses the largest step ``≤ dt_s`` and ``≤ 0.9 x`` that limit that tiles the 0.25 s phases
@@ -45,13 +48,17 @@ from skinhil.analysis.modal_response import reduced_responses, supports
 from skinhil.analysis.phases import PhaseWindows
 from skinhil.errors import ConfigError
 from skinhil.model.skin import Mechanics, SkinModel, SkinParams
-from skinhil.model.stimuli import at_size, paper_stimuli
+from skinhil.model.stimuli import Stimulus, at_size, paper_stimuli
+from skinhil.model.strain import strain_summary
 from skinhil.workers import one_blas_thread, process_map, worker_count
 
 logger = logging.getLogger(__name__)
 
-MEASURES: tuple[str, ...] = tuple(InformationMeasures.__dataclass_fields__)
-"""Names of the measures stored per grid point."""
+STRAIN: tuple[str, ...] = ("max_strain", "median_strain")
+"""The strain of a point's runs (:func:`skinhil.model.strain.strain_summary`), stored beside
+its measures."""
+MEASURES: tuple[str, ...] = tuple(InformationMeasures.__dataclass_fields__) + STRAIN
+"""Names of the values stored per grid point."""
 STABILITY_MARGIN = 0.9
 """Fraction of the geometric integrator's stability limit used as the largest step."""
 
@@ -74,6 +81,9 @@ class SweepSpec:
     mechanics: Mechanics = "linear"
     dt_s: float = 2.5e-4
     base: SkinParams = field(default_factory=SkinParams)
+    timing: tuple[float, float] | None = None
+    """(indentation_s, decay_tau_s) of the stimuli (s), or None for the built-in ones'; the
+    phases follow the indentation (:meth:`PhaseWindows.of`)."""
 
     def __post_init__(self) -> None:
         for name in ("stiffness_n_per_m", "damping_n_s_per_m", "tension_n"):
@@ -131,30 +141,51 @@ def point_step(params: SkinParams, dt_s: float, windows: PhaseWindows) -> float:
     return phase / math.ceil(phase / min(dt_s, limit) - 1e-9)
 
 
-def evaluate_point(params: SkinParams, dt_s: float = 2.5e-4) -> InformationMeasures:
-    """Simulate the paper stimuli (moved to the skin's size by :func:`at_size`) with
-    ``params`` and return the information measures."""
+def timed_stimuli(params: SkinParams, timing: tuple[float, float] | None = None
+                  ) -> list[Stimulus]:
+    """The paper stimuli at the skin's size (:func:`at_size`), with ``timing``
+    (indentation_s, decay_tau_s) if given."""
     stimuli = [at_size(s, params.size) for s in paper_stimuli()]
+    if timing is not None:
+        stimuli = [replace(s, indentation_s=timing[0], decay_tau_s=timing[1]) for s in stimuli]
+    return stimuli
+
+
+def point_values(params: SkinParams, dt_s: float = 2.5e-4,
+                 timing: tuple[float, float] | None = None) -> dict[str, float]:
+    """Every value of :data:`MEASURES` at one point: the measures of the paper stimuli
+    (:func:`timed_stimuli`) and the strain of their runs; NaN if the point diverged."""
+    stimuli = timed_stimuli(params, timing)
     windows = PhaseWindows.of(stimuli)
     with threadpool_limits(1):
         step = point_step(params, dt_s, windows)
         if supports(params):
-            responses = reduced_responses(params, stimuli, windows.duration_s, step).reduced
+            reduced = reduced_responses(params, stimuli, windows.duration_s, step)
+            responses, forces = reduced.reduced, reduced.full_forces()
         else:
             responses = SkinModel(params).simulate_many(stimuli, windows.duration_s, step)
+            forces = responses
         if not np.all(np.isfinite(responses)):
             logger.warning("sweep point %s diverged; its measures are NaN", params)
-            nan = math.nan
-            return InformationMeasures(nan, nan, nan, nan, nan, nan, nan)
-        return information_measures(responses, step, windows)
+            return dict.fromkeys(MEASURES, math.nan)
+        strain = strain_summary(forces, params)
+        return {**information_measures(responses, step, windows).as_dict(),
+                "max_strain": strain.max, "median_strain": strain.median}
 
 
-def _evaluate(args: tuple[SkinParams, float]) -> InformationMeasures:
-    return evaluate_point(*args)
+def evaluate_point(params: SkinParams, dt_s: float = 2.5e-4) -> InformationMeasures:
+    """Simulate the paper stimuli (moved to the skin's size by :func:`at_size`) with
+    ``params`` and return the information measures."""
+    values = point_values(params, dt_s)
+    return InformationMeasures(**{k: values[k] for k in InformationMeasures.__dataclass_fields__})
 
 
-def _dask(tasks: list[tuple[SkinParams, float]], scheduler: str, bar: tqdm,
-          timeout_s: float) -> list:
+def _evaluate(args: tuple[SkinParams, float, tuple[float, float] | None]) -> dict[str, float]:
+    return point_values(*args)
+
+
+def _dask(tasks: list[tuple[SkinParams, float, tuple[float, float] | None]], scheduler: str,
+          bar: tqdm, timeout_s: float) -> list:
     try:
         from distributed import Client, as_completed
     except ImportError:  # pragma: no cover - depends on the installation
@@ -180,7 +211,7 @@ def run_sweep(spec: SweepSpec, workers: int | None = None, scheduler: str | None
     in this process) or, when ``scheduler`` (``tcp://HOST:PORT``) is given, on that Dask
     cluster (reached within ``connect_timeout_s`` s). The result does not depend on where
     the points ran."""
-    tasks = [(p, spec.dt_s) for p in spec.points()]
+    tasks = [(p, spec.dt_s, spec.timing) for p in spec.points()]
     n_workers = worker_count(workers)
     start = time.perf_counter()
     with tqdm(total=len(tasks), desc=f"sweep {spec.mechanics}", unit="point",
@@ -189,6 +220,6 @@ def run_sweep(spec: SweepSpec, workers: int | None = None, scheduler: str | None
             results = _dask(tasks, scheduler, bar, connect_timeout_s)
         else:
             results = process_map(_evaluate, tasks, n_workers, on_result=lambda _: bar.update())
-    values = {name: np.array([getattr(r, name) for r in results]).reshape(spec.shape)
+    values = {name: np.array([r[name] for r in results]).reshape(spec.shape)
               for name in MEASURES}
     return SweepResult(spec, values, time.perf_counter() - start)

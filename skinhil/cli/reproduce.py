@@ -28,10 +28,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                    help="run the sweeps on this Dask distributed scheduler")
     p.add_argument("--grid", type=integer(1, 101, "grid side"), metavar="N",
-                   help="N x N stiffness x damping grid for both mechanics (default: 15, "
+                   help="N x N stiffness x damping grid for both mechanics (default: 11, "
                         "--quick: 5 and 3)")
     p.add_argument("--repeats", type=integer(1, 1000, "count"), metavar="R",
-                   help="cross-validation repeats (default: 10, --quick: 2)")
+                   help="cross-validation repeats (default: 5, --quick: 2)")
+    p.add_argument("--search-only", action="store_true",
+                   help="run only the paper preset's search (the paper's linear model, its "
+                        "open choices searched) and cache it in DIR/paper_search.json, which "
+                        "a later run in DIR reads")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
 
 
@@ -46,18 +50,21 @@ def run(args: argparse.Namespace) -> int:
         cfg = replace(cfg, decoding=replace(cfg.decoding, repeats=args.repeats))
     t0 = time.monotonic()
     try:
-        outcome = reproduce(args.out, cfg, quick=args.quick)
+        outcome = reproduce(args.out, cfg, quick=args.quick, search_only=args.search_only)
     except KeyboardInterrupt:
         done = sorted(p.name for p in Path(args.out).glob("*") if not p.name.startswith("."))
         print(f"reproduce: stopped after {time.monotonic() - t0:.1f} s; {len(done)} files "
               f"complete in {args.out}{': ' + ', '.join(done) if done else ''}", flush=True)
         raise
+    if args.search_only:
+        print(f"wrote {outcome.report} in {outcome.seconds:.1f} s")
+        return 0
     print(f"wrote {outcome.report} and {len(outcome.figures)} figures in "
           f"{outcome.seconds:.1f} s")
     for r in outcome.results:
         from skinhil.reproduce.report import verdicts
 
         for v, _ in verdicts(r):
-            print(f"  {r.label:16s} {v.key:4s} {'yes' if v.reproduced else 'NO ':3s}  "
+            print(f"  {r.label:24s} {v.key:4s} {'yes' if v.reproduced else 'NO ':3s}  "
                   f"{v.claim}")
     return 0

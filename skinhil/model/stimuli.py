@@ -28,6 +28,9 @@ Built-in stimuli (documented choices; the paper gives the directions, not every 
 - :func:`direction_conditions` — Figure 4's 9 indentation conditions: a force in the x-y plane
   on M15 at angles 0°, 120°, 240° (from +x towards +y) and magnitudes 0.1, 0.3, 0.5 N,
   condition index ``3·i_angle + i_magnitude``; these are the classes the decoder learns.
+  Their angles and magnitudes are the project's choice (the paper shows its conditions as
+  arrows without values); :func:`figure_4a_stimulus` is the one stimulus the paper gives in
+  numbers (Fx = Fy = 0.5 N on M15).
 
 All use ``onset_s = 0``, ``indentation_s = 0.25`` and ``decay_tau_s = 0.1`` by default.
 
@@ -243,6 +246,13 @@ def direction_conditions() -> list[Stimulus]:
             vec = (mag * math.cos(rad), mag * math.sin(rad), 0.0)
             out.append(Stimulus(f"{angle:g}deg_{mag:g}N", {15: vec}))
     return out
+
+
+def figure_4a_stimulus() -> Stimulus:
+    """The stimulus drawn in the paper's Figure 4A: Fx = Fy = 0.5 N on M15 (0.71 N at 45°).
+    Not one of the 9 decoded conditions (their angles and magnitudes are the project's
+    choice, docs/reproduce.md); the report shows its strain and what sensor #5 sees of it."""
+    return Stimulus("fig4A_Fx0.5_Fy0.5", {15: (0.5, 0.5, 0.0)})
 
 
 def at_size(stimulus: Stimulus, size: MeshSize) -> Stimulus:

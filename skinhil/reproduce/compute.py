@@ -17,7 +17,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from skinhil.analysis.correlation import sensors_of_mass, similarity_matrix
+from skinhil.analysis.correlation import (
+    sensors_of_mass,
+    similarity_matrix,
+    similarity_matrix_per_sensor,
+)
 from skinhil.analysis.decoding_snr import (
     PAPER_SNRS_DB,
     DecodingSetup,
@@ -32,7 +36,8 @@ from skinhil.analysis.sweep import SweepResult, SweepSpec, log_values, run_sweep
 from skinhil.decoding import CVResult, FeatureSpec
 from skinhil.model.mechanics.readout import Readout
 from skinhil.model.skin import Dynamics, SkinModel, SkinParams
-from skinhil.model.stimuli import direction_conditions, paper_stimuli
+from skinhil.model.stimuli import direction_conditions, figure_4a_stimulus, paper_stimuli
+from skinhil.model.strain import StrainSummary, strain_summary
 from skinhil.model.trials import simulate_trials
 from skinhil.reproduce.claims import edge_of_optimum
 
@@ -42,9 +47,10 @@ FOCUS_MASS = 15
 """Figures 3F and 4D-G look at the sensors of M15 (the springs attached to it), where the
 Figure 4 forces are applied."""
 PAPER_SENSOR_RANK = 5
-"""The paper decodes from "sensor #5" of the ten springs attached to M15. Rule, fixed in
-advance: the 5th of the ten in ascending spring number (the paper's numbering, which the
-mesh follows; the rank is the same 0- or 1-based)."""
+"""The paper decodes from "sensor #5" of the ten springs attached to M15. The paper numbers
+masses, not springs, so which spring is its sensor #5 is not given; the rule, ours and fixed
+in advance: the 5th of the ten in ascending spring number (the project's spring numbering,
+docs/reproduce.md)."""
 FIGURE_SNR_DB = 10.0
 """The paper's operating point (dB): the rasters (4C-D), PSP traces (4E) and the confusion
 matrix (4F)."""
@@ -62,6 +68,13 @@ optimum still at the edge then is reported as none within the extended grid."""
 VALID_RATIO = 0.1
 """The regime: the small-displacement model counts as valid while every spring's relative
 displacement |q_j − q_i| / L0 stays below this."""
+AMPLITUDES: dict[str, float] = {"paper": 1.0, "small": 100.0}
+"""The amplitude, the design's third factor: ``SkinParams()``'s mass, stiffness and damping
+multiplied together by this factor (and the sweep grids with them). The modes, the damping
+ratios and the spring forces of the linear model stay what they are; every displacement, so
+every strain, is divided by it. "paper": the paper's 0.5 N on the default skin (strain of
+100-200 %); "small": the same touch at 1/100 of the strain, where the geometric dynamics and
+the length readout reduce to their small-displacement limits."""
 TENSION_N: tuple[float, ...] = (0.0, 0.005, 0.0158, 0.05, 0.158, 0.5)
 """Baseline tensions (N) of the tension sweep: none, then log-spaced 5 mN..0.5 N, whose
 transverse stiffness T/L on the 1 mm mesh (5..500 N/m) spans the stiffness sweep's range."""
@@ -74,17 +87,18 @@ class ReproduceConfig:
     the rasters of 4D-E are the decoding's own trials), SNRs, response step ``dt_s`` (s),
     and where to run the sweeps.
 
-    Defaults: 15 x 15 grids (odd, so the default K and C lie on the grid; terciles of 5
-    values and 2A's extremes exactly 3 values), 7 values per tension slice (the default in
-    the middle), 50 trials per condition and 10 repeats of 5-fold CV (at 10 dB the split
-    standard error is about a twentieth of the finite trials' error, which more repeats
-    cannot reduce; REPORT.md prints both)."""
+    Defaults (the 2 x 2 x 2 design runs eight times what one mechanics and readout did, on
+    a 2-core machine): 11 x 11 grids (odd, so the default K and C lie on the grid; 2A's
+    extremes exactly 3 values), 5 values per tension slice (the default in the middle), 50
+    trials per condition and 5 repeats of 5-fold CV (at 10 dB the split standard error is
+    about a tenth of the finite trials' error, which more repeats cannot reduce; REPORT.md
+    prints both). ``--grid 15 --repeats 10`` gives the earlier sizes."""
 
-    sweep_linear: tuple[int, int] = (15, 15)
-    sweep_geometric: tuple[int, int] = (15, 15)
-    tension_linear: int = 7
-    tension_geometric: int = 7
-    decoding: DecodingSetup = field(default_factory=lambda: DecodingSetup(repeats=10))
+    sweep_linear: tuple[int, int] = (11, 11)
+    sweep_geometric: tuple[int, int] = (11, 11)
+    tension_linear: int = 5
+    tension_geometric: int = 5
+    decoding: DecodingSetup = field(default_factory=lambda: DecodingSetup(repeats=5))
     snrs_db: tuple[float, ...] = PAPER_SNRS_DB
     dt_s: float = 1e-4
     workers: int | None = None
@@ -92,6 +106,9 @@ class ReproduceConfig:
     progress: bool = True
     extensions: int = MAX_EXTENSIONS
     """How many times the damping grid may be extended per end for 2B/2C (--quick: 0)."""
+    amplitudes: tuple[str, ...] = tuple(AMPLITUDES)
+    """Amplitude levels of the design (:data:`AMPLITUDES`); the tension sweeps run at the
+    first only."""
 
     @classmethod
     def quick(cls, **kwargs: object) -> ReproduceConfig:
@@ -115,12 +132,20 @@ class MechanicsResults:
 
     mechanics: str
     readout: str
+    amplitude: str
+    params: SkinParams
     responses: np.ndarray
     pca_ind: PhasePCA
     pca_post: PhasePCA
     measures: InformationMeasures
+    """1E-F's measures on stimulus 1 alone (the paper's Figure 1); ``pca_*`` are its."""
+    stacked_pcas: tuple[PhasePCA, PhasePCA]
+    stacked: InformationMeasures
+    """The same for the five inputs stacked (an extra)."""
     focus_sensors: np.ndarray
     similarity: np.ndarray
+    """3F's index, the per-sensor mean (as the paper); ``similarity_pooled`` the extra."""
+    similarity_pooled: np.ndarray
     sweep: SweepResult
     """The K x C sweep with its damping grid extended for 2B/2C (:func:`extended_sweep`)."""
     sweep_base: SweepResult
@@ -135,12 +160,17 @@ class MechanicsResults:
     condition_forces: np.ndarray
     population_raster: np.ndarray
     sensor_trials: np.ndarray
+    strain: dict[str, StrainSummary] = field(default_factory=dict)
+    """Strain of the runs behind each analysis: "stimulus 1", "inputs" (the five),
+    "conditions" (Figure 4's nine), "fig4A" (:func:`figure_4a_stimulus`)."""
+    fig4a_sensor_n: float = math.nan
+    """Largest tension (N) of the paper's sensor under the Figure 4A stimulus."""
     seconds: dict[str, float] = field(default_factory=dict)
 
     @property
     def label(self) -> str:
-        """Mechanics and readout, as the report and the figures name the run."""
-        return f"{self.mechanics}/{self.readout}"
+        """Mechanics, readout and amplitude, as the report and the figures name the run."""
+        return f"{self.mechanics}/{self.readout}/{self.amplitude}"
 
     @property
     def paper_sensor_spikes(self) -> np.ndarray:
@@ -193,6 +223,22 @@ def figure_snr_index(snrs_db: tuple[float, ...]) -> int:
     """Index of the SNR nearest :data:`FIGURE_SNR_DB`."""
     return int(np.argmin([abs(s - FIGURE_SNR_DB) if math.isfinite(s) else math.inf
                           for s in snrs_db]))
+
+
+def scaled_params(params: SkinParams, factor: float) -> SkinParams:
+    """``params`` with mass, stiffness and damping multiplied by ``factor`` (:data:`AMPLITUDES`)."""
+    return replace(params, mass_kg=params.mass_kg * factor,
+                   stiffness_n_per_m=params.stiffness_n_per_m * factor,
+                   damping_n_s_per_m=params.damping_n_s_per_m * factor)
+
+
+def sweep_grid(n_k: int, n_c: int, base: SkinParams) -> SweepSpec:
+    """The K x C grid a decade either side of ``base``'s stiffness and damping."""
+    k, c = base.stiffness_n_per_m, base.damping_n_s_per_m
+    spec = SweepSpec.log_grid(n_k, n_c, mechanics=base.mechanics if base.mechanics != "auto"
+                              else base.dynamics, stiffness_range=(k / 10, k * 10),
+                              damping_range=(c / 10, c * 10))
+    return replace(spec, base=base)
 
 
 def _tension_sweeps(mechanics: Dynamics, readout: Readout, n: int, config: ReproduceConfig
@@ -269,7 +315,7 @@ def compute_regime(dt_s: float) -> Regime:
     for mechanics in ("linear", "geometric"):
         model = SkinModel(SkinParams(mechanics=mechanics))  # type: ignore[arg-type]
         runs = [(s, 0.5) for s in paper_stimuli()]
-        runs += [(s, FIGURE_TRIAL_S) for s in direction_conditions()]
+        runs += [(s, FIGURE_TRIAL_S) for s in [*direction_conditions(), figure_4a_stimulus()]]
         per[mechanics] = {s.name: largest_relative_displacement(model, s, d, dt_s)
                           for s, d in runs}
     linear = SkinModel(SkinParams(mechanics="linear"))
@@ -281,29 +327,36 @@ def compute_regime(dt_s: float) -> Regime:
                   readout_gap(linear, paper, FIGURE_TRIAL_S, dt_s))
 
 
-def compute_mechanics(mechanics: Dynamics, readout: Readout,
-                      config: ReproduceConfig) -> MechanicsResults:
-    """Run every analysis for one mechanics and readout with default parameters."""
-    base = SkinParams(mechanics=mechanics, readout=readout)
+def compute_mechanics(mechanics: Dynamics, readout: Readout, config: ReproduceConfig,
+                      amplitude: str = "paper") -> MechanicsResults:
+    """Run every analysis for one mechanics, readout and amplitude (:data:`AMPLITUDES`) with
+    default parameters otherwise."""
+    base = scaled_params(SkinParams(mechanics=mechanics, readout=readout), AMPLITUDES[amplitude])
     model = SkinModel(base)
     seconds: dict[str, float] = {}
     t0 = time.perf_counter()
     stimuli = paper_stimuli()
     windows = PhaseWindows.of(stimuli)
     responses = model.simulate_many(stimuli, windows.duration_s, config.dt_s)
-    pca_ind, pca_post = phase_pcas(responses, config.dt_s, windows)
+    pca_ind, pca_post = phase_pcas(responses[:1], config.dt_s, windows)
+    stacked = phase_pcas(responses, config.dt_s, windows)
     focus = sensors_of_mass(model.springs, FOCUS_MASS)
-    similarity = similarity_matrix(responses[:, :, focus])
+    similarity = similarity_matrix_per_sensor(responses[:, :, focus])
+    pooled = similarity_matrix(responses[:, :, focus])
+    strain = {"stimulus 1": strain_summary(responses[:1], base),
+              "inputs": strain_summary(responses, base)}
     seconds["information"] = time.perf_counter() - t0
 
     grid = config.sweep_linear if mechanics == "linear" else config.sweep_geometric
-    sweep_base = _run(replace(SweepSpec.log_grid(*grid, mechanics=mechanics), base=base),
-                      config)
+    sweep_base = _run(sweep_grid(*grid, base), config)
     sweep = extended_sweep(sweep_base, config)
     seconds["sweep"] = sweep.seconds
-    n_t = config.tension_linear if mechanics == "linear" else config.tension_geometric
-    tension_k, tension_c = _tension_sweeps(mechanics, readout, n_t, config)
-    seconds["tension sweeps"] = tension_k.seconds + tension_c.seconds
+    if amplitude == config.amplitudes[0]:
+        n_t = config.tension_linear if mechanics == "linear" else config.tension_geometric
+        tension_k, tension_c = _tension_sweeps(mechanics, readout, n_t, config)
+        seconds["tension sweeps"] = tension_k.seconds + tension_c.seconds
+    else:  # the tension axis is shown at the first amplitude only
+        tension_k = tension_c = SweepResult(replace(sweep_base.spec, tension_n=(0.0,)), {}, 0.0)
 
     t0 = time.perf_counter()
     d = config.decoding
@@ -315,6 +368,9 @@ def compute_mechanics(mechanics: Dynamics, readout: Readout,
     t0 = time.perf_counter()
     conditions = direction_conditions()
     forces = model.simulate_many(conditions, FIGURE_TRIAL_S, config.dt_s)
+    strain["conditions"] = strain_summary(forces, base)
+    fig4a = model.simulate(figure_4a_stimulus(), FIGURE_TRIAL_S, config.dt_s)
+    strain["fig4A"] = strain_summary(fig4a, base)
     # the decoding's own trials at the figure SNR (same seed, reps and step), run longer
     i_fig = figure_snr_index(config.snrs_db)
     sensor_trials = simulate_trials(conditions, d.reps, duration_s=FIGURE_TRIAL_S,
@@ -325,9 +381,49 @@ def compute_mechanics(mechanics: Dynamics, readout: Readout,
                                  dt_s=config.dt_s, snr_db=config.snrs_db[i_fig],
                                  seed=d.seed + len(config.snrs_db), model=model)[0, 0]
     seconds["rasters"] = time.perf_counter() - t0
-    logger.info("%s mechanics, %s readout done: %s", mechanics, readout, seconds)
+    logger.info("%s mechanics, %s readout, %s amplitude done: %s", mechanics, readout,
+                amplitude, seconds)
+    paper_sensor = int(focus[PAPER_SENSOR_RANK - 1])
     return MechanicsResults(
-        mechanics, readout, responses, pca_ind, pca_post, measures_from_pcas(pca_ind, pca_post),
-        focus, similarity, sweep, sweep_base, tension_k, tension_c, tuple(config.snrs_db),
+        mechanics, readout, amplitude, base, responses, pca_ind, pca_post,
+        measures_from_pcas(pca_ind, pca_post), stacked, measures_from_pcas(*stacked), focus,
+        similarity, pooled, sweep, sweep_base, tension_k, tension_c, tuple(config.snrs_db),
         d.spec, sets, decoding, forces[:, :, focus], forces[FOCUS_CONDITION], population,
-        sensor_trials, seconds)
+        sensor_trials, strain, float(fig4a[:, paper_sensor].max()), seconds)
+
+
+SUPPLEMENTARY_FACTORS: tuple[float, ...] = (0.1, 1.0, 10.0)
+"""Supplementary Figure 1: stiffness and damping at these multiples of the defaults (3 x 3)."""
+
+
+@dataclass(frozen=True)
+class SupplementaryPoint:
+    """One panel pair of Supplementary Figure 1: stiffness (N/m), damping (N·s/m), M15's
+    sensors' forces (n_steps, 10) N under stimulus 1, and its two phases' PCA curves."""
+
+    stiffness_n_per_m: float
+    damping_n_s_per_m: float
+    forces: np.ndarray
+    curve_ind: np.ndarray
+    curve_post: np.ndarray
+
+
+def compute_supplementary(dt_s: float) -> list[SupplementaryPoint]:
+    """Supplementary Figure 1 on the paper's linear model (linear dynamics, axial readout):
+    the sensor responses to stimulus 1 and the variance-explained curves of each phase, per
+    K x C of :data:`SUPPLEMENTARY_FACTORS` (K-major)."""
+    base = SkinParams(mechanics="linear", readout="axial")
+    stimulus = paper_stimuli()[:1]
+    windows = PhaseWindows.of(stimulus)
+    out = []
+    for fk in SUPPLEMENTARY_FACTORS:
+        for fc in SUPPLEMENTARY_FACTORS:
+            params = replace(base, stiffness_n_per_m=base.stiffness_n_per_m * fk,
+                             damping_n_s_per_m=base.damping_n_s_per_m * fc)
+            model = SkinModel(params)
+            r = model.simulate_many(stimulus, windows.duration_s, dt_s)
+            ind, post = phase_pcas(r, dt_s, windows)
+            focus = sensors_of_mass(model.springs, FOCUS_MASS)
+            out.append(SupplementaryPoint(params.stiffness_n_per_m, params.damping_n_s_per_m,
+                                          r[0][:, focus], ind.curve, post.curve))
+    return out
