@@ -15,13 +15,16 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
         "reproduce", help="regenerate the paper's figures and a report of its claims",
         description="Simulate, analyse and plot Figures 1E-F, 2A-C (and the tension axis), "
-                    "3A-F and 4A-G for the linear and the geometric mechanics, each with the "
-                    "length and the axial readout, and write "
+                    "3A-F, 4A-G and Supplementary 1 for the linear and the geometric "
+                    "mechanics, each with the length and the axial readout, at the paper's "
+                    "amplitude and at 1/100 of its strain, search the paper's linear model "
+                    "for a setting that reproduces its claims, and write "
                     "REPORT.md saying which claims of the paper the model reproduces (needs "
                     "matplotlib).")
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
     p.add_argument("--quick", action="store_true",
-                   help="small grids and few repeats (under a minute), for tests")
+                   help="small grids, few repeats, the paper's amplitude only (a check, "
+                        "for tests; docs/reproduce.md gives its time)")
     p.add_argument("--workers", type=integer(1, 256, "worker count"), metavar="N",
                    help="local worker processes for sweeps and cross-validation "
                         "(default: all cores)")

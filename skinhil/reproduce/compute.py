@@ -112,10 +112,11 @@ class ReproduceConfig:
 
     @classmethod
     def quick(cls, **kwargs: object) -> ReproduceConfig:
-        """Small grids and few repeats: every figure in about a minute."""
+        """Small grids, few repeats and the paper's amplitude only (a 2 x 2 design): every
+        figure but the other amplitude's 4E, for tests (time: docs/reproduce.md)."""
         base = cls(sweep_linear=(5, 5), sweep_geometric=(3, 3), tension_linear=3,
                    tension_geometric=1, decoding=DecodingSetup(reps=10, repeats=2),
-                   extensions=0)
+                   extensions=0, amplitudes=("paper",))
         return replace(base, **kwargs)  # type: ignore[arg-type]
 
 
