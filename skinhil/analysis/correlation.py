@@ -25,6 +25,8 @@ attached to M15) is on 0..1, "0 uncorrelated, 1 identical" as the paper describe
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from skinhil.errors import ConfigError
@@ -52,8 +54,8 @@ def correlation_index(a: np.ndarray, b: np.ndarray) -> float:
     return rho if np.isnan(rho) else max(rho, 0.0)
 
 
-def similarity_matrix(responses: np.ndarray) -> np.ndarray:
-    """Responses (n_stim, n_steps, n_sensors) → (n_stim, n_stim) correlation indices."""
+def _pairwise(responses: np.ndarray,
+              index: Callable[[np.ndarray, np.ndarray], float]) -> np.ndarray:
     r = np.asarray(responses, dtype=np.float64)
     if r.ndim != 3:
         raise ConfigError(f"responses must be (n_stimuli, n_steps, n_sensors), got {r.shape}")
@@ -61,8 +63,14 @@ def similarity_matrix(responses: np.ndarray) -> np.ndarray:
     out = np.full((n, n), np.nan)
     for i in range(n):
         for j in range(i, n):
-            out[i, j] = out[j, i] = correlation_index(r[i], r[j])
+            out[i, j] = out[j, i] = index(r[i], r[j])
     return out
+
+
+def similarity_matrix(responses: np.ndarray) -> np.ndarray:
+    """Responses (n_stim, n_steps, n_sensors) → (n_stim, n_stim) pooled correlation indices
+    (:func:`correlation_index`)."""
+    return _pairwise(responses, correlation_index)
 
 
 def per_sensor_index(a: np.ndarray, b: np.ndarray) -> float:
@@ -76,15 +84,7 @@ def per_sensor_index(a: np.ndarray, b: np.ndarray) -> float:
 def similarity_matrix_per_sensor(responses: np.ndarray) -> np.ndarray:
     """Responses (n_stim, n_steps, n_sensors) → (n_stim, n_stim) per-sensor mean indices
     (:func:`per_sensor_index`: the paper's Figure 3F)."""
-    r = np.asarray(responses, dtype=np.float64)
-    if r.ndim != 3:
-        raise ConfigError(f"responses must be (n_stimuli, n_steps, n_sensors), got {r.shape}")
-    n = r.shape[0]
-    out = np.full((n, n), np.nan)
-    for i in range(n):
-        for j in range(i, n):
-            out[i, j] = out[j, i] = per_sensor_index(r[i], r[j])
-    return out
+    return _pairwise(responses, per_sensor_index)
 
 
 def sensors_of_mass(springs: np.ndarray, mass_number: int) -> np.ndarray:

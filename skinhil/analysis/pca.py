@@ -121,22 +121,23 @@ def area_between(curve_ind: np.ndarray, curve_post: np.ndarray) -> float:
 
 def signal_information_ratio(scores: np.ndarray) -> float:
     """Mean over the columns of ``mean|z| / std(z)`` (NaN if any column is constant)."""
+    z, std = _scores_and_std(scores)
+    return math.nan if std is None else float(np.mean(np.abs(z).mean(axis=0) / std))
+
+
+def _scores_and_std(scores: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """The scores as floats and each column's std (None if any column is constant)."""
     z = np.asarray(scores, dtype=float)
     if z.ndim != 2 or z.shape[0] < 2:
         raise ConfigError(f"scores must be (n_samples >= 2, n_components), got {z.shape}")
     std = z.std(axis=0)
     if np.any(std <= 1e-12 * max(np.abs(z).max(), np.finfo(float).tiny)):
-        return math.nan
-    return float(np.mean(np.abs(z).mean(axis=0) / std))
+        return z, None
+    return z, std
 
 
 def signal_information_ratio_literal(scores: np.ndarray) -> float:
     """Mean over the columns of ``|mean(z)| / std(z)``: eq. 10 read literally (NaN if any
     column is constant)."""
-    z = np.asarray(scores, dtype=float)
-    if z.ndim != 2 or z.shape[0] < 2:
-        raise ConfigError(f"scores must be (n_samples >= 2, n_components), got {z.shape}")
-    std = z.std(axis=0)
-    if np.any(std <= 1e-12 * max(np.abs(z).max(), np.finfo(float).tiny)):
-        return math.nan
-    return float(np.mean(np.abs(z.mean(axis=0)) / std))
+    z, std = _scores_and_std(scores)
+    return math.nan if std is None else float(np.mean(np.abs(z.mean(axis=0)) / std))
