@@ -268,7 +268,7 @@ static void take_record(decoder_t *D, const unsigned char *d, int m) {
         } else {
             printf("{\"record\":{\"type\":\"COMMAND\",\"token\":%u,\"opcode\":%u,\"arg\":",
                    token, op);
-            if (op == 5) { float f; memcpy(&f, &arg, 4); print_float(f); }
+            if (op == 5 || op == 12) { float f; memcpy(&f, &arg, 4); print_float(f); }
             else printf("%u", arg);
             printf("}}\n");
         }

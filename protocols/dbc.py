@@ -8,7 +8,8 @@ with default settings. Event slots after a frame's last event hold the all-ones 
 (511; wide: 1048575), which the DBC names ``NONE`` (an FD frame also says how many events it
 holds in ``Count``). A COMMAND frame is multiplexed by its ``Opcode``: ``Arg`` for opcodes
 1..7, ``DecisionStimulusId`` and ``DecisionConfidence`` for DECISION (SPEC.md §3.5.1),
-``AnswerTask`` and the task's values for ANSWER (§3.5.3; the task multiplexes them).
+``AnswerTask`` and the task's values for ANSWER (§3.5.3; the task multiplexes them),
+``GripN`` (binary32, N) for GRIP (§3.5.6).
 """
 
 from __future__ import annotations
@@ -167,6 +168,7 @@ def messages(fd: bool) -> tuple[Message, ...]:
     seq = Signal("Seq", 0, 8 if fd else 4)
     decision = int(CommandCode.DECISION)
     answer = int(CommandCode.ANSWER)
+    grip = int(CommandCode.GRIP)
     command = Message(k.CLS_COMMAND, "SKIN_COMMAND", 8, HOST, (
         seq, Signal("Opcode", 8, 8, mux="M", choices=_enum_choices(CommandCode)),
         Signal("Token", 16, 16),
@@ -174,7 +176,9 @@ def messages(fd: bool) -> tuple[Message, ...]:
         Signal("DecisionStimulusId", 32, 24, mux=f"m{decision}", mux_range=(decision, decision)),
         Signal("DecisionConfidence", 56, 8, mux=f"m{decision}", mux_range=(decision, decision),
                choices=((CONFIDENCE_STEPS + 1, "NONE"),)),
-        *_answer_signals(answer)))
+        *_answer_signals(answer),
+        Signal("GripN", 32, 32, "N", mux=f"m{grip}", mux_range=(grip, grip),
+               float32=True)))
     ack = Message(k.CLS_ACK, "SKIN_ACK", 6, BOARD, (
         seq, Signal("Ok", 8, 1), Signal("AckSeq", 9, 7),
         Signal("Opcode", 16, 8, choices=_enum_choices(CommandCode)),
@@ -265,7 +269,8 @@ def dbc_text(board_id: int = 0, fd: bool = False) -> str:
                  "given here. Event slots after the last event hold address 511 (NONE). "
                  "A COMMAND of opcode DECISION carries DecisionStimulusId and "
                  "DecisionConfidence (0..254 = confidence x 254; 255 NONE) instead of Arg; "
-                 "one of opcode ANSWER carries AnswerTask and the task's values. "
+                 "one of opcode ANSWER carries AnswerTask and the task's values; "
+                 "one of opcode GRIP carries GripN (N, IEEE-754 binary32). "
                  'Layout: protocols/SPEC.md";')
     if fd:
         lines.append('BA_DEF_ BO_ "VFrameFormat" ENUM "StandardCAN","ExtendedCAN",'

@@ -30,12 +30,18 @@ def check_uint(value: int, bits: int, what: str) -> int:
     return v
 
 
+FLOAT_OPCODES = (CommandCode.SET_SNR, CommandCode.GRIP)
+"""Opcodes whose argument is an IEEE-754 binary32 (dB, N)."""
+
+
 def arg_bits(opcode: int, arg: int | float) -> int:
-    """The 32-bit wire form of a command argument: binary32 for SET_SNR, else uint32."""
-    if int(opcode) == CommandCode.SET_SNR:
+    """The 32-bit wire form of a command argument: binary32 for SET_SNR and GRIP, else
+    uint32."""
+    if int(opcode) in FLOAT_OPCODES:
         a = float(arg)
         if math.isnan(a):
-            raise ProtocolError("SET_SNR argument is NaN; give a level in dB or inf")
+            raise ProtocolError(f"{CommandCode(int(opcode)).name} argument is NaN; give a "
+                                "number")
         return int.from_bytes(struct.pack("<f", a), "little")
     if isinstance(arg, float) and not arg.is_integer():
         raise ProtocolError(f"command argument {arg} must be an integer for opcode {opcode}")
@@ -43,8 +49,9 @@ def arg_bits(opcode: int, arg: int | float) -> int:
 
 
 def arg_value(opcode: int, bits: int) -> int | float:
-    """The argument a 32-bit wire field carries (float for SET_SNR, int otherwise)."""
-    if opcode == CommandCode.SET_SNR:
+    """The argument a 32-bit wire field carries (float for SET_SNR and GRIP, int
+    otherwise)."""
+    if opcode in FLOAT_OPCODES:
         return float(struct.unpack("<f", bits.to_bytes(4, "little"))[0])
     return bits
 

@@ -37,6 +37,9 @@ class CommandCode(enum.IntEnum):
     """Ask for the session record and the stimulus table now (sent right after the ACK)."""
     ANSWER = 10
     """The decoder under test's answer to a task: an :class:`Answer` (task id, values)."""
+    GRIP = 12
+    """Set the hand's grip: ``arg`` the normal force set-point in N (float, binary32 on the
+    wire), from the board's next tick on (SPEC.md §3.5.6)."""
 
 
 class NackReason(enum.IntEnum):
@@ -56,6 +59,10 @@ class NackReason(enum.IntEnum):
     """An ANSWER names a task id this document does not define (5..15)."""
     TASK_NOT_POSED = 10
     """An ANSWER names a task the board does not score in this run (no truth for it)."""
+    GRIP_LIMIT = 11
+    """A GRIP above the largest grip, or changing it faster than the largest rate."""
+    NO_OBJECT = 12
+    """A GRIP to a board that holds no object (it runs no grasp task)."""
 
 
 class MarkerPhase(enum.IntEnum):
@@ -185,7 +192,7 @@ class Command:
     """A host→board command; ``token`` (0..65535) is echoed in the ACK.
 
     ``arg`` is an int (stimulus/schedule number, 0..2**32-1) or, for ``SET_SNR``, a float in
-    dB (sent as IEEE-754 binary32; ``inf`` allowed).
+    dB (sent as IEEE-754 binary32; ``inf`` allowed), for ``GRIP`` a float in N (binary32).
     """
 
     token: int

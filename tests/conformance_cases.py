@@ -32,10 +32,12 @@ from protocol_examples import (
 
 from protocols import (
     ANSWER_SCALE,
+    Ack,
     Answer,
     Command,
     CommandCode,
     Decision,
+    NackReason,
     RunEnd,
     RunEndReason,
     SerialEncoder,
@@ -160,6 +162,14 @@ def cases() -> list[dict[str, Any]]:
         "7 (its 28-bit field as its one value: the board NACKs it UNKNOWN_TASK).",
         b"".join(host.command(a) for a in answers), [], [record_json(a) for a in answers],
         frames_ok=6))
+    host, board = SerialEncoder(), SerialEncoder()
+    grip = Command(0x1240, CommandCode.GRIP, 0.75)
+    nack = Ack(0x1241, CommandCode.GRIP, False, NackReason.GRIP_LIMIT)
+    out.append(_case(
+        "grip", "§3.5.6, §3.6", "A host's GRIP of 0.75 N (binary32) and a board's NACK of "
+        "another GRIP for reason 11 GRIP_LIMIT (their own sequence numbers, 0 each).",
+        host.command(grip) + board.ack(nack), [], [record_json(grip), record_json(nack)],
+        frames_ok=2))
     enc = SerialEncoder()
     end = RunEnd(t_us=20_000_000, reason=RunEndReason.DURATION)
     sess = b"".join(enc.session_record(r) for r in (SESSION, *TABLE, end))

@@ -49,6 +49,10 @@ ANSWERS = (Answer(0x1236, Task.LOCALISATION, (1.25, -2.5)), Answer(0x1237, Task.
 slip, a vibration of 100 Hz."""
 ACK = Ack(token=0x1234, opcode=CommandCode.SET_STIMULUS, ok=False,
           reason=NackReason.UNKNOWN_STIMULUS)
+GRIP = Command(token=0x1240, opcode=CommandCode.GRIP, arg=0.75)
+"""A grip of 0.75 N (binary32 0x3F400000)."""
+GRIP_NACK = Ack(token=0x1241, opcode=CommandCode.GRIP, ok=False, reason=NackReason.GRIP_LIMIT)
+"""A GRIP refused: above the largest grip or faster than the largest rate."""
 EVENTS = make_events([0, 0, 300, 900], [5, 17, 337, 2])
 """Four events: channels 5 and 17 at 0 µs, 337 at 300 µs, 2 at 900 µs."""
 BURST = make_events([200] * 25, list(range(0, 250, 10)))
@@ -127,6 +131,7 @@ EXAMPLES: dict[str, Callable[[], str]] = {
     "serial-ack": _serial(lambda e: e.ack(ACK)),
     "serial-decision": _serial(lambda e: e.command(DECISION)),
     "serial-answers": _serial(lambda e: b"".join(e.command(a) for a in ANSWERS)),
+    "serial-grip": _serial(lambda e: e.command(GRIP) + e.ack(GRIP_NACK)),
     "serial-session": _serial(lambda e: b"".join(e.session_record(r) for r in SESSION_RECORDS)),
     "serial-run-end": _serial(lambda e: e.session_record(RUN_END)),
 }
@@ -139,6 +144,7 @@ for _fd, _tag in ((False, "can"), (True, "canfd")):
     EXAMPLES[f"{_tag}-ack"] = _can(_fd, lambda e: e.ack(ACK))
     EXAMPLES[f"{_tag}-decision"] = _can(_fd, lambda e: e.command(DECISION))
     EXAMPLES[f"{_tag}-answers"] = _can(_fd, lambda e: [f for a in ANSWERS for f in e.command(a)])
+    EXAMPLES[f"{_tag}-grip"] = _can(_fd, lambda e: e.command(GRIP) + e.ack(GRIP_NACK))
     EXAMPLES[f"{_tag}-session"] = _can(_fd, lambda e: [
         f for r in SESSION_RECORDS for f in e.session_record(r)])
     EXAMPLES[f"{_tag}-run-end"] = _can(_fd, lambda e: e.session_record(RUN_END))
