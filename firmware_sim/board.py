@@ -66,6 +66,7 @@ from skinhil.model.skin import SkinModel, SkinParams
 from skinhil.model.stimuli import Schedule, ScheduledStimulus
 from skinhil.model.stimulus_table import stimulus_table
 from skinhil.model.timeline import MarkerEvent, Timeline
+from skinhil.plant import GraspParams, HeldObject
 from skinhil.scoring import DecisionScoreboard, TaskScoreboard, answer_reason
 from skinhil.transports import Transport
 from skinhil.world import Scene, TouchSensor, TruthLog
@@ -233,7 +234,7 @@ class Board:
     def __init__(self, config: BoardConfig, open_link: Callable[[], Transport[Any]],
                  file_schedule: Schedule | None = None,
                  on_link: Callable[[str], None] | None = None,
-                 scene: Scene | None = None) -> None:
+                 scene: Scene | None = None, grasp: GraspParams | None = None) -> None:
         self.config = config.check()
         if scene is not None and config.threads > 1:
             raise ConfigError("a scenario with contacts steps the mechanics and the neurons "
@@ -248,6 +249,11 @@ class Board:
                                  state_forces=scene is not None)
         self.touch = TouchSensor(self.sensor, scene) if scene is not None else None
         """The skin touching the scenario's contacts (inside the compiled step), or None."""
+        if grasp is not None and self.touch is None:
+            raise ConfigError("a held object needs its lifts' scene (skinhil.plant.lift_scene)")
+        self.plant = (HeldObject(grasp, self.touch.world, int(round(config.tick_s * 1e6)))
+                      if grasp is not None and self.touch is not None else None)
+        """The held object the GRIP commands act on (its lifts are ``scene``), or None."""
         self.truth = TruthLog()
         """The contacts' ground truth, one record per contact per tick (the board's secret:
         for scoring and recordings, never sent on the link)."""
@@ -447,6 +453,8 @@ class Board:
                 else:
                     (self.sensor if self.pipeline is None else self.pipeline).set_snr(snr)
                     self.snr_db = snr
+            elif op == codes.GRIP:
+                reason = self._grip(cmd, arrival_us)
             elif op in (codes.QUERY_STATUS, codes.QUERY_SESSION, codes.PING):
                 pass  # QUERY_STATUS / QUERY_SESSION: the record follows the ACK
             else:
@@ -463,8 +471,21 @@ class Board:
             self.counters.rx_errors += 1  # a refused command shows in the next STATUS
         return protocols.Ack(token=cmd.token, opcode=op, ok=ok, reason=reason)
 
+    def _grip(self, cmd: Any, arrival_us: int | None) -> Any:
+        """A GRIP executed now (the held object's grip from the next tick on): its NACK
+        reason (SPEC.md §3.5.6)."""
+        why = protocols.NackReason
+        if self.plant is None:
+            return why.NO_OBJECT
+        outcome = self.plant.set_grip(float(cmd.arg), self.board_time_us(), arrival_us,
+                                      cmd.token)
+        return {"ok": why.NONE, "bad_argument": why.BAD_ARGUMENT}.get(outcome, why.GRIP_LIMIT)
+
     def _start_scene(self, mode: int, now_s: float) -> None:
-        """The contacts play from ``now_s`` (s) with the schedule file (mode 2), else none."""
+        """The contacts play from ``now_s`` (s) with the schedule file (mode 2), else none;
+        the held object's grip and lifts start again with them."""
+        if self.plant is not None:
+            self.plant.reset()
         if self.touch is not None:
             if mode == Timeline.SCHEDULE_FILE:
                 self.touch.start(now_s)
@@ -545,21 +566,7 @@ class Board:
     # -- one tick -----------------------------------------------------------------------
     def tick(self) -> None:
         """Run one publish tick (see module docstring for the order)."""
-        cfg = self.config
-        first = self.sensor.step_index
-        n = cfg.steps_per_tick
-        if self.touch is not None:  # the schedule's and the contacts' forces, compiled
-            schedule = self.timeline.schedule_for(first * cfg.dt_s, (first + n - 1) * cfg.dt_s)
-            _, spikes, raw = self.touch.advance_schedule(schedule, n)
-            self.truth.add_raw(first * self._dt_us, raw[0])
-            if self.tasks is not None and self.running and self.link is not None:
-                self.tasks.observe(first * self._dt_us, raw[0])
-        elif self.pipeline is None:  # the schedule's forces made inside the compiled step
-            schedule = self.timeline.schedule_for(first * cfg.dt_s, (first + n - 1) * cfg.dt_s)
-            _, spikes = self.sensor.advance_schedule(schedule, n)
-        else:
-            spikes, first = self.pipeline.advance(
-                self.timeline.forces((first + np.arange(n)) * cfg.dt_s))
+        spikes, first = self.step_model()
         if not self._publish(spikes, first):
             self._try_reconnect()
             return
@@ -570,6 +577,33 @@ class Board:
         self.scoreboard.advance(self.board_time_us())
         if self.tasks is not None:
             self.tasks.advance(self.board_time_us())
+
+    def step_model(self) -> tuple[np.ndarray, int]:
+        """The model's steps of one tick (the held object's grip applied before, its truth,
+        the contacts' and the task trials' kept after): the spikes (steps, channels) and their
+        first step."""
+        cfg = self.config
+        first = self.sensor.step_index
+        n = cfg.steps_per_tick
+        if self.touch is not None:  # the schedule's and the contacts' forces, compiled
+            if self.plant is not None:
+                self.plant.before_tick()
+            schedule = self.timeline.schedule_for(first * cfg.dt_s, (first + n - 1) * cfg.dt_s)
+            _, spikes, raw = self.touch.advance_schedule(schedule, n)
+            self.truth.add_raw(first * self._dt_us, raw[0])
+            if self.tasks is not None and self.running and self.link is not None:
+                self.tasks.observe(first * self._dt_us, raw[0])
+            if self.plant is not None:
+                self.truth.add_object(self.plant.after_tick(
+                    first * self._dt_us, first * cfg.dt_s - self.touch.scene_offset_s,
+                    cfg.dt_s, raw))
+        elif self.pipeline is None:  # the schedule's forces made inside the compiled step
+            schedule = self.timeline.schedule_for(first * cfg.dt_s, (first + n - 1) * cfg.dt_s)
+            _, spikes = self.sensor.advance_schedule(schedule, n)
+        else:
+            spikes, first = self.pipeline.advance(
+                self.timeline.forces((first + np.arange(n)) * cfg.dt_s))
+        return spikes, first
 
     def _publish(self, spikes: np.ndarray, first: int) -> bool:
         """The events of a spike block starting at step ``first`` counted as generated and

@@ -43,7 +43,10 @@ from skinhil.recording import (
     link_recorder,
     open_recording,
 )
+from skinhil.plant import GraspParams, lift_scene
+from skinhil.plant.report import grasp_text, plant_scores
 from skinhil.scoring import DecisionScoreboard, scoreboard_text, truth_lines
+from skinhil.world.scene import MAX_CONTACTS as MAX_LIFTS
 
 LIVE_WINDOW_TICKS = 1000
 """The live status's lateness p99 is over this many most recent ticks (its max is over the
@@ -73,6 +76,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                      help=f"play this {SCHEDULE_HELP}")
     src.add_argument("--host-driven", action="store_true",
                      help="no schedule: stimuli only on host commands")
+    src.add_argument("--grasp", type=integer(1, MAX_LIFTS, "lifts"), metavar="LIFTS",
+                     help="a held object lifted LIFTS times, 1..{} (docs/grasp.md): the decoder "
+                          "under test grips it with GRIP commands; its scores go to --score "
+                          "under \"grasp\"".format(MAX_LIFTS))
     src.add_argument("--replay", type=Path, metavar="FILE",
                      help="play this recording (serve --record) onto the link instead of "
                           "running the board: byte for byte (serial, UDP), frame for frame "
@@ -149,7 +156,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _config(args: argparse.Namespace) -> BoardConfig:
-    if args.schedule is not None:
+    if args.schedule is not None or args.grasp is not None:
         mode = Timeline.SCHEDULE_FILE
     elif args.host_driven:
         mode = Timeline.SCHEDULE_NONE
@@ -343,12 +350,13 @@ def run_replay(args: argparse.Namespace) -> int:
 
 
 def write_score(path: Path, scoreboard: DecisionScoreboard,
-                tasks: dict[str, Any] | None = None) -> None:
-    """Write ``scoreboard`` with every decision to ``path`` (JSON), and the ANSWERs' scores
-    per task under ``"tasks"``, whole or not at all."""
+                tasks: dict[str, Any] | None = None,
+                extra: dict[str, Any] | None = None) -> None:
+    """Write ``scoreboard`` with every decision to ``path`` (JSON), the ANSWERs' scores per
+    task under ``"tasks"`` and the keys of ``extra`` (``"grasp"``), whole or not at all."""
     with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps({**scoreboard.summary(with_log=True), "tasks": tasks or {}},
-                                  indent=1) + "\n", encoding="utf-8")
+        tmp.write_text(json.dumps({**scoreboard.summary(with_log=True), "tasks": tasks or {},
+                                   **(extra or {})}, indent=1) + "\n", encoding="utf-8")
 
 
 def write_truth(path: Path, board: Board) -> None:
@@ -397,6 +405,9 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
                 else None)
     schedule = scenario.schedule if scenario is not None else None
     scene = scenario.scene if scenario is not None else None
+    grasp = GraspParams() if args.grasp is not None else None
+    if grasp is not None:
+        scene = lift_scene(grasp, args.grasp)
     tty = sys.stderr.isatty() and not args.quiet and not args.json
     where = describe_transport(args)
 
@@ -408,7 +419,7 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
 
     score_path = check_output_path(args.score) if args.score is not None else None
     truth_path = check_output_path(args.truth) if args.truth is not None else None
-    board = Board(config, open_link, schedule, on_link, scene)
+    board = Board(config, open_link, schedule, on_link, scene, grasp)
     if made is not None:
         made.append(board)
     _claim_cpu(args)
@@ -446,15 +457,19 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
     finally:
         if tty:
             sys.stderr.write("\n")
+    extra = ({"grasp": plant_scores(board.plant, board.truth)} if board.plant is not None
+             else {})
     if score_path is not None:
-        write_score(score_path, board.scoreboard, summary.tasks)
+        write_score(score_path, board.scoreboard, summary.tasks, extra)
     if truth_path is not None:
         write_truth(truth_path, board)
     if args.json:
-        print(json.dumps({"type": "summary", **summary.as_dict()}), flush=True)
+        print(json.dumps({"type": "summary", **summary.as_dict(), **extra}), flush=True)
     elif not args.quiet:
         print(_summary_text(summary), flush=True)
         print(scoreboard_text(summary.scoreboard), flush=True)
+        if extra:
+            print(grasp_text(extra["grasp"]), flush=True)
     if board.touch is not None and not args.quiet:
         truth = board.truth.records()
         text = (f"contact truth kept on the board (never sent): {board.truth.ticks} ticks of "

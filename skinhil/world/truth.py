@@ -79,7 +79,17 @@ class TruthLog:
 
     def __init__(self, capacity_ticks: int = 60_000) -> None:
         self._ticks: deque[tuple[int, np.ndarray]] = deque(maxlen=capacity_ticks)
+        self._objects: deque[np.ndarray] = deque(maxlen=capacity_ticks)
         self.ticks = 0
+
+    def add_object(self, row: np.ndarray) -> None:
+        """Keep one tick's record of a held object (a structured row, the plant's dtype:
+        :data:`skinhil.plant.HELD_DTYPE`)."""
+        self._objects.append(row.copy())
+
+    def objects(self) -> np.ndarray | None:
+        """Every kept tick's held-object records, in time order; None when none were kept."""
+        return np.concatenate(list(self._objects)) if self._objects else None
 
     def add_raw(self, t_us: int, raw: np.ndarray) -> None:
         """Keep one tick's truth: the kernel's rows (n_contacts, :data:`RAW_FIELDS`) for

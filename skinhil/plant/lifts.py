@@ -1,0 +1,119 @@
+"""A run of lifts as a scene: the object's parameters, its load profile, one contact per lift.
+
+Each lift is one contact (:class:`skinhil.world.Contact`) of a flat pad, the object's face,
+under force control on both axes: the normal load is the grip (set at run time,
+:meth:`skinhil.world.World.set_load`), the tangential load along x is the object's load
+``L(t)`` (N), a table of keyframes:
+
+    0 .. grasp_s                 L = 0                     the hand closes at its grip
+    .. + rise_s                  L rises to m·g            the lift
+    .. + hold_s                  L = m·g, with a pull of pull_n (ramps of ramp_s) in its middle
+    .. + lower_s                 L falls to 0              the object is set down
+    .. + settle_s                L = 0, then the contact ends (the hand opens)
+
+followed by ``gap_s`` with nothing touching before the next lift.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from skinhil.errors import ConfigError
+from skinhil.world import Contact, Indenter, Scene, Trajectory
+from skinhil.world.scene import MAX_CONTACTS
+
+G_M_PER_S2 = 9.81
+"""Standard gravity (m/s²)."""
+
+
+@dataclass(frozen=True)
+class GraspParams:
+    """The held object, its lifts and the grip's bounds (SI units; docs/grasp.md)."""
+
+    mass_kg: float = 0.05
+    """The object's mass: its load at hold is m·g (0.49 N)."""
+    pull_n: float = 0.15
+    """The perturbation: an extra pull (N) in the middle of the hold."""
+    pad_radius_m: float = 1.2e-3
+    """The object's face: a flat pad of this radius (covers five masses of a 1 mm skin)."""
+    mu_static: float = 0.8
+    mu_kinetic: float = 0.6
+    """Friction between the object and the skin: slip ratio grip/load = 1/mu_static."""
+    initial_grip_n: float = 0.3
+    """The grip (N) before any GRIP command: the hand's low grip (half what the weight
+    needs: m·g/mu_static = 0.61 N)."""
+    max_grip_n: float = 2.0
+    """The largest grip (N) a GRIP may set."""
+    max_rate_n_per_s: float = 100.0
+    """The fastest grip change (N/s) a GRIP may ask, from the last accepted one."""
+    drop_distance_m: float = 1e-3
+    """The object drops once it has slid this far (m) on the skin in one lift."""
+    grasp_s: float = 0.15
+    rise_s: float = 0.2
+    hold_s: float = 0.45
+    pull_s: float = 0.1
+    ramp_s: float = 0.02
+    lower_s: float = 0.2
+    settle_s: float = 0.05
+    gap_s: float = 0.1
+
+    def __post_init__(self) -> None:
+        for name, value in vars(self).items():
+            if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
+                raise ConfigError(f"GraspParams.{name} must be a finite number >= 0, "
+                                  f"got {value!r}")
+        if not 0 < self.mu_kinetic <= self.mu_static:
+            raise ConfigError("GraspParams: friction needs 0 < mu_kinetic <= mu_static")
+        if not self.hold_s >= self.pull_s + 2 * self.ramp_s:
+            raise ConfigError("GraspParams: the hold must be long enough for the pull")
+        if not 0 < self.initial_grip_n <= self.max_grip_n:
+            raise ConfigError("GraspParams: 0 < initial_grip_n <= max_grip_n")
+
+    @property
+    def weight_n(self) -> float:
+        """The load (N) while held: m·g."""
+        return self.mass_kg * G_M_PER_S2
+
+    @property
+    def slip_ratio(self) -> float:
+        """Grip/load below which the object slides: 1/mu_static."""
+        return 1.0 / self.mu_static
+
+    @property
+    def lift_s(self) -> float:
+        """One lift's contact (s), without the gap."""
+        return self.grasp_s + self.rise_s + self.hold_s + self.lower_s + self.settle_s
+
+    @property
+    def period_s(self) -> float:
+        """From one lift's start to the next (s)."""
+        return self.lift_s + self.gap_s
+
+    def load_keyframes(self) -> np.ndarray:
+        """(t_s, load_n) of one lift's load profile (module docstring)."""
+        w, p = self.weight_n, self.pull_n
+        t1 = self.grasp_s
+        t2 = t1 + self.rise_s
+        tp = t2 + 0.5 * (self.hold_s - self.pull_s) - self.ramp_s
+        t3 = t2 + self.hold_s
+        t4 = t3 + self.lower_s
+        rows = [(0.0, 0.0), (t1, 0.0), (t2, w), (tp, w), (tp + self.ramp_s, w + p),
+                (tp + self.ramp_s + self.pull_s, w + p), (tp + 2 * self.ramp_s + self.pull_s, w),
+                (t3, w), (t4, 0.0), (t4 + self.settle_s, 0.0)]
+        return np.array(rows)
+
+
+def lift_scene(params: GraspParams, lifts: int) -> Scene:
+    """``lifts`` lifts of the object, one every ``params.period_s`` from scene time 0."""
+    if not (isinstance(lifts, int) and 1 <= lifts <= MAX_CONTACTS):
+        raise ConfigError(f"a run holds 1..{MAX_CONTACTS} lifts, got {lifts!r}")
+    load = params.load_keyframes()
+    keys = np.column_stack([load[:, 0], load[:, 1], np.zeros(len(load)),
+                            np.full(len(load), params.initial_grip_n)])
+    trajectory = Trajectory(keys, normal="force", tangential="force")
+    pad = Indenter("flat", params.pad_radius_m)
+    return Scene(tuple(Contact(pad, trajectory, i * params.period_s, params.mu_static,
+                               params.mu_kinetic, f"lift{i + 1}") for i in range(lifts)))
