@@ -37,7 +37,7 @@ from skinhil.cli.listen import LivePrinter, class_names, print_summary, summary
 from skinhil.cli.options import DECODE_SNR_DB
 from skinhil.cli.train import print_report
 from skinhil.cli.transport_args import baud_value
-from skinhil.cli.values import real, seed_value, snr_value
+from skinhil.cli.values import integer, real, seed_value, snr_value
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import PAPER_SIZE, spring_count
 from skinhil.model.skin import SkinParams
@@ -48,6 +48,10 @@ from skinhil.receiver.session import run_against_board, serve_command
 from skinhil.receiver.training import train_decoder
 from skinhil.transports import PtyMasterTransport
 
+DEFAULT_LIFTS = 10
+"""Lifts of ``--task grasp`` (about 1.2 s each)."""
+MAX_LIFTS = 64
+"""Most lifts of one run (one contact each)."""
 DEFAULT_DURATION_S = 20.0
 MIN_DURATION_S = 1.0
 """Shortest demo (s of board time): a stimulus and its rest, so that there is something to
@@ -89,6 +93,16 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--baud", type=baud_value, default=921600,
                    help="emulated serial baud rate (default: 921600)")
     p.add_argument("--quiet", action="store_true", help="only the final figures")
+    p.add_argument("--task", choices=("directions", "grasp"), default="directions",
+                   help="directions: decide the 9 direction conditions (default); grasp: the "
+                        "board holds an object through --lifts lifts and the reference grip "
+                        "controller grips it from the spikes (docs/grasp.md)")
+    p.add_argument("--lifts", type=integer(1, MAX_LIFTS, "lifts"), default=DEFAULT_LIFTS,
+                   metavar="N", help=f"--task grasp: lifts to play, 1..{MAX_LIFTS} (default: "
+                                     f"{DEFAULT_LIFTS}, about {DEFAULT_LIFTS * 1.2:g} s)")
+    p.add_argument("--controller", choices=("reflex", "off"), default="reflex",
+                   help="--task grasp: the reference grip controller (default), or none: the "
+                        "hand keeps its constant low grip")
     add_lab_output_args(p)
 
 
@@ -173,6 +187,9 @@ def print_beside(own: dict[str, Any], board: dict[str, Any]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.task == "grasp":
+        from skinhil.cli import demo_grasp  # it reads this module's cache_dir
+        return demo_grasp.run(args)
     check_lab_outputs(args, PAPER_SIZE)
     t_start = time.monotonic()
     announce_cold_cache("demo")

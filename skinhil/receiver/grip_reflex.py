@@ -31,7 +31,8 @@ import numpy as np
 import protocols
 from skinhil.errors import ConfigError, TransportError
 from skinhil.receiver.answer import SEND_TIMEOUT_S, host_encoder
-from skinhil.receiver.receiver import Receiver, ReceiverListener
+from skinhil.receiver.receiver import ReceiverListener
+from skinhil.transports import Transport
 
 log = logging.getLogger(__name__)
 
@@ -174,12 +175,13 @@ class SlipReflex:
 
 
 class GripController(ReceiverListener):
-    """Sends the reflex's grips to ``receiver``'s board as GRIP commands (SPEC.md §3.5.3)."""
+    """Sends the reflex's grips to the board on ``transport`` (board ``board_id``) as GRIP
+    commands (SPEC.md §3.5.3), and counts the board's answers."""
 
-    def __init__(self, receiver: Receiver, reflex: SlipReflex) -> None:
-        self.receiver = receiver
+    def __init__(self, transport: Transport[Any], reflex: SlipReflex, board_id: int = 0) -> None:
+        self.transport = transport
         self.reflex = reflex
-        self.encoder = host_encoder(receiver.transport, receiver.board_id)
+        self.encoder = host_encoder(transport, board_id)
         self._token = 0
         self.sent = 0
         self.unsent = 0
@@ -194,7 +196,7 @@ class GripController(ReceiverListener):
             payload = self.encoder.command(
                 protocols.Command(self._token, protocols.CommandCode.GRIP, grip))
             try:
-                done = self.receiver.transport.send(payload, timeout=SEND_TIMEOUT_S)
+                done = self.transport.send(payload, timeout=SEND_TIMEOUT_S)
             except TransportError as exc:
                 log.warning("GRIP not sent: %s", exc)
                 done = -1

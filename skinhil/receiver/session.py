@@ -11,9 +11,21 @@ import subprocess
 import sys
 import time
 from collections.abc import Sequence
+from typing import Any, Protocol
 
 from skinhil.errors import TransportError
-from skinhil.receiver.receiver import Receiver
+
+
+class StreamReader(Protocol):
+    """What the loop reads of a receiver (:class:`skinhil.receiver.Receiver`,
+    :class:`skinhil.receiver.grip_loop.GripLoop`)."""
+
+    transport: Any
+    run_end: Any
+
+    def feed(self, payload: Any, host_s: float | None = None) -> list[Any]: ...
+
+    def flush(self) -> list[Any]: ...
 
 
 def serve_command(link_args: Sequence[str], duration_s: float, snr_db: float, seed: int,
@@ -23,7 +35,7 @@ def serve_command(link_args: Sequence[str], duration_s: float, snr_db: float, se
             "--snr-db", str(snr_db), "--seed", str(seed), "--rest", str(rest_s), "--quiet"]
 
 
-def run_against_board(receiver: Receiver, command: Sequence[str], idle_s: float = 0.3,
+def run_against_board(receiver: StreamReader, command: Sequence[str], idle_s: float = 0.3,
                       timeout_s: float = 600.0) -> tuple[int, str, str]:
     """Start ``command`` and feed ``receiver`` until the board's RUN_END record (or, if it
     never comes, ``idle_s`` of silence after the board exited); (status, stdout, stderr)."""

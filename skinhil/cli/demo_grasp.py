@@ -1,0 +1,109 @@
+"""``skinhil demo --task grasp``: the board holds an object through a run of lifts; the
+reference grip controller on the other end of a pty grips it from the spikes; the scores.
+
+The board runs as ``skinhil serve --grasp LIFTS`` in a subprocess; the controller
+(:mod:`skinhil.receiver.grip_reflex`, its load readout fitted on first use at the demo's SNR
+and cached beside the demo's model) reads the pty master and sends GRIPs; ``--controller
+off`` sends none, so the hand keeps its constant low grip. The board scores every lift
+(docs/grasp.md) into its score file, which the demo prints.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from protocols.kernel_cache import source_hash
+from skinhil.cli.demo import cache_dir
+from skinhil.errors import ConfigError
+from skinhil.model.geometry import PAPER_SIZE, spring_count
+from skinhil.plant import GraspParams
+from skinhil.plant.report import grasp_text
+from skinhil.receiver.grip_loop import GripLoop
+from skinhil.receiver.grip_reflex import GripController, LoadReadout, SlipReflex
+from skinhil.receiver.grip_training import fit_readout
+from skinhil.receiver.receiver import ReceiverListener
+from skinhil.receiver.session import run_against_board, serve_command
+from skinhil.transports import PtyMasterTransport
+
+def cached_readout(snr_db: float) -> Path:
+    """The grip controller's load readout for ``snr_db``, fitted now if missing."""
+    path = cache_dir() / f"grip-readout-{snr_db:g}dB-{source_hash()}.npz"
+    if path.exists():
+        return path
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"the demo's cache '{path.parent}' cannot be written "
+                          f"({exc.strerror or exc}) — set XDG_CACHE_HOME to a writable "
+                          "folder") from None
+    print(f"fitting the grip controller's load readout at {snr_db:g} dB on simulated lifts "
+          f"(first use; cached in {path.parent})", flush=True)
+    fit_readout(snr_db).save(path)
+    for old in path.parent.glob(f"grip-readout-{snr_db:g}dB-*.npz"):
+        if old != path:
+            old.unlink(missing_ok=True)
+    return path
+
+
+def print_lifts(scores: dict[str, Any]) -> None:
+    """One line per lift."""
+    print(f"{'lift':>4}  {'held':>5}  {'slip onset':>10}  {'reaction':>9}  {'slid':>8}  "
+          f"{'peak grip':>9}  {'economy':>7}")
+    for t in scores.get("trials", []):
+        def ms(v: float | None) -> str:
+            return "-" if v is None else f"{v:.0f} ms"
+        econ = "-" if t["grip_economy"] is None else f"{t['grip_economy']:.2f}"
+        print(f"{t['lift']:>4}  {'yes' if t['held'] else 'DROP':>5}  "
+              f"{ms(t['slip_onset_ms']):>10}  {ms(t['reaction_latency_ms']):>9}  "
+              f"{t['slip_distance_mm']:>5.2f} mm  {t['peak_grip_n']:>7.2f} N  {econ:>7}")
+
+
+def run(args: argparse.Namespace) -> int:
+    """The grasp demo (module docstring)."""
+    t_start = time.monotonic()
+    params = GraspParams()
+    listeners: list[ReceiverListener] = []
+    link, slave_fd = PtyMasterTransport.open_pair(args.baud)
+    controller = None
+    if args.controller == "reflex":
+        readout = LoadReadout.load(cached_readout(args.snr_db), spring_count(PAPER_SIZE))
+        controller = GripController(link, SlipReflex(readout))
+        listeners.append(controller)
+    score_dir = tempfile.TemporaryDirectory(prefix="skinhil-demo-")
+    score = Path(score_dir.name) / "score.json"
+    duration_s = round(args.lifts * params.period_s + 0.05, 3)
+    cmd = serve_command(["--port", link.slave_path, "--baud", str(args.baud), "--grasp",
+                         str(args.lifts), "--score", str(score)], duration_s, args.snr_db,
+                        args.seed)
+    print(f"board: {' '.join(cmd[1:])}\ncontroller: {args.controller} on {link.name}; "
+          f"object {params.mass_kg * 1e3:g} g (load {params.weight_n:.2f} N, pull "
+          f"{params.pull_n:g} N), slip ratio {params.slip_ratio:.2f}, hand's low grip "
+          f"{params.initial_grip_n:g} N", flush=True)
+    loop = GripLoop(link, listeners)
+    try:
+        status, out, err = run_against_board(loop, cmd)
+    finally:
+        link.shutdown()
+        os.close(slave_fd)
+    with score_dir:
+        board_score = json.loads(score.read_text(encoding="utf-8")) if score.exists() else None
+    if status != 0 or board_score is None:
+        raise ConfigError(f"the board stopped with status {status}: "
+                          f"{err.strip().splitlines()[-1] if err.strip() else 'no score'}")
+    scores = board_score["grasp"]
+    if not args.quiet:
+        print_lifts(scores)
+    print(grasp_text(scores))
+    if controller is not None:
+        c = controller.as_dict()
+        print(f"controller: {c['sent']} GRIPs sent ({c['acked']} ACK, {c['nacked']} NACK, "
+              f"{c['unsent']} not sent)")
+    print(f"demo: {args.lifts} lifts at {args.snr_db:g} dB, controller {args.controller}, "
+          f"{time.monotonic() - t_start:.1f} s wall in all", flush=True)
+    return 0
