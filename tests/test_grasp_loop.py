@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import os
 import threading
-import time
 
 import numpy as np
 import pytest
@@ -37,8 +36,9 @@ def test_grips_act_within_a_tick_and_refusals_are_counted(pty_pair) -> None:
     grip = protocols.CommandCode.GRIP
     tokens: list[int] = []
 
-    def host() -> None:  # at 200 ms of board time (grasped, no load yet), from the hand's 0.3 N: 0.38 N is within
-        # 100 N/s, 5 N above 2 N, 1.5 N right after too fast (a tick allows 0.1 N); 0.3 N
+    def host() -> None:  # at 200 ms of board time (grasped, no load yet), from the hand's
+        # 0.3 N: 0.38 N is within 100 N/s, 5 N above 2 N, 1.5 N right after too fast (a tick
+        # allows 0.1 N); then 0.3 N
         peer.wait_for(lambda p: any(s.t_us >= 200_000 for s in p.of(protocols.Status)), 60)
         for values in ((0.38, 5.0, 1.5), (0.3,)):  # the second once the first are answered
             tokens.extend(peer.command(grip, v) for v in values)
@@ -84,10 +84,12 @@ def test_a_board_without_an_object_refuses_grip() -> None:
     for scene, grasp, grip in ((None, None, 0.5), (lift_scene(PARAMS, 1), PARAMS, -1.0)):
         host, slave_fd = PtyMasterTransport.open_pair()
         try:
+            path = host.slave_path
             board = Board(BoardConfig(schedule_mode=Timeline.SCHEDULE_FILE),
-                          lambda: SerialTransport(host.slave_path, baud=921600), scene=scene,
+                          lambda p=path: SerialTransport(p, baud=921600), scene=scene,
                           grasp=grasp)
-            answers.append(board.handle(protocols.Command(9, protocols.CommandCode.GRIP, grip)))
+            answers.append(board.handle(protocols.Command(9, protocols.CommandCode.GRIP,
+                                                          grip)))
             assert board.counters.nacks == 1
         finally:
             host.shutdown()

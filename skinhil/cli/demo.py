@@ -26,6 +26,8 @@ from pathlib import Path
 from typing import Any
 
 from protocols.kernel_cache import source_hash
+from skinhil.cli import demo_grasp
+from skinhil.cli.demo_cache import cache_dir
 from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.lab_outputs import (
     add_lab_output_args,
@@ -106,12 +108,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     add_lab_output_args(p)
 
 
-def cache_dir() -> Path:
-    """Where the demo caches its model: ``$XDG_CACHE_HOME/skinhil`` or ``~/.cache/skinhil``."""
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "skinhil"
-
-
 @contextlib.contextmanager
 def board_warming(baud: int, snr_db: float, seed: int) -> Iterator[None]:
     """While the body runs, a one-tick board (the demo's command line) on a throwaway pty
@@ -188,7 +184,6 @@ def print_beside(own: dict[str, Any], board: dict[str, Any]) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if args.task == "grasp":
-        from skinhil.cli import demo_grasp  # it reads this module's cache_dir
         return demo_grasp.run(args)
     check_lab_outputs(args, PAPER_SIZE)
     t_start = time.monotonic()

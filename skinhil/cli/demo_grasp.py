@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from protocols.kernel_cache import source_hash
-from skinhil.cli.demo import cache_dir
+from skinhil.cli.demo_cache import cache_dir
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import PAPER_SIZE, spring_count
 from skinhil.plant import GraspParams
@@ -30,6 +30,7 @@ from skinhil.receiver.grip_training import fit_readout
 from skinhil.receiver.receiver import ReceiverListener
 from skinhil.receiver.session import run_against_board, serve_command
 from skinhil.transports import PtyMasterTransport
+
 
 def cached_readout(snr_db: float) -> Path:
     """The grip controller's load readout for ``snr_db``, fitted now if missing."""

@@ -34,6 +34,8 @@ from skinhil.errors import ConfigError
 from skinhil.model.geometry import format_size, spring_count
 from skinhil.model.timeline import Timeline
 from skinhil.output_files import atomic_path, check_output_path
+from skinhil.plant import GraspParams, lift_scene
+from skinhil.plant.report import grasp_text, plant_scores
 from skinhil.recording import (
     CAPTURE_SUFFIX,
     RecordingTransport,
@@ -43,8 +45,6 @@ from skinhil.recording import (
     link_recorder,
     open_recording,
 )
-from skinhil.plant import GraspParams, lift_scene
-from skinhil.plant.report import grasp_text, plant_scores
 from skinhil.scoring import DecisionScoreboard, scoreboard_text, truth_lines
 from skinhil.world.scene import MAX_CONTACTS as MAX_LIFTS
 
@@ -77,9 +77,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     src.add_argument("--host-driven", action="store_true",
                      help="no schedule: stimuli only on host commands")
     src.add_argument("--grasp", type=integer(1, MAX_LIFTS, "lifts"), metavar="LIFTS",
-                     help="a held object lifted LIFTS times, 1..{} (docs/grasp.md): the decoder "
-                          "under test grips it with GRIP commands; its scores go to --score "
-                          "under \"grasp\"".format(MAX_LIFTS))
+                     help=f"a held object lifted LIFTS times, 1..{MAX_LIFTS} (docs/grasp.md): "
+                          "the decoder under test grips it with GRIP commands; its scores go "
+                          "to --score "
+                          "under \"grasp\"")
     src.add_argument("--replay", type=Path, metavar="FILE",
                      help="play this recording (serve --record) onto the link instead of "
                           "running the board: byte for byte (serial, UDP), frame for frame "

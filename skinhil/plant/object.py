@@ -6,8 +6,9 @@ contact that has not dropped, 0 N on a dropped one) and, after the model's steps
 distance grows by ``Σ v_slip·dt`` over the steps in gross slip (every touching mass slipping;
 ``v_slip`` the contact's slip speed), and once it passes ``drop_distance_m`` the object drops
 (its grip goes to 0 N: the hand no longer holds it); it drops too when, loaded, it touches
-no mass of the skin at some step (it has left the skin's patch). A GRIP (:meth:`HeldObject.set_grip`)
-changes the grip from the next tick on, within the bounds of :class:`GraspParams`.
+no mass of the skin at some step (it has left the skin's patch). A GRIP
+(:meth:`HeldObject.set_grip`) changes the grip from the next tick on, within the bounds of
+:class:`GraspParams`.
 """
 
 from __future__ import annotations

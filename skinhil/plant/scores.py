@@ -1,12 +1,12 @@
 """Scores of a run of lifts from the held object's truth (:data:`HELD_DTYPE`), per lift and
 per run (docs/grasp.md "Scores").
 
-Per lift: held or dropped; the largest slip distance; the slip onset (the first tick in partial
-or gross slip while loaded); the reaction latency, from the onset to the first tick whose grip is above
-the grip at the onset (None without a slip, or without an increase before the lift ends); the
-grip economy, the median safety margin ``(G/L − r)/(G/L)`` over the lift's ticks while it is
-held with a load of at least half its weight (``r`` the slip ratio 1/mu_static: 0 grips at the
-slip ratio, 0.5 twice it; negative: below it).
+Per lift: held or dropped; the largest slip distance; the slip onset (the first tick in
+partial or gross slip while loaded); the reaction latency, from the onset to the first tick
+whose grip is above the grip at the onset (None without a slip, or without an increase before
+the lift ends); the grip economy, the median safety margin ``(G/L − r)/(G/L)`` over the
+lift's ticks while it is held with a load of at least half its weight (``r`` the slip ratio
+1/mu_static: 0 grips at the slip ratio, 0.5 twice it; negative: below it).
 """
 
 from __future__ import annotations

@@ -42,8 +42,8 @@ class ReflexParams:
     """The controller's constants (module docstring); times in s, forces in N."""
 
     low_grip_n: float = 0.3
-    max_grip_n: float = 1.2
-    ratio: float = 1.5
+    max_grip_n: float = 1.4
+    ratio: float = 1.7
     """Grip per newton of load read: above the slip ratio 1.25 of the default object."""
     bin_s: float = 0.002
     tau_s: float = 0.02
