@@ -55,6 +55,8 @@ class Answerer(ReceiverListener):
         self.outstanding = False
         self.sent_s = 0.0
         self.spike_us: dict[int, int] = {}
+        self.answers: dict[int, int] = {}
+        """ACKs by reason (0: executed)."""
 
     def on_events(self, events: np.ndarray, host_time_s: float) -> None:
         if not len(events) or (self.outstanding and host_time_s - self.sent_s < 0.1):
@@ -69,8 +71,10 @@ class Answerer(ReceiverListener):
             self.sent_s = host_time_s
 
     def on_ack(self, ack: Any) -> None:
-        if ack.opcode == protocols.CommandCode.GRIP and ack.token == self.token:
-            self.outstanding = False
+        if ack.opcode == protocols.CommandCode.GRIP:
+            self.answers[int(ack.reason)] = self.answers.get(int(ack.reason), 0) + 1
+            if ack.token == self.token:
+                self.outstanding = False
 
 
 def measure(kind: str, lifts: int, snr_db: float) -> dict[str, float] | None:
@@ -108,8 +112,13 @@ def measure(kind: str, lifts: int, snr_db: float) -> dict[str, float] | None:
         log = json.loads(score.read_text(encoding="utf-8"))["grasp"]["grip_log"]
     lat = np.array([(applied + DT_US - answerer.spike_us[token]) * 1e-3
                     for token, _, applied, _ in log if token in answerer.spike_us])
-    return {"grips": float(len(lat)), "sent": float(answerer.token), "p50_ms": float(np.percentile(lat, 50)),
-            "p90_ms": float(np.percentile(lat, 90)), "p99_ms": float(np.percentile(lat, 99)),
+    if not len(lat):
+        print(f"{kind}: {answerer.token} GRIPs sent, none executed; ACKs by reason "
+              f"{answerer.answers}")
+        return None
+    return {"grips": float(len(lat)), "sent": float(answerer.token),
+            "p50_ms": float(np.percentile(lat, 50)), "p90_ms": float(np.percentile(lat, 90)),
+            "p99_ms": float(np.percentile(lat, 99)),
             "max_ms": float(lat.max())}
 
 
@@ -133,8 +142,9 @@ def main() -> int:
         if m is None or m["grips"] == 0:
             failed += 1
             continue
-        print(f"{kind}: {int(m['grips'])} of {int(m['sent'])} GRIPs executed; spike on the board -> contact force: p50 "
-              f"{m['p50_ms']:.2f} ms, p90 {m['p90_ms']:.2f} ms, p99 {m['p99_ms']:.2f} ms, "
+        print(f"{kind}: {int(m['grips'])} of {int(m['sent'])} GRIPs executed; spike on the "
+              f"board -> contact force: p50 {m['p50_ms']:.2f} ms, p90 {m['p90_ms']:.2f} ms, "
+              f"p99 {m['p99_ms']:.2f} ms, "
               f"max {m['max_ms']:.2f} ms (board time; {args.lifts} lifts at "
               f"{args.snr_db:g} dB)", flush=True)
     return 1 if failed else 0

@@ -41,7 +41,10 @@ def test_grips_act_within_a_tick_and_refusals_are_counted(pty_pair) -> None:
         # allows 0.1 N); then 0.3 N
         peer.wait_for(lambda p: any(s.t_us >= 200_000 for s in p.of(protocols.Status)), 60)
         for values in ((0.38, 5.0, 1.5), (0.3,)):  # the second once the first are answered
-            tokens.extend(peer.command(grip, v) for v in values)
+            batch = [(peer.next_token(), v) for v in values]  # in one write: one tick reads it
+            os.write(pty_pair.master, b"".join(
+                peer.encoder.command(protocols.Command(t, grip, v)) for t, v in batch))
+            tokens.extend(t for t, _ in batch)
             peer.wait_for(lambda p: len([a for a in p.of(protocols.Ack)
                                          if a.token in tokens]) == len(tokens), 10)
 

@@ -29,54 +29,74 @@ def host_encoder(transport: Any, board_id: int) -> Any:
     return protocols.SerialEncoder()
 
 
-class DecisionAnswerer(ReceiverListener):
-    """Sends each decision of ``receiver`` to its board as a DECISION (SPEC.md §3.5.1)."""
+class CommandSender(ReceiverListener):
+    """Sends COMMAND units to the board on ``transport`` and counts them and their ACKs."""
+
+    def __init__(self, transport: Any, board_id: int) -> None:
+        self.transport = transport
+        self.encoder = host_encoder(transport, board_id)
+        self.sent = 0
+        """Commands handed to the link."""
+        self.unsent = 0
+        """Commands the link refused (gone, or no room within :data:`SEND_TIMEOUT_S`)."""
+        self.acked = 0
+        """Commands the board ACKed."""
+        self.nacked = 0
+        """Commands the board NACKed."""
+
+    def send(self, record: Any, what: str) -> bool:
+        """Encode and send ``record`` (a command), counted; False when the link refused it
+        (``what`` names it in the warning)."""
+        payload = self.encoder.command(record)
+        try:
+            done = self.transport.send(payload, timeout=SEND_TIMEOUT_S)
+        except TransportError as exc:
+            log.warning("%s not sent: %s", what, exc)
+            done = -1
+        if done < len(payload):  # bytes (serial) or frames (CAN) handed to the link
+            log.warning("%s not sent: the link had no room for %g s", what, SEND_TIMEOUT_S)
+            self.unsent += 1
+            return False
+        self.sent += 1
+        return True
+
+    def count_ack(self, ack: Any) -> None:
+        """Count an ACK of one of these commands."""
+        if ack.ok:
+            self.acked += 1
+        else:
+            self.nacked += 1
+
+    def as_dict(self) -> dict[str, int]:
+        """The counters: sent, unsent, acked, nacked."""
+        return {"sent": self.sent, "unsent": self.unsent, "acked": self.acked,
+                "nacked": self.nacked}
+
+
+class DecisionAnswerer(CommandSender):
+    """Sends each decision of ``receiver`` to its board as a DECISION (SPEC.md §3.5.1); an
+    ACK says it was scored, a NACK that it was counted while stopped or for an unknown id."""
 
     def __init__(self, receiver: Receiver) -> None:
+        super().__init__(receiver.transport, receiver.board_id)
         self.receiver = receiver
-        self.encoder = host_encoder(receiver.transport, receiver.board_id)
         self._token = 0
         self._tokens: set[int] = set()
-        self.sent = 0
-        """DECISIONs handed to the link."""
-        self.unsent = 0
-        """DECISIONs the link refused (gone, or no room within :data:`SEND_TIMEOUT_S`)."""
-        self.acked = 0
-        """DECISIONs the board ACKed (scored)."""
-        self.nacked = 0
-        """DECISIONs the board NACKed (counted while stopped, or for an unknown id)."""
         self.tokens: list[int | None] = []
         """The DECISION token of each decision, in order (None: not sent); the board's
         scoreboard log names the same tokens."""
 
     def on_decision(self, decision: ScoredDecision) -> None:
         self._token = (self._token + 1) % 65536
-        payload = self.encoder.command(
-            protocols.Decision(self._token, int(decision.prediction.label)))
-        try:
-            done = self.receiver.transport.send(payload, timeout=SEND_TIMEOUT_S)
-        except TransportError as exc:
-            log.warning("DECISION not sent: %s", exc)
-            done = -1
-        if done < len(payload):  # bytes (serial) or frames (CAN) handed to the link
-            log.warning("DECISION for stimulus %d not sent: the link had no room for %g s",
-                        decision.prediction.label, SEND_TIMEOUT_S)
-            self.unsent += 1
+        label = int(decision.prediction.label)
+        if not self.send(protocols.Decision(self._token, label),
+                         f"DECISION for stimulus {label}"):
             self.tokens.append(None)
             return
         self.tokens.append(self._token)
         self._tokens.add(self._token)
-        self.sent += 1
 
     def on_ack(self, ack: Any) -> None:
         if ack.opcode == protocols.CommandCode.DECISION and ack.token in self._tokens:
             self._tokens.discard(ack.token)
-            if ack.ok:
-                self.acked += 1
-            else:
-                self.nacked += 1
-
-    def as_dict(self) -> dict[str, int]:
-        """The answers' counters: sent, unsent, acked, nacked."""
-        return {"sent": self.sent, "unsent": self.unsent, "acked": self.acked,
-                "nacked": self.nacked}
+            self.count_ack(ack)

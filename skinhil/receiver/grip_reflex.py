@@ -29,9 +29,8 @@ from typing import Any
 import numpy as np
 
 import protocols
-from skinhil.errors import ConfigError, TransportError
-from skinhil.receiver.answer import SEND_TIMEOUT_S, host_encoder
-from skinhil.receiver.receiver import ReceiverListener
+from skinhil.errors import ConfigError
+from skinhil.receiver.answer import CommandSender
 from skinhil.transports import Transport
 
 log = logging.getLogger(__name__)
@@ -174,46 +173,24 @@ class SlipReflex:
         return out
 
 
-class GripController(ReceiverListener):
+class GripController(CommandSender):
     """Sends the reflex's grips to the board on ``transport`` (board ``board_id``) as GRIP
     commands (SPEC.md §3.5.3), and counts the board's answers."""
 
     def __init__(self, transport: Transport[Any], reflex: SlipReflex, board_id: int = 0) -> None:
-        self.transport = transport
+        super().__init__(transport, board_id)
         self.reflex = reflex
-        self.encoder = host_encoder(transport, board_id)
         self._token = 0
-        self.sent = 0
-        self.unsent = 0
-        self.acked = 0
-        self.nacked = 0
         self.grips: list[tuple[int, int, float]] = []
         """(token, board time µs of the bin that asked, grip N) of each GRIP sent."""
 
     def on_events(self, events: np.ndarray, host_time_s: float) -> None:
         for t_us, grip in self.reflex.feed(events):
             self._token = (self._token + 1) % 65536
-            payload = self.encoder.command(
-                protocols.Command(self._token, protocols.CommandCode.GRIP, grip))
-            try:
-                done = self.transport.send(payload, timeout=SEND_TIMEOUT_S)
-            except TransportError as exc:
-                log.warning("GRIP not sent: %s", exc)
-                done = -1
-            if done < len(payload):
-                self.unsent += 1
-                continue
-            self.sent += 1
-            self.grips.append((self._token, int(t_us), grip))
+            command = protocols.Command(self._token, protocols.CommandCode.GRIP, grip)
+            if self.send(command, f"GRIP of {grip:g} N"):
+                self.grips.append((self._token, int(t_us), grip))
 
     def on_ack(self, ack: Any) -> None:
         if ack.opcode == protocols.CommandCode.GRIP:
-            if ack.ok:
-                self.acked += 1
-            else:
-                self.nacked += 1
-
-    def as_dict(self) -> dict[str, int]:
-        """The GRIPs' counters: sent, unsent, acked, nacked."""
-        return {"sent": self.sent, "unsent": self.unsent, "acked": self.acked,
-                "nacked": self.nacked}
+            self.count_ack(ack)
