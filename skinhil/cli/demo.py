@@ -15,19 +15,16 @@ and cached under ``$XDG_CACHE_HOME/skinhil`` (``~/.cache/skinhil``).
 from __future__ import annotations
 
 import argparse
-import contextlib
 import json
 import os
-import subprocess
 import tempfile
 import time
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 from protocols.kernel_cache import source_hash
 from skinhil.cli import demo_grasp
-from skinhil.cli.demo_cache import cache_dir
+from skinhil.cli.demo_cache import board_warming, cache_dir
 from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.lab_outputs import (
     add_lab_output_args,
@@ -106,27 +103,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="--task grasp: the reference grip controller (default), or none: the "
                         "hand keeps its constant low grip")
     add_lab_output_args(p)
-
-
-@contextlib.contextmanager
-def board_warming(baud: int, snr_db: float, seed: int) -> Iterator[None]:
-    """While the body runs, a one-tick board (the demo's command line) on a throwaway pty
-    compiles or loads the board's kernels in another process, on the other core: from a
-    fresh clone that is ~15 s the demo's board then does not spend before its first tick."""
-    link, slave_fd = PtyMasterTransport.open_pair(baud)
-    board = subprocess.Popen(
-        serve_command(["--port", link.slave_path, "--baud", str(baud)], 0.001, snr_db, seed,
-                      DEMO_REST_S), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL)
-    try:
-        yield
-        board.wait(timeout=600)
-    finally:
-        if board.poll() is None:
-            board.kill()
-            board.wait()
-        link.shutdown()
-        os.close(slave_fd)
 
 
 def cached_model(snr_db: float, quiet: bool, baud: int, seed: int) -> Path:

@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from protocols.kernel_cache import source_hash
-from skinhil.cli.demo_cache import cache_dir
+from skinhil.cli.demo_cache import board_warming, cache_dir
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import PAPER_SIZE, spring_count
 from skinhil.plant import GraspParams
@@ -32,8 +32,9 @@ from skinhil.receiver.session import run_against_board, serve_command
 from skinhil.transports import PtyMasterTransport
 
 
-def cached_readout(snr_db: float) -> Path:
-    """The grip controller's load readout for ``snr_db``, fitted now if missing."""
+def cached_readout(snr_db: float, baud: int, seed: int) -> Path:
+    """The grip controller's load readout for ``snr_db``, fitted now if missing (while a
+    board at ``baud`` and ``seed`` warms its kernels in another process)."""
     path = cache_dir() / f"grip-readout-{snr_db:g}dB-{source_hash()}.npz"
     if path.exists():
         return path
@@ -45,7 +46,9 @@ def cached_readout(snr_db: float) -> Path:
                           "folder") from None
     print(f"fitting the grip controller's load readout at {snr_db:g} dB on simulated lifts "
           f"(first use; cached in {path.parent})", flush=True)
-    fit_readout(snr_db).save(path)
+    with board_warming(baud, snr_db, seed):
+        readout = fit_readout(snr_db)
+    readout.save(path)
     for old in path.parent.glob(f"grip-readout-{snr_db:g}dB-*.npz"):
         if old != path:
             old.unlink(missing_ok=True)
@@ -70,10 +73,12 @@ def run(args: argparse.Namespace) -> int:
     t_start = time.monotonic()
     params = GraspParams()
     listeners: list[ReceiverListener] = []
+    readout = (LoadReadout.load(cached_readout(args.snr_db, args.baud, args.seed),
+                                spring_count(PAPER_SIZE))
+               if args.controller == "reflex" else None)
     link, slave_fd = PtyMasterTransport.open_pair(args.baud)
     controller = None
-    if args.controller == "reflex":
-        readout = LoadReadout.load(cached_readout(args.snr_db), spring_count(PAPER_SIZE))
+    if readout is not None:
         controller = GripController(link, SlipReflex(readout))
         listeners.append(controller)
     score_dir = tempfile.TemporaryDirectory(prefix="skinhil-demo-")
