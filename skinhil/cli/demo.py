@@ -161,6 +161,9 @@ def print_beside(own: dict[str, Any], board: dict[str, Any]) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.task == "grasp":
         return demo_grasp.run(args)
+    if args.lifts != DEFAULT_LIFTS or args.controller != "reflex":
+        raise ConfigError("--lifts and --controller set the grasp demo: add --task grasp, or "
+                          "drop them")
     check_lab_outputs(args, PAPER_SIZE)
     t_start = time.monotonic()
     announce_cold_cache("demo")

@@ -70,6 +70,13 @@ def print_lifts(scores: dict[str, Any]) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """The grasp demo (module docstring)."""
+    given = [opt for opt, dest in (("--view", "view"), ("--lsl", "lsl"),
+                                   ("--psp-sensors", "psp_sensors"), ("--model", "model"))
+             if getattr(args, dest, None) is not None]
+    if given:
+        raise ConfigError(f"{', '.join(given)} go{'es' if len(given) == 1 else ''} with the "
+                          "directions demo: the grasp demo has no stimulus decoder, view or "
+                          "LSL outlets — drop it, or leave out --task grasp")
     t_start = time.monotonic()
     params = GraspParams()
     listeners: list[ReceiverListener] = []
