@@ -801,7 +801,7 @@ class Board:
         (self.sensor if self.pipeline is None else self.pipeline).reset()  # waits for them
         self.sensor.neurons.restore_noise_streams(streams)
         if self.touch is not None:
-            self.truth = TruthLog()
+            self.truth.clear()
             self._start_scene(self.timeline.mode, 0.0)
         if self.link is not None:
             self.link.warm_up(self.status())

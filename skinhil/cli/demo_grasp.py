@@ -5,7 +5,9 @@ The board runs as ``skinhil serve --grasp LIFTS`` in a subprocess; the controlle
 (:mod:`skinhil.receiver.grip_reflex`, its load readout fitted on first use at the demo's SNR
 and cached beside the demo's model) reads the pty master and sends GRIPs; ``--controller
 off`` sends none, so the hand keeps its constant low grip. The board scores every lift
-(docs/grasp.md) into its score file, which the demo prints.
+(docs/grasp.md) into its score file, which the demo prints. With ``--view`` the live view
+shows the stream and plots the held object's truth, which the board appends to a file of the
+demo's (``serve --grasp-truth``: the operator's side channel, not the decoder's link).
 """
 
 from __future__ import annotations
@@ -14,22 +16,29 @@ import argparse
 import json
 import os
 import tempfile
+import threading
 import time
 from pathlib import Path
 from typing import Any
 
 from protocols.kernel_cache import source_hash
 from skinhil.cli.demo_cache import board_warming, cache_dir
+from skinhil.cli.lab_outputs import LabOutputs, check_lab_outputs
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import PAPER_SIZE, spring_count
 from skinhil.plant import GraspParams
 from skinhil.plant.report import grasp_text
+from skinhil.plant.truth_file import HeldTruthReader
 from skinhil.receiver.grip_loop import GripLoop
 from skinhil.receiver.grip_reflex import GripController, LoadReadout, SlipReflex
 from skinhil.receiver.grip_training import fit_readout
 from skinhil.receiver.receiver import ReceiverListener
 from skinhil.receiver.session import run_against_board, serve_command
 from skinhil.transports import PtyMasterTransport
+from skinhil.view.grasp_trace import GraspTrace
+
+TAIL_PERIOD_S = 0.05
+"""Seconds between reads of the board's truth file for the live view."""
 
 
 def cached_readout(snr_db: float, baud: int, seed: int) -> Path:
@@ -55,6 +64,29 @@ def cached_readout(snr_db: float, baud: int, seed: int) -> Path:
     return path
 
 
+class TruthTail:
+    """Hands the board's held-object truth (its ``--grasp-truth`` file) to the live view's
+    grasp panel every :data:`TAIL_PERIOD_S`, on a thread, until :meth:`stop`."""
+
+    def __init__(self, reader: HeldTruthReader, trace: GraspTrace) -> None:
+        self.reader, self.trace = reader, trace
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="skinhil-grasp-truth",
+                                        daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while not self._stop.wait(TAIL_PERIOD_S):
+            self.trace.add(self.reader.read())
+
+    def stop(self) -> None:
+        """Read the rest (the board has ended), close the last lift, stop the thread."""
+        self._stop.set()
+        self._thread.join(timeout=2.0)
+        self.trace.add(self.reader.read())
+        self.trace.finish()
+
+
 def print_lifts(scores: dict[str, Any]) -> None:
     """One line per lift."""
     print(f"{'lift':>4}  {'held':>5}  {'slip onset':>10}  {'reaction':>9}  {'slid':>8}  "
@@ -70,13 +102,14 @@ def print_lifts(scores: dict[str, Any]) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """The grasp demo (module docstring)."""
-    given = [opt for opt, dest in (("--view", "view"), ("--lsl", "lsl"),
-                                   ("--psp-sensors", "psp_sensors"), ("--model", "model"))
+    given = [opt for opt, dest in (("--lsl", "lsl"), ("--psp-sensors", "psp_sensors"),
+                                   ("--model", "model"))
              if getattr(args, dest, None) is not None]
     if given:
         raise ConfigError(f"{', '.join(given)} go{'es' if len(given) == 1 else ''} with the "
-                          "directions demo: the grasp demo has no stimulus decoder, view or "
+                          "directions demo: the grasp demo has no stimulus decoder or "
                           "LSL outlets — drop it, or leave out --task grasp")
+    check_lab_outputs(args, PAPER_SIZE)
     t_start = time.monotonic()
     params = GraspParams()
     listeners: list[ReceiverListener] = []
@@ -90,20 +123,32 @@ def run(args: argparse.Namespace) -> int:
         listeners.append(controller)
     score_dir = tempfile.TemporaryDirectory(prefix="skinhil-demo-")
     score = Path(score_dir.name) / "score.json"
+    truth = Path(score_dir.name) / "truth.bin"
     duration_s = round(args.lifts * params.period_s + 0.05, 3)
+    view_args = ["--grasp-truth", str(truth)] if args.view is not None else []
     cmd = serve_command(["--port", link.slave_path, "--baud", str(args.baud), "--grasp",
-                         str(args.lifts), "--score", str(score)], duration_s, args.snr_db,
-                        args.seed)
+                         str(args.lifts), "--score", str(score), *view_args], duration_s,
+                        args.snr_db, args.seed)
     print(f"board: {' '.join(cmd[1:])}\ncontroller: {args.controller} on {link.name}; "
           f"object {params.mass_kg * 1e3:g} g (load {params.weight_n:.2f} N, pull "
           f"{params.pull_n:g} N), slip ratio {params.slip_ratio:.2f}, hand's low grip "
           f"{params.initial_grip_n:g} N", flush=True)
     loop = GripLoop(link, listeners)
+    outputs = LabOutputs(args, {}, PAPER_SIZE, "demo") if args.view is not None else None
+    trace = GraspTrace()
+    feed = outputs.view_feed(0, loop, grasp=trace) if outputs is not None else None
+    if feed is not None:
+        listeners.append(feed)
+    tail = TruthTail(HeldTruthReader(truth), trace) if feed is not None else None
     try:
         status, out, err = run_against_board(loop, cmd)
     finally:
         link.shutdown()
         os.close(slave_fd)
+        if tail is not None:
+            tail.stop()
+        if outputs is not None:
+            outputs.close()
     with score_dir:
         board_score = json.loads(score.read_text(encoding="utf-8")) if score.exists() else None
     if status != 0 or board_score is None:

@@ -19,7 +19,7 @@ from skinhil.errors import ConfigError
 INPUT_OPTIONS: tuple[str, ...] = ("schedule", "replay", "model", "oracle_truth")
 """``args`` attributes of files a command reads (``--schedule``, ``--replay``, ``--model``,
 ``--oracle-truth``)."""
-OUTPUT_OPTIONS: tuple[str, ...] = ("out", "record", "score", "truth", "nwb")
+OUTPUT_OPTIONS: tuple[str, ...] = ("out", "record", "score", "truth", "grasp_truth", "nwb")
 """``args`` attributes of files a command writes."""
 
 

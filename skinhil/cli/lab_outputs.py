@@ -20,6 +20,8 @@ from skinhil.model.geometry import MeshSize, build_mesh, format_size, spring_cou
 from skinhil.model.skin import SkinParams
 from skinhil.receiver import Receiver, ReceiverListener
 from skinhil.view import ViewFeed, ViewServer, parse_address
+from skinhil.view.feed import StreamSource
+from skinhil.view.grasp_trace import GraspTrace
 
 
 def _sensors(text: str) -> list[int]:
@@ -110,15 +112,25 @@ class LabOutputs:
             print(f"skinhil {command}: live view at {self.server.url}", file=sys.stderr,
                   flush=True)
 
+    def view_feed(self, key: object, source: StreamSource,
+                  answers: Callable[[], dict[str, int]] | None = None,
+                  grasp: GraspTrace | None = None) -> ViewFeed | None:
+        """Board ``key``'s feed on the view (None without ``--view``): it hears ``source``
+        (a receiver, or the grasp demo's loop, whose ``grasp`` truth it plots too)."""
+        if self.server is None:
+            return None
+        feed = ViewFeed(source, self.mesh, self.names, self.args.psp_sensors, answers, grasp)
+        self.server.add_feed(str(key), feed)
+        return feed
+
     def attach(self, key: object, receiver: Receiver,
                answers: Callable[[], dict[str, int]] | None = None) -> list[ReceiverListener]:
         """The listeners of board ``key``'s ``receiver`` (the view also shows ``answers()``,
         the receiver's DECISION counters, when it answers the board)."""
         self.boards += 1
         out: list[ReceiverListener] = []
-        if self.server is not None:
-            feed = ViewFeed(receiver, self.mesh, self.names, self.args.psp_sensors, answers)
-            self.server.add_feed(str(key), feed)
+        feed = self.view_feed(key, receiver, answers)
+        if feed is not None:
             out.append(feed)
         if getattr(self.args, "lsl", None) is not None:
             name = self.args.lsl if self.boards == 1 else f"{self.args.lsl}-{self.boards}"

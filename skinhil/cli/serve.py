@@ -36,6 +36,7 @@ from skinhil.model.timeline import Timeline
 from skinhil.output_files import atomic_path, check_output_path
 from skinhil.plant import GraspParams, lift_scene
 from skinhil.plant.report import grasp_text, plant_scores
+from skinhil.plant.truth_file import HeldTruthWriter
 from skinhil.recording import (
     CAPTURE_SUFFIX,
     RecordingTransport,
@@ -149,6 +150,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--truth", type=Path, metavar="FILE",
                    help="write the ground truth here at the end, for the operator: every "
                         "stimulus marker and every trial of the contact tasks (JSON lines)")
+    p.add_argument("--grasp-truth", type=Path, metavar="FILE",
+                   help="with --grasp: append the held object's truth to FILE as the run goes "
+                        "(one record a tick, skinhil.plant.HELD_DTYPE, written every 50 ms; "
+                        "never on the link): what demo --task grasp --view plots")
     out = p.add_mutually_exclusive_group()
     out.add_argument("--quiet", action="store_true", help="print nothing but errors")
     out.add_argument("--json", action="store_true",
@@ -420,7 +425,16 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
 
     score_path = check_output_path(args.score) if args.score is not None else None
     truth_path = check_output_path(args.truth) if args.truth is not None else None
+    if args.grasp_truth is not None and grasp is None:
+        raise ConfigError("--grasp-truth writes a held object's truth: give --grasp LIFTS "
+                          "too, or leave it out")
+    grasp_truth_path = (check_output_path(args.grasp_truth) if args.grasp_truth is not None
+                        else None)
     board = Board(config, open_link, schedule, on_link, scene, grasp)
+    truth_file = (HeldTruthWriter(grasp_truth_path) if grasp_truth_path is not None
+                  else None)
+    if truth_file is not None:
+        board.truth.object_sink = truth_file.add
     if made is not None:
         made.append(board)
     _claim_cpu(args)
@@ -458,6 +472,8 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
     finally:
         if tty:
             sys.stderr.write("\n")
+        if truth_file is not None:
+            truth_file.close()
     extra = ({"grasp": plant_scores(board.plant, board.truth)} if board.plant is not None
              else {})
     if score_path is not None:

@@ -12,7 +12,7 @@ import time
 from typing import Any
 
 import protocols
-from skinhil.receiver.receiver import ReceiverListener, make_codec
+from skinhil.receiver.receiver import LinkReport, ReceiverListener, link_report, make_codec
 from skinhil.transports import Transport
 
 
@@ -45,9 +45,15 @@ class GripLoop:
                     listener.on_ack(rec)
             elif isinstance(rec, protocols.Status):
                 self.last_status = rec
+                for listener in self.listeners:
+                    listener.on_status(rec)
             elif isinstance(rec, protocols.RunEnd):
                 self.run_end = rec
         return []
+
+    def link_report(self) -> LinkReport:
+        """The link's counters and the board's last status (the live view shows them)."""
+        return link_report(self.codec.counters, self.last_status)
 
     def flush(self) -> list[Any]:
         """Nothing is held back (the controller acts on each bin as it closes)."""

@@ -105,6 +105,26 @@ class LinkReport:
         return dict(self.__dict__)
 
 
+def link_report(counters: Any, status: Any, late_events: int = 0,
+                link_errors: int = 0) -> LinkReport:
+    """The :class:`LinkReport` of a codec's ``counters`` and the board's last ``status``
+    (None before any), with the receiver's own late events and link errors."""
+    def g(obj: Any, name: str) -> int:
+        return int(getattr(obj, name, 0) or 0)
+
+    c, st = counters, status
+    return LinkReport(
+        events_decoded=g(c, "events_decoded"), frames_ok=g(c, "frames_ok"),
+        crc_errors=g(c, "crc_errors"), resyncs=g(c, "resyncs"),
+        bytes_discarded=g(c, "bytes_discarded"), seq_gaps=g(c, "seq_gaps"),
+        frames_lost=g(c, "frames_lost"), duplicates=g(c, "duplicates"),
+        board_generated=g(st, "events_generated"), board_sent=g(st, "events_sent"),
+        board_dropped=g(st, "events_dropped"),
+        lost_on_link=g(c, "events_lost"), untimed_events=g(c, "events_untimed"),
+        malformed=g(c, "malformed"), late_events=late_events,
+        link_errors=link_errors, acks_lost=g(c, "acks_lost"))
+
+
 def make_codec(transport: Transport[Any], board_id: int = 0) -> Any:
     """The protocols decoder for ``transport``'s kind of link."""
     if transport.kind == "can":
@@ -355,19 +375,5 @@ class Receiver:
     # -- figures ------------------------------------------------------------------------
     def link_report(self) -> LinkReport:
         """Current link counters, board drops and events lost on the link."""
-        c = self.codec.counters
-        st = self.last_status
-
-        def g(obj: Any, name: str) -> int:
-            return int(getattr(obj, name, 0) or 0)
-
-        return LinkReport(
-            events_decoded=g(c, "events_decoded"), frames_ok=g(c, "frames_ok"),
-            crc_errors=g(c, "crc_errors"), resyncs=g(c, "resyncs"),
-            bytes_discarded=g(c, "bytes_discarded"), seq_gaps=g(c, "seq_gaps"),
-            frames_lost=g(c, "frames_lost"), duplicates=g(c, "duplicates"),
-            board_generated=g(st, "events_generated"), board_sent=g(st, "events_sent"),
-            board_dropped=g(st, "events_dropped"),
-            lost_on_link=g(c, "events_lost"), untimed_events=g(c, "events_untimed"),
-            malformed=g(c, "malformed"), late_events=self.classifier.late_events,
-            link_errors=self.link_errors, acks_lost=g(c, "acks_lost"))
+        return link_report(self.codec.counters, self.last_status,
+                           self.classifier.late_events, self.link_errors)

@@ -23,6 +23,9 @@ every 0.1 s) drains it into one JSON-ready message:
   last status (late ticks, drops by reason);
 - ``psp_sensors`` and ``psp_labels``: present when the PSP sensors changed (a page picked
   one, :meth:`ViewFeed.pick_psp_sensors`);
+- ``grasp``: present when the feed has a held object's truth (``demo --task grasp
+  --view``): its new points and lift outcomes (:class:`skinhil.view.grasp_trace.GraspTrace`),
+  what the grasp panel plots; the ``config`` then holds the last seconds of them;
 - ``answers``: present when the receiver answers the board (``listen --answer``, ``demo``):
   its DECISIONs sent, ACKed, NACKed and not sent, shown in their own panel (the board's
   verdicts on them are its scoreboard: ``serve``'s status line and ``--score``).
@@ -45,13 +48,14 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from skinhil.model.geometry import Mesh, sensor_label, sensor_positions
-from skinhil.receiver import Receiver, ReceiverListener, ScoredDecision, in_stream_order
+from skinhil.receiver import LinkReport, ReceiverListener, ScoredDecision, in_stream_order
 from skinhil.receiver.traces import PspTraces
+from skinhil.view.grasp_trace import GraspTrace
 
 log = logging.getLogger(__name__)
 
@@ -92,13 +96,27 @@ def default_trace_sensors(n_channels: int, count: int = DEFAULT_TRACES) -> list[
     return sorted({int(a) for a in np.linspace(0, n_channels - 1, min(count, n_channels))})
 
 
+class StreamSource(Protocol):
+    """What the feed reads of the receiving end (:class:`skinhil.receiver.Receiver`,
+    :class:`skinhil.receiver.grip_loop.GripLoop`); a ``scoreboard`` attribute, where it has
+    one, gives the ``score`` (None without)."""
+
+    last_status: Any
+
+    def link_report(self) -> LinkReport: ...
+
+
 class ViewFeed(ReceiverListener):
     """Receiver listener → update messages of the live view (see the module)."""
 
-    def __init__(self, receiver: Receiver, mesh: Mesh, names: dict[int, str],
+    def __init__(self, receiver: StreamSource, mesh: Mesh, names: dict[int, str],
                  psp_sensors: Sequence[int] | None = None,
-                 answers: Callable[[], dict[str, int]] | None = None) -> None:
+                 answers: Callable[[], dict[str, int]] | None = None,
+                 grasp: GraspTrace | None = None) -> None:
         self.receiver = receiver
+        self.grasp = grasp
+        """The held object's truth for the grasp panel (added by the operator that runs
+        the board, never read from the link), or None: no panel."""
         self.names = names
         self.mesh = mesh
         self.n_channels = int(mesh.springs.shape[0])
@@ -236,7 +254,10 @@ class ViewFeed(ReceiverListener):
         newest decisions (oldest first)."""
         with self._lock:
             recent = list(self._recent)
-        return {**self.config, "recent_decisions": recent}
+        hello = {**self.config, "recent_decisions": recent}
+        if self.grasp is not None:
+            hello["grasp"] = self.grasp.history()
+        return hello
 
     def on_link_error(self, message: str) -> None:
         with self._lock:
@@ -281,10 +302,14 @@ class ViewFeed(ReceiverListener):
             k: v for k, v in dataclasses.asdict(st).items() if isinstance(v, int | bool)}
         if self.answers is not None:
             msg["answers"] = self.answers()
+        if self.grasp is not None:
+            msg["grasp"] = self.grasp.drain()
         return msg
 
-    def _score(self) -> dict[str, Any]:
-        sb = self.receiver.scoreboard
+    def _score(self) -> dict[str, Any] | None:
+        sb = getattr(self.receiver, "scoreboard", None)
+        if sb is None:
+            return None
         return {"classes": list(sb.classes), "confusion": sb.confusion.tolist(),
                 "scored": sb.scored, "correct": sb.correct, "misses": sb.misses,
                 "false_alarms": sb.false_alarms,

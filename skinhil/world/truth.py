@@ -14,6 +14,7 @@ recordings), never sent on the decoder's link.
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Callable
 
 import numpy as np
 
@@ -81,11 +82,22 @@ class TruthLog:
         self._ticks: deque[tuple[int, np.ndarray]] = deque(maxlen=capacity_ticks)
         self._objects: deque[np.ndarray] = deque(maxlen=capacity_ticks)
         self.ticks = 0
+        self.object_sink: Callable[[np.ndarray], None] | None = None
+        """Also handed each held-object record as it is added (``serve --grasp-truth``'s
+        file), or None."""
+
+    def clear(self) -> None:
+        """Forget every kept tick (the board's warm-up is over); the sink stays."""
+        self._ticks.clear()
+        self._objects.clear()
+        self.ticks = 0
 
     def add_object(self, row: np.ndarray) -> None:
         """Keep one tick's record of a held object (a structured row, the plant's dtype:
         :data:`skinhil.plant.HELD_DTYPE`)."""
         self._objects.append(row.copy())
+        if self.object_sink is not None:
+            self.object_sink(row)
 
     def objects(self) -> np.ndarray | None:
         """Every kept tick's held-object records, in time order; None when none were kept."""

@@ -37,7 +37,7 @@ const view = {
   config: null, nowUs: null, shiftRest: 0, updates: 0, spikesDrawn: 0, notDrawn: 0,
   decisions: [], psp: [], pspEnd: 0, lastLink: null, decisionsSeen: 0,
   markers: [], onsetsSeen: 0, onsetsDrawn: 0, run: {state: "waiting", reason: ""},
-  ended: false, rates: null, mapMaxHz: 0, picked: [],
+  ended: false, rates: null, mapMaxHz: 0, picked: [], grasp: null,
 };
 
 function report(body) {
@@ -75,7 +75,9 @@ const overlay = $("map-overlay"), octx = overlay.getContext("2d");
 // -- layout: canvases as wide as their column --------------------------------------------
 function fitWidths() {
   const w = Math.max(200, Math.floor($("left").clientWidth));
-  for (const c of [raster, marks, $("raster-axis"), psp, $("psp-axis")]) c.width = w;
+  for (const c of [raster, marks, $("raster-axis"), psp, $("psp-axis"), $("grasp"), $("grasp-axis")]) {
+    c.width = w;
+  }
 }
 
 // -- raster ------------------------------------------------------------------------------
@@ -233,6 +235,87 @@ function pick(address) {
   view.picked = list;
   fetch("/psp", {method: "POST", body: JSON.stringify({board: view.config.board, sensors: list})})
     .catch(() => {});
+}
+
+// -- grasp (the held object's truth, from the board: demo --task grasp) -------------------
+// view.grasp holds the points of the last GRASP_WINDOW_S board seconds as columns, and each
+// lift's outcome; points come once in the config (history) and then in each update.
+const GRASP_WINDOW_S = 10;
+const GRASP_LINES = [["grip_n", "#fc6", "grip set-point"], ["normal_n", "#6d6", "normal force"],
+                     ["load_n", "#9cf", "load"]];
+const SLIP_MM = "#e8e", GRASP_KEYS = ["t_us", "lift", "slip", "grip_n", "normal_n", "load_n", "slip_mm"];
+
+function enableGrasp() {
+  if (view.grasp) return;
+  view.grasp = {outcomes: [], points: 0};
+  for (const k of GRASP_KEYS) view.grasp[k] = [];
+  // room for the panel in a laptop's window: shorter raster and PSP canvases
+  raster.height = marks.height = 180;
+  psp.height = 150;
+  $("grasp-panel").hidden = false;
+  if (view.rowPx !== undefined) setupRaster(view.config.n_channels);  // drawn before: again
+}
+
+function addGrasp(g) {
+  const v = view.grasp, last = v.t_us.length ? v.t_us[v.t_us.length - 1] : -Infinity;
+  for (let i = 0; i < g.t_us.length; i++) {
+    if (g.t_us[i] <= last) continue;  // the config's history and the first update overlap
+    for (const k of GRASP_KEYS) v[k].push(g[k][i]);
+    v.points += 1;
+  }
+  for (const mk of g.outcomes) if (!v.outcomes.some((o) => o.lift === mk.lift)) v.outcomes.push(mk);
+  if (!v.t_us.length) return;
+  const horizon = v.t_us[v.t_us.length - 1] - GRASP_WINDOW_S * 1e6;
+  let cut = 0;
+  while (cut < v.t_us.length && v.t_us[cut] < horizon) cut++;
+  if (cut) for (const k of GRASP_KEYS) v[k].splice(0, cut);
+}
+
+function drawGrasp() {
+  const c = $("grasp"), ctx = c.getContext("2d"), W = c.width, H = c.height, v = view.grasp;
+  ctx.fillStyle = "#000";
+  ctx.fillRect(0, 0, W, H);
+  if (!v.t_us.length) return;
+  const end = v.t_us[v.t_us.length - 1], n = v.t_us.length, top = 14, bottom = H - 4;
+  const x = (t) => timeX(t, end, GRASP_WINDOW_S, W);
+  for (let i = 0; i < n; i++) {  // slip state under the lines
+    if (v.slip[i] < 2) continue;
+    const x0 = x(i ? v.t_us[i - 1] : v.t_us[i] - 1e4);
+    ctx.fillStyle = v.slip[i] >= 3 ? "rgba(255, 70, 70, 0.45)" : "rgba(230, 200, 60, 0.30)";
+    ctx.fillRect(Math.floor(x0), top, Math.max(1, Math.ceil(x(v.t_us[i]) - x0)), bottom - top);
+  }
+  let fmax = 1, dmax = 1;
+  for (const [k] of GRASP_LINES) for (const f of v[k]) fmax = Math.max(fmax, f);
+  for (const d of v.slip_mm) dmax = Math.max(dmax, d);
+  const line = (k, colour, scale) => {
+    ctx.strokeStyle = colour;
+    ctx.beginPath();
+    for (let i = 0; i < n; i++) {
+      const y = bottom - (v[k][i] / scale) * (bottom - top);
+      if (i === 0 || v.lift[i] !== v.lift[i - 1]) ctx.moveTo(x(v.t_us[i]), y);
+      else ctx.lineTo(x(v.t_us[i]), y);
+    }
+    ctx.stroke();
+  };
+  for (const [k, colour] of GRASP_LINES) line(k, colour, 1.1 * fmax);
+  line("slip_mm", SLIP_MM, 1.1 * dmax);
+  ctx.font = "11px sans-serif";
+  for (const mk of v.outcomes) {
+    const xm = Math.round(x(mk.t_us));
+    if (xm < 0 || xm >= W) continue;
+    ctx.fillStyle = mk.held ? "#6d6" : "#f66";
+    ctx.fillRect(xm, top, 2, bottom - top);
+    ctx.fillText(`lift ${mk.lift} ${mk.held ? "held" : "DROPPED"}`, Math.max(2, Math.min(xm - 70, W - 90)), top + 12);
+  }
+  let lx = 4;
+  for (const [, colour, label] of [...GRASP_LINES, ["", SLIP_MM, "slip distance"]]) {
+    ctx.fillStyle = colour;
+    ctx.fillText(label, lx, 11);
+    lx += ctx.measureText(label).width + 12;
+  }
+  ctx.fillStyle = "#999";
+  ctx.fillText(`${(1.1 * fmax).toFixed(2)} N, ${(1.1 * dmax).toFixed(2)} mm full scale`, lx + 8, 11);
+  drawTimeAxis($("grasp-axis"), end, GRASP_WINDOW_S, 1);
 }
 
 // -- skin map ----------------------------------------------------------------------------
@@ -426,7 +509,7 @@ function reportState() {
   const m = view.lastMsg;
   report({kind: "state", updates: view.updates, spikes_drawn: view.spikesDrawn,
           decisions_shown: view.decisionsSeen, events_decoded: m ? m.link.events_decoded : 0,
-          t_board_us: m ? m.t_board_us : 0, scored: m ? m.score.scored : 0,
+          t_board_us: m ? m.t_board_us : 0, scored: m && m.score ? m.score.scored : 0,
           onsets_seen: view.onsetsSeen, run: view.run.state});
 }
 
@@ -452,8 +535,15 @@ function onUpdate(m) {
   drawPsp();
   drawTimeAxis($("psp-axis"), pspEndUs(), PSP_WINDOW_S, 0.5);
   updateMap(m);
-  showDecisions(m);
-  showConfusion(m.score);
+  if (m.score) {  // a receiver with a decoder (the grasp demo's loop has none)
+    showDecisions(m);
+    showConfusion(m.score);
+  }
+  if (m.grasp) {
+    enableGrasp();
+    addGrasp(m.grasp);
+    drawGrasp();
+  }
   showTable("counters", COUNTERS.map(([k, f]) => [k, f(m)]));
   $("answers-panel").hidden = !m.answers;
   if (m.answers) showTable("answers", ANSWERS.map(([k, label]) => [label, m.answers[k]]));
@@ -502,12 +592,17 @@ const board = new URLSearchParams(location.search).get("board");
 const source = new EventSource("/events" + (board === null ? "" : "?board=" + encodeURIComponent(board)));
 source.addEventListener("config", (e) => {
   view.config = JSON.parse(e.data);
+  if (view.config.grasp) {
+    enableGrasp();
+    addGrasp(view.config.grasp);
+  }
   setupRaster(view.config.n_channels);
   setupMap();
   view.picked = view.config.psp_sensors.slice();
   view.decisions = view.config.recent_decisions.slice().reverse();
   showBoards(view.config.boards);
   showRun({state: "live", reason: ""});
+  if (view.grasp) drawGrasp();
 });
 source.addEventListener("update", (e) => { if (view.config && !view.ended) onUpdate(JSON.parse(e.data)); });
 source.addEventListener("end", (e) => endRun(JSON.parse(e.data)));
