@@ -115,3 +115,56 @@ def test_one_server_shows_several_boards_takes_picks_and_ends_the_run(
     reader.join(10)
     assert seen[-1] == ("end", {"state": "ended", "reason": "the receiver stopped"}), seen[-3:]
     assert seen[-2][0] == "update" and seen[-2][1]["run"]["state"] == "ended"
+
+
+def test_the_grasp_key_carries_the_boards_held_object_truth(receiver: Receiver,
+                                                             tmp_path: Path) -> None:
+    """The held object's truth, through the file the board appends it to and the feed: each
+    10 ms point is its bin's last tick (grip, normal force, load, slip distance) with the
+    bin's highest slip state; lift 1 is marked held at its last tick, lift 2 dropped at the
+    tick it dropped; a page that connects later gets the points in its config."""
+    from skinhil.plant import HELD_DTYPE
+    from skinhil.plant.truth_file import HeldTruthReader, HeldTruthWriter
+    from skinhil.view.grasp_trace import BIN_US, GraspTrace
+
+    rng = np.random.default_rng(3)
+    n = 200  # 1 ms ticks: lift 1 for 0-79 ms, none 80-99 ms, lift 2 from 100 ms, drops at 150
+    truth = np.zeros(n, dtype=HELD_DTYPE)
+    truth["t_us"] = np.arange(n) * 1000
+    truth["lift"] = np.where(truth["t_us"] < 80_000, 1, np.where(truth["t_us"] < 100_000, 0, 2))
+    truth["dropped"] = truth["t_us"] >= 150_000
+    truth["held"] = (truth["lift"] > 0) & ~truth["dropped"]
+    for field in ("grip_n", "normal_n", "load_n", "slip_distance_mm"):
+        truth[field] = rng.uniform(0, 1, n)
+    truth["slip"] = rng.integers(0, 4, n)
+    writer = HeldTruthWriter(tmp_path / "truth.bin")
+    reader = HeldTruthReader(tmp_path / "truth.bin")
+    trace = GraspTrace()
+    feed = ViewFeed(receiver, build_mesh(SkinParams().spacing_m, SkinParams().layer_gap_m), {},
+                    grasp=trace)
+    assert "grasp" not in _feed(receiver).update()  # no held object: no panel
+    for row in truth[:123]:
+        writer.add(row[None])
+    writer.flush()
+    trace.add(reader.read())  # mid-bin: the open bin waits
+    first = feed.update()["grasp"]
+    for row in truth[123:]:
+        writer.add(row[None])
+    writer.close()
+    trace.add(reader.read())
+    trace.finish()
+    rest = feed.update()["grasp"]
+    got = {k: first[k] + rest[k] for k in first if k != "outcomes"}
+    assert reader.read().shape == (0,)
+    assert len(first["t_us"]) == 12 and len(got["t_us"]) == n * 1000 // BIN_US
+    last = np.arange(9, n, 10)  # each bin's last tick
+    assert got["t_us"] == truth["t_us"][last].tolist()
+    for key, field in (("grip_n", "grip_n"), ("normal_n", "normal_n"), ("load_n", "load_n"),
+                       ("slip_mm", "slip_distance_mm")):
+        assert np.allclose(got[key], truth[field][last], atol=5e-5), key
+    assert got["slip"] == truth["slip"].reshape(-1, 10).max(axis=1).tolist()
+    assert got["lift"] == truth["lift"][last].tolist()
+    assert first["outcomes"] == [{"lift": 1, "t_us": 79_000, "held": True}]
+    assert rest["outcomes"] == [{"lift": 2, "t_us": 150_000, "held": False}]
+    hello = feed.hello()["grasp"]
+    assert hello["t_us"] == got["t_us"] and len(hello["outcomes"]) == 2
