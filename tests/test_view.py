@@ -4,6 +4,7 @@ pty; the raster draws, counters and decisions advance, the console shows no erro
 from __future__ import annotations
 
 import json
+import re
 import time
 import urllib.request
 from pathlib import Path
@@ -261,3 +262,64 @@ def test_udp_view_and_lsl_at_26x26_fit_a_laptop_and_show_the_touch(
     assert ended["ended"] and ended["status"].startswith("run ended"), ended
     assert ended["banner"] and "receiver stopped" in ended["banner"], ended
     assert end_shot.exists()
+
+
+GRASP_STATE = """view.grasp ? JSON.stringify({
+  points: view.grasp.points, ended: view.ended,
+  hidden: document.getElementById('grasp-panel').hidden,
+  max: Object.fromEntries(['grip_n', 'normal_n', 'load_n', 'slip_mm', 'slip'].map(
+    (k) => [k, Math.max(0, ...view.grasp[k])])),
+  min_grip: Math.min(...view.grasp.grip_n), outcomes: view.grasp.outcomes,
+  canvas: (() => { const r = document.getElementById('grasp').getBoundingClientRect();
+                   return [r.left, r.top, r.width, r.height]; })()}) : null"""
+
+
+def test_grasp_demo_view_plots_grip_load_and_slip(tmp_path: Path) -> None:
+    """``demo --task grasp --lifts 2 --controller off --view``: the page's grasp panel plots
+    the board's truth: the hand's constant 0.3 N grip, the load up to the weight and the
+    pull, the slip distance past the 1 mm drop, both lifts marked dropped, as the demo's
+    scores say; the lines are on the screenshot."""
+    demo = ServeProcess("--task", "grasp", "--lifts", "2", "--controller", "off", "--view",
+                        "0", command="demo")
+    try:
+        url = wait_for_stderr(demo, "live view at").split()[-1]
+        with Chromium() as browser:
+            browser.open(url)
+            end = time.monotonic() + 60
+            state: dict[str, Any] = {}
+            while time.monotonic() < end:
+                raw = browser.evaluate(GRASP_STATE)
+                state = json.loads(raw) if raw else {}
+                if len(state.get("outcomes", [])) == 2 or demo.exited:
+                    break
+                time.sleep(0.2)
+            assert demo.wait(60) == 0, demo.stderr
+            time.sleep(0.5)  # the last update drawn
+            state = json.loads(browser.evaluate(GRASP_STATE))
+            shot = browser.screenshot(tmp_path / "grasp-view.png")
+            errors = list(browser.console_errors)
+    finally:
+        demo.kill()
+    assert errors == [], errors
+    text = "".join(line.get("text", "") for line in demo.lines)
+    slid = [float(s) for s in re.findall(r"DROP .* (\d+\.\d+) mm", text)]
+    assert len(slid) == 2, text
+    assert not state["hidden"] and state["points"] > 150, state  # 2.35 s of 10 ms points
+    assert state["min_grip"] == state["max"]["grip_n"] == 0.3, state  # the hand's low grip
+    assert 0.64 <= state["max"]["load_n"] <= 0.65, state  # m·g + the pull: 0.49 + 0.15 N
+    assert 0.2 < state["max"]["normal_n"] < 0.4, state
+    assert state["max"]["slip"] == 3 and round(state["max"]["slip_mm"], 2) == max(slid), state
+    assert [(o["lift"], o["held"]) for o in state["outcomes"]] == [(1, False), (2, False)]
+    # the lines on the panel: grip (#fc6), load (#9cf) and the drop marks (#f66)
+    panel = _png(shot)
+    left, top, width, height = (int(round(v)) for v in state["canvas"])
+    px = panel[top + 14:top + height - 2, left:left + width, :3]
+
+    def near(rgb: tuple[int, int, int]) -> int:
+        """Columns (board time) where the colour ``rgb`` is drawn."""
+        return int((np.abs(px - np.array(rgb) / 255).max(axis=2) < 0.12).any(axis=0).sum())
+
+    # 2.35 s of the panel's 10 s: about 170 columns of the lines
+    grip, load = near((0xff, 0xcc, 0x66)), near((0x99, 0xcc, 0xff))
+    assert grip > 100 and load > 100, (grip, load)
+    assert near((0xff, 0x66, 0x66)) >= 2  # the drop marks

@@ -297,8 +297,10 @@ function drawGrasp() {
     }
     ctx.stroke();
   };
-  for (const [k, colour] of GRASP_LINES) line(k, colour, 1.1 * fmax);
+  ctx.lineWidth = 1.5;
   line("slip_mm", SLIP_MM, 1.1 * dmax);
+  for (const [k, colour] of GRASP_LINES.slice().reverse()) line(k, colour, 1.1 * fmax);  // grip on top
+  ctx.lineWidth = 1;
   ctx.font = "11px sans-serif";
   for (const mk of v.outcomes) {
     const xm = Math.round(x(mk.t_us));
