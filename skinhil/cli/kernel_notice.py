@@ -6,7 +6,9 @@ The model's and the wire's kernels are compiled on first use and cached on disk
 to the sources, one directory per version of the sources). The first run after an install
 or a change of the sources spends :data:`COLD_COMPILE_S` compiling before it starts;
 ``serve``, ``listen``, ``demo``, ``train`` and ``simulate`` call :func:`announce_cold_cache`
-once their input is checked (about a second after launch), so a refusal stays one line;
+once their input is checked (about a second after launch), so a refusal of the command
+line stays one line (``serve`` says it before building the board, whose geometric mechanics
+compiles as it is built: on a cold cache a port that cannot be opened is refused after it);
 ``skinhil compile`` compiles ahead of time.
 """
 

@@ -430,6 +430,9 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
                           "too, or leave it out")
     grasp_truth_path = (check_output_path(args.grasp_truth) if args.grasp_truth is not None
                         else None)
+    # the board's model compiles as it is built (the geometric mechanics' rest forces come
+    # from its kernel): say so before, with the arguments checked
+    announce_cold_cache("serve")
     board = Board(config, open_link, schedule, on_link, scene, grasp)
     truth_file = (HeldTruthWriter(grasp_truth_path) if grasp_truth_path is not None
                   else None)
@@ -438,7 +441,6 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
     if made is not None:
         made.append(board)
     _claim_cpu(args)
-    announce_cold_cache("serve")  # board.run compiles: its warm-up runs every kernel once
 
     def on_second(b: Board) -> None:
         info = _live(b)
