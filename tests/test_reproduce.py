@@ -28,7 +28,10 @@ LABELS = tuple(f"{m}/{r}/paper" for m in ("linear", "geometric") for r in ("leng
 
 def test_quick_reproduce_writes_figures_claims_and_sensor_table(tmp_path: Path) -> None:
     start = time.perf_counter()
-    assert main(["reproduce", "--quick", "--out", str(tmp_path), "--no-progress"]) == 0
+    # the quick run on a 2 x 2 grid, one repeat: every figure, claim row and table of the
+    # report (the whole --quick run is timed by benchmarks/bench_reproduce.py)
+    assert main(["reproduce", "--quick", "--grid", "2", "--repeats", "1", "--workers", "2",
+                 "--out", str(tmp_path), "--no-progress"]) == 0
     print(f"reproduce --quick: {time.perf_counter() - start:.1f} s")  # timed by benchmarks
     for name in (n for n in FIGURES if "_small" not in n):
         data = (tmp_path / name).read_bytes()
