@@ -1,7 +1,7 @@
 """Signals at random moments: outputs whole or untouched, no orphans, no tracebacks.
 
 - SIGTERM at random moments to ``train --out``, ``simulate --out``, ``listen --record`` and
-  ``reproduce --out`` (``TRIES`` each: 8, or ``SKINHIL_SIGNAL_TRIES`` for a soak): every
+  ``reproduce --out`` (``TRIES`` each: 5, or ``SKINHIL_SIGNAL_TRIES`` for a soak): every
   output is either the previous file, byte for byte, or a complete new one; no temporary
   file is left; no process the command started outlives it by more than 2 s
   (``reproduce --workers 2``).
@@ -36,8 +36,8 @@ from harness.serve import RUN_DIR, serve_env
 
 from skinhil.decoding import DirectionDecoder
 
-TRIES = int(os.environ.get("SKINHIL_SIGNAL_TRIES", "8"))
-"""SIGTERMs per command at random moments (8 in CI; a soak: SKINHIL_SIGNAL_TRIES=50)."""
+TRIES = int(os.environ.get("SKINHIL_SIGNAL_TRIES", "5"))
+"""SIGTERMs per command at random moments (5 in CI; a soak: SKINHIL_SIGNAL_TRIES=50)."""
 CLEAN_SIGINT = (0, 2, 130, -signal.SIGINT)
 """Exit statuses after a SIGINT: finished, refused, stopped; or ended by its default action
 while the interpreter shut down after finishing (Python restores the default handlers then;

@@ -184,12 +184,17 @@ def run_vcan(decoder: WindowDecoder, snr_db: float, n_stimuli: int,
 
 
 @pytest.mark.vcan
-def test_online_accuracy_through_vcan_matches_offline_at_10_db(decoder_10db):
+def test_online_accuracy_through_vcan_matches_offline_at_10_db():
     """The issue's test through vcan0 at 1 Mbit/s: at 10 dB the board sends a few hundred
-    events/s, well within the bus."""
-    decoder, trained = decoder_10db
-    receiver = run_vcan(decoder, SNR_DB, N_VCAN_STIMULI)
-    check_online_matches_offline("vcan", receiver, decoder, trained, n_stimuli=N_VCAN_STIMULI)
+    events/s, well within the bus. Against the decoder on the board's own stream simulated
+    offline; the comparison with the cross-validated accuracy is the pty's (a decoder trained
+    on 180 stimuli inside user-mode Linux took 30 s of the CI's budget: this one learns 90
+    without cross-validation)."""
+    decoder, trained = train_decoder(SNR_DB, reps=10, seed=0, rest_s=REST_S,
+                                     cross_validation=False)
+    receiver = run_vcan(WindowDecoder(decoder), SNR_DB, N_VCAN_STIMULI)
+    check_online_matches_offline("vcan", receiver, WindowDecoder(decoder), trained,
+                                 n_stimuli=N_VCAN_STIMULI, against_cv=False)
 
 
 @pytest.mark.vcan
