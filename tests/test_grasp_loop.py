@@ -18,6 +18,7 @@ from skinhil.model.timeline import Timeline
 from skinhil.plant import GraspParams, lift_scene
 from skinhil.receiver.grip_loop import GripLoop
 from skinhil.receiver.grip_reflex import GripController, LoadReadout, SlipReflex
+from skinhil.receiver.receiver import ReceiverListener
 from skinhil.transports import PtyMasterTransport, SerialTransport
 
 PARAMS = GraspParams(grasp_s=0.3, rise_s=0.1, hold_s=0.2, pull_s=0.05, lower_s=0.1,
@@ -134,3 +135,54 @@ def test_a_closed_loop_session_replays_bit_for_bit() -> None:
     assert live.tobytes() == again.tobytes()
     assert board.truth.records().tobytes() == replica.truth.records().tobytes()
     assert [e.grip_n for e in replica.plant.log] == [e.grip_n for e in plant.log]
+
+
+class _Heard(ReceiverListener):
+    """What a listener hears, callback by callback."""
+
+    def __init__(self) -> None:
+        self.heard: list[tuple[str, object]] = []
+
+    def on_marker(self, marker: object) -> None:
+        self.heard.append(("marker", marker))
+
+    def on_status(self, status: object) -> None:
+        self.heard.append(("status", status))
+
+    def on_ack(self, ack: object) -> None:
+        self.heard.append(("ack", ack))
+
+    def on_session(self, session: object) -> None:
+        self.heard.append(("session", session))
+
+    def on_run_end(self, run_end: object) -> None:
+        self.heard.append(("run_end", run_end))
+
+
+def test_the_grip_loop_hands_on_the_boards_records_as_the_receiver_does(tmp_path) -> None:
+    """One stream of a SESSION, its table, a MARKER, a STATUS, a GRIP's NACK and the RUN_END:
+    the grip loop's listener hears the same records through the same callbacks as the
+    reference receiver's (one dispatch), and both keep the status and the run's end."""
+    from harness.lab import chance_model
+    from protocol_examples import GRIP_NACK, MARKER, RUN_END, SESSION_RECORDS, STATUS
+
+    from skinhil.receiver import Receiver
+    from skinhil.receiver.model_file import load_window_decoder
+
+    enc = protocols.SerialEncoder()
+    stream = b"".join([*(enc.session_record(r) for r in SESSION_RECORDS), enc.marker(MARKER),
+                       enc.status(STATUS), enc.ack(GRIP_NACK), enc.session_record(RUN_END)])
+    decoder = load_window_decoder(chance_model(tmp_path, (6, 6)), n_channels=338)
+    host, slave_fd = PtyMasterTransport.open_pair()
+    try:
+        heard_loop, heard_receiver = _Heard(), _Heard()
+        loop = GripLoop(host, [heard_loop])
+        receiver = Receiver(host, decoder, listeners=[heard_receiver])
+        for reader in (loop, receiver):
+            reader.feed(stream, 1.0)
+    finally:
+        host.shutdown()
+        os.close(slave_fd)
+    assert [k for k, _ in heard_loop.heard] == ["session", "marker", "status", "ack", "run_end"]
+    assert heard_loop.heard == heard_receiver.heard
+    assert loop.last_status == receiver.last_status and loop.run_end == receiver.run_end

@@ -1,5 +1,6 @@
-"""The receiving end of a closed grip loop: the board's stream decoded, its events handed to
-listeners (the grip controller), its records counted, until the board's RUN_END.
+"""The receiving end of a closed grip loop: the board's stream decoded, its events and records
+handed to listeners (the grip controller, the live view) as the reference receiver hands them
+(:func:`skinhil.receiver.receiver.dispatch_record`), until the board's RUN_END.
 
 It needs no stimulus decoder (the grasp task asks for none); it reads what
 :func:`skinhil.receiver.session.run_against_board` reads of a receiver (``transport``,
@@ -12,7 +13,13 @@ import time
 from typing import Any
 
 import protocols
-from skinhil.receiver.receiver import LinkReport, ReceiverListener, link_report, make_codec
+from skinhil.receiver.receiver import (
+    LinkReport,
+    ReceiverListener,
+    dispatch_record,
+    link_report,
+    make_codec,
+)
 from skinhil.transports import Transport
 
 
@@ -40,15 +47,11 @@ class GripLoop:
             for listener in self.listeners:
                 listener.on_events(result.events, h)
         for rec in result.records:
-            if isinstance(rec, protocols.Ack):
-                for listener in self.listeners:
-                    listener.on_ack(rec)
-            elif isinstance(rec, protocols.Status):
+            if isinstance(rec, protocols.Status):
                 self.last_status = rec
-                for listener in self.listeners:
-                    listener.on_status(rec)
             elif isinstance(rec, protocols.RunEnd):
                 self.run_end = rec
+            dispatch_record(rec, self.listeners)
         return []
 
     def link_report(self) -> LinkReport:

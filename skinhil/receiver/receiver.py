@@ -125,6 +125,22 @@ def link_report(counters: Any, status: Any, late_events: int = 0,
         link_errors=link_errors, acks_lost=g(c, "acks_lost"))
 
 
+LISTENER_CALLBACKS: dict[type, str] = {
+    protocols.Marker: "on_marker", protocols.Status: "on_status", protocols.Ack: "on_ack",
+    protocols.Session: "on_session", protocols.RunEnd: "on_run_end"}
+"""The :class:`ReceiverListener` callback each kind of board record is handed to."""
+
+
+def dispatch_record(record: Any, listeners: Iterable[ReceiverListener]) -> None:
+    """Hand a decoded board ``record`` to each of ``listeners``' callback for its kind
+    (:data:`LISTENER_CALLBACKS`; a kind without one, such as a STIMULUS entry, to none)."""
+    name = LISTENER_CALLBACKS.get(type(record))
+    if name is None:
+        return
+    for listener in listeners:
+        getattr(listener, name)(record)
+
+
 def make_codec(transport: Transport[Any], board_id: int = 0) -> Any:
     """The protocols decoder for ``transport``'s kind of link."""
     if transport.kind == "can":
@@ -218,15 +234,8 @@ class Receiver:
         if isinstance(rec, protocols.Marker):
             if _is_onset(rec):
                 self.scoreboard.add_marker(int(rec.t_us), int(rec.stimulus_id))
-            for listener in self.listeners:
-                listener.on_marker(rec)
         elif isinstance(rec, protocols.Status):
             self.last_status = rec
-            for listener in self.listeners:
-                listener.on_status(rec)
-        elif isinstance(rec, protocols.Ack):
-            for listener in self.listeners:
-                listener.on_ack(rec)
         elif isinstance(rec, protocols.Session):
             self._take_session(rec)
         elif isinstance(rec, protocols.StimulusEntry):
@@ -234,8 +243,7 @@ class Receiver:
         elif isinstance(rec, protocols.RunEnd):
             self.run_end = rec
             self.run_ends += 1
-            for listener in self.listeners:
-                listener.on_run_end(rec)
+        dispatch_record(rec, self.listeners)
 
     def _take_session(self, session: Any) -> None:
         """A SESSION: the stimulus table starts again; a decoder made for another stream
@@ -250,8 +258,6 @@ class Receiver:
                 check(int(session.n_channels), int(session.step_us) * 1e-6)
             except SkinhilError as exc:
                 self._report(f"session: {exc}")
-        for listener in self.listeners:
-            listener.on_session(session)
 
     def known_board_time_us(self, host_s: float | None = None) -> int:
         """Board time (µs) before which the stream is taken as complete."""
