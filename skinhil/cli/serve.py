@@ -333,6 +333,12 @@ def run_replay(args: argparse.Namespace) -> int:
     if args.truth is not None:
         raise ConfigError("--truth writes a live board's truth: a replay's truth is the "
                           "recording's markers; drop --truth")
+    if args.grasp_truth is not None:
+        raise ConfigError("--grasp-truth writes the held object's truth of a live board "
+                          "(serve --grasp): a replay holds no object; drop --grasp-truth")
+    if args.markers:
+        raise ConfigError("--markers puts a live board's markers on a blind link: a replay "
+                          "plays the recording's units as they were recorded; drop --markers")
     score_path = check_output_path(args.score) if args.score is not None else None
     scoreboard = DecisionScoreboard(args.response_window_s)
     _claim_cpu(args)
