@@ -272,8 +272,9 @@ class Board:
                                              lambda sid: sid in self.timeline.catalog)
         """The decoder under test's DECISIONs scored against the onsets the board sent."""
         self.tasks: TaskScoreboard | None = None
-        """Its ANSWERs of the contact tasks scored against :attr:`truth` (with a scene)."""
-        if scene is not None:
+        """Its ANSWERs of the contact tasks scored against :attr:`truth`: with a scenario's
+        contacts, which pose them (a held object's lifts pose the grasp task alone)."""
+        if scene is not None and self.plant is None:
             self.tasks = TaskScoreboard(
                 [c.trajectory.vibration_frequency_hz if c.trajectory.vibration_amplitude_m > 0
                  else 0.0 for c in scene.contacts], config.response_window_s)

@@ -186,3 +186,27 @@ def test_the_grip_loop_hands_on_the_boards_records_as_the_receiver_does(tmp_path
     assert [k for k, _ in heard_loop.heard] == ["session", "marker", "status", "ack", "run_end"]
     assert heard_loop.heard == heard_receiver.heard
     assert loop.last_status == receiver.last_status and loop.run_end == receiver.run_end
+
+
+def test_a_grasp_run_poses_no_contact_task_and_a_scenario_still_does() -> None:
+    """The lifts of a held object pose the grasp task alone: no contact task trial is kept
+    (nor work done for one each tick), a FORCE ANSWER is NACKed TASK_NOT_POSED and the score's
+    ``tasks`` is empty; the same lifts played as a scenario's contacts still pose and score
+    the contact tasks."""
+    answers, tasks = [], []
+    for grasp in (PARAMS, None):
+        host, slave_fd = PtyMasterTransport.open_pair()
+        try:
+            path = host.slave_path
+            board = Board(CONFIG, lambda p=path: SerialTransport(p, baud=921600),
+                          scene=lift_scene(PARAMS, 1), grasp=grasp)
+            answers.append(board.handle(protocols.Answer(7, protocols.Task.FORCE, (0.3,))))
+            tasks.append(board.run(0.1).tasks)
+        finally:
+            host.shutdown()
+            os.close(slave_fd)
+    assert [(a.ok, a.reason) for a in answers] == [
+        (False, protocols.NackReason.TASK_NOT_POSED), (True, protocols.NackReason.NONE)]
+    assert tasks[0] == {}
+    assert tasks[1]["force"]["trials"] == tasks[1]["localisation"]["trials"] == 1
+    assert tasks[1]["force"]["false_alarms"] == 1
