@@ -269,14 +269,20 @@ GRASP_STATE = """view.grasp ? JSON.stringify({
   hidden: document.getElementById('grasp-panel').hidden,
   max: Object.fromEntries(['grip_n', 'normal_n', 'load_n', 'slip_mm', 'slip'].map(
     (k) => [k, Math.max(0, ...view.grasp[k])])),
-  min_grip: Math.min(...view.grasp.grip_n), outcomes: view.grasp.outcomes,
+  min_grip: Math.min(...view.grasp.grip_n.filter((g) => g !== null)),
+  gripped: view.grasp.grip_n.filter((g) => g !== null).length,
+  gripped_after_drop: view.grasp.t_us.filter((t, i) => view.grasp.grip_n[i] !== null
+    && view.grasp.outcomes.some((o) => o.lift === view.grasp.lift[i] && !o.held && t >= o.t_us)
+  ).length,
+  outcomes: view.grasp.outcomes,
   canvas: (() => { const r = document.getElementById('grasp').getBoundingClientRect();
                    return [r.left, r.top, r.width, r.height]; })()}) : null"""
 
 
 def test_grasp_demo_view_plots_grip_load_and_slip(tmp_path: Path) -> None:
     """``demo --task grasp --lifts 2 --controller off --view``: the page's grasp panel plots
-    the board's truth: the hand's constant 0.3 N grip, the load up to the weight and the
+    the board's truth: the hand's constant 0.3 N grip until each object drops (none after),
+    the load up to the weight and the
     pull, the slip distance past the 1 mm drop, both lifts marked dropped, as the demo's
     scores say; the lines are on the screenshot."""
     demo = ServeProcess("--task", "grasp", "--lifts", "2", "--controller", "off", "--view",
@@ -306,6 +312,8 @@ def test_grasp_demo_view_plots_grip_load_and_slip(tmp_path: Path) -> None:
     assert len(slid) == 2, text
     assert not state["hidden"] and state["points"] > 150, state  # 2.35 s of 10 ms points
     assert state["min_grip"] == state["max"]["grip_n"] == 0.3, state  # the hand's low grip
+    # the grip while the object is held, none after it dropped: about 0.3 s of each lift
+    assert 40 <= state["gripped"] <= 80 and state["gripped_after_drop"] == 0, state
     assert 0.64 <= state["max"]["load_n"] <= 0.65, state  # m·g + the pull: 0.49 + 0.15 N
     assert 0.2 < state["max"]["normal_n"] < 0.4, state
     assert state["max"]["slip"] == 3 and round(state["max"]["slip_mm"], 2) == max(slid), state
@@ -319,7 +327,7 @@ def test_grasp_demo_view_plots_grip_load_and_slip(tmp_path: Path) -> None:
         """Columns (board time) where the colour ``rgb`` is drawn."""
         return int((np.abs(px - np.array(rgb) / 255).max(axis=2) < 0.12).any(axis=0).sum())
 
-    # 2.35 s of the panel's 10 s: about 170 columns of the lines
+    # 2.35 s of the panel's 10 s: about 170 columns of the load, 45 of the grip (held)
     grip, load = near((0xff, 0xcc, 0x66)), near((0x99, 0xcc, 0xff))
-    assert grip > 100 and load > 100, (grip, load)
+    assert load > 100 and 25 < grip < load / 2, (grip, load)
     assert near((0xff, 0x66, 0x66)) >= 2  # the drop marks

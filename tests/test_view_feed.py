@@ -120,9 +120,10 @@ def test_one_server_shows_several_boards_takes_picks_and_ends_the_run(
 def test_the_grasp_key_carries_the_boards_held_object_truth(receiver: Receiver,
                                                              tmp_path: Path) -> None:
     """The held object's truth, through the file the board appends it to and the feed: each
-    10 ms point is its bin's last tick (grip, normal force, load, slip distance) with the
-    bin's highest slip state; lift 1 is marked held at its last tick, lift 2 dropped at the
-    tick it dropped; a page that connects later gets the points in its config."""
+    10 ms point is its bin's last tick (grip while held, else none; normal force, load, slip
+    distance) with the bin's highest slip state; lift 1 is marked held at its last tick,
+    lift 2 dropped at the tick it dropped; a page that connects later gets the points in its
+    config."""
     from skinhil.plant import HELD_DTYPE
     from skinhil.plant.truth_file import HeldTruthReader, HeldTruthWriter
     from skinhil.view.grasp_trace import BIN_US, GraspTrace
@@ -159,9 +160,13 @@ def test_the_grasp_key_carries_the_boards_held_object_truth(receiver: Receiver,
     assert len(first["t_us"]) == 12 and len(got["t_us"]) == n * 1000 // BIN_US
     last = np.arange(9, n, 10)  # each bin's last tick
     assert got["t_us"] == truth["t_us"][last].tolist()
-    for key, field in (("grip_n", "grip_n"), ("normal_n", "normal_n"), ("load_n", "load_n"),
+    for key, field in (("normal_n", "normal_n"), ("load_n", "load_n"),
                        ("slip_mm", "slip_distance_mm")):
         assert np.allclose(got[key], truth[field][last], atol=5e-5), key
+    held = truth["held"][last]  # the grip on the object: none between lifts and once dropped
+    assert [g is None for g in got["grip_n"]] == (~held).tolist()
+    assert np.allclose([g for g in got["grip_n"] if g is not None], truth["grip_n"][last][held],
+                       atol=5e-5)
     assert got["slip"] == truth["slip"].reshape(-1, 10).max(axis=1).tolist()
     assert got["lift"] == truth["lift"][last].tolist()
     assert first["outcomes"] == [{"lift": 1, "t_us": 79_000, "held": True}]

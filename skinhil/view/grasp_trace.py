@@ -9,8 +9,11 @@ still sees the lifts so far). Each point stands for one bin of :data:`BIN_US` of
 (10 points per 0.1 s update): ``t_us`` (the bin's last tick), ``grip_n``, ``normal_n``,
 ``load_n`` (N) and ``slip_mm`` (mm) of the bin's last tick, ``slip`` the bin's highest slip
 state (0 none, 1 stick, 2 partial, 3 gross: a short slip is not lost), ``lift`` its lift
-(0 between lifts). ``outcomes`` marks each lift's end: ``{"lift", "t_us", "held"}`` at the
-tick it dropped, or at its last tick when it was held.
+(0 between lifts). ``grip_n`` is the grip on the object, the hand's set-point while the tick
+holds it (``held``), None when no object is held (between lifts, and from the tick a lift's
+object dropped: the board grips it no more), so the plotted grip ends at the drop.
+``outcomes`` marks each lift's end: ``{"lift", "t_us", "held"}`` at the tick it dropped, or
+at its last tick when it was held.
 """
 
 from __future__ import annotations
@@ -94,6 +97,8 @@ class GraspTrace:
                      "slip": int(slip[i])}
             for key, field in FIELDS:
                 point[key] = round(float(rec[field][e]), 4)
+            if not rec["held"][e]:
+                point["grip_n"] = None  # no object in the hand: nothing gripped
             self._points.append(point)
             self._history.append(point)
 

@@ -241,7 +241,7 @@ function pick(address) {
 // view.grasp holds the points of the last GRASP_WINDOW_S board seconds as columns, and each
 // lift's outcome; points come once in the config (history) and then in each update.
 const GRASP_WINDOW_S = 10;
-const GRASP_LINES = [["grip_n", "#fc6", "grip set-point"], ["normal_n", "#6d6", "normal force"],
+const GRASP_LINES = [["grip_n", "#fc6", "grip (held)"], ["normal_n", "#6d6", "normal force"],
                      ["load_n", "#9cf", "load"]];
 const SLIP_MM = "#e8e", GRASP_KEYS = ["t_us", "lift", "slip", "grip_n", "normal_n", "load_n", "slip_mm"];
 
@@ -287,13 +287,16 @@ function drawGrasp() {
   let fmax = 1, dmax = 1;
   for (const [k] of GRASP_LINES) for (const f of v[k]) fmax = Math.max(fmax, f);
   for (const d of v.slip_mm) dmax = Math.max(dmax, d);
-  const line = (k, colour, scale) => {
+  const line = (k, colour, scale) => {  // a null point (grip with no object held) ends it
     ctx.strokeStyle = colour;
     ctx.beginPath();
+    let drawing = false;
     for (let i = 0; i < n; i++) {
+      if (v[k][i] === null) { drawing = false; continue; }
       const y = bottom - (v[k][i] / scale) * (bottom - top);
-      if (i === 0 || v.lift[i] !== v.lift[i - 1]) ctx.moveTo(x(v.t_us[i]), y);
+      if (!drawing || v.lift[i] !== v.lift[i - 1]) ctx.moveTo(x(v.t_us[i]), y);
       else ctx.lineTo(x(v.t_us[i]), y);
+      drawing = true;
     }
     ctx.stroke();
   };
