@@ -33,6 +33,21 @@ IDLE_OFFSET_S = 1e300
 """Scene offset of a world that is not playing: every contact is before its start."""
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _step_times_and_schedule_forces(first_step, dt, t_offset, slots, n_slots, springs,
+                                    schedule):  # pragma: no cover - compiled
+    # each step's sensor time (s) and the schedule's forces (N) by step, component and slot
+    # in the precision of springs (the stepper's), as the schedule's sensor kernels make
+    # them; inlined into each touch kernel (Numba IR), so each compiles as if written there
+    n_steps = springs.shape[0]
+    t = (first_step + np.arange(n_steps)) * dt
+    forces = np.zeros((n_steps, 3, n_slots), dtype=springs.dtype)
+    starts, onsets, ends, which, stim_onsets, stim_ends, taus, ptr, pushed, peaks = schedule
+    add_schedule_forces(forces.transpose(0, 2, 1), t - t_offset, starts, onsets, ends, which,
+                        stim_onsets, stim_ends, taus, ptr, slots[pushed], peaks)
+    return t, forces
+
+
 @numba.njit(cache=True, nogil=True)
 def _leapfrog_touch_kernel(first_step, dt, t_offset, scene_offset, slots, n_slots, springs,
                            spikes, schedule, substeps, mechanics, neurons, operands, state,
@@ -40,11 +55,8 @@ def _leapfrog_touch_kernel(first_step, dt, t_offset, scene_offset, slots, n_slot
     # the schedule's forces by slot (as _scheduled_leapfrog_sensor_kernel), then per step the
     # contact on the state at its start and one leapfrog step; then the neurons
     n_steps = springs.shape[0]
-    t = (first_step + np.arange(n_steps)) * dt
-    forces = np.zeros((n_steps, 3, n_slots), dtype=springs.dtype)
-    starts, onsets, ends, which, stim_onsets, stim_ends, taus, ptr, pushed, peaks = schedule
-    add_schedule_forces(forces.transpose(0, 2, 1), t - t_offset, starts, onsets, ends, which,
-                        stim_onsets, stim_ends, taus, ptr, slots[pushed], peaks)
+    t, forces = _step_times_and_schedule_forces(first_step, dt, t_offset, slots, n_slots,
+                                                springs, schedule)
     q = mechanics[12]
     w = mechanics[14]
     for k in range(n_steps):
@@ -63,11 +75,8 @@ def _geometric_touch_kernel(first_step, dt, t_offset, scene_offset, slots, n_slo
     # contact on the state at its start and one RK4 step of the geometric mechanics; then
     # the neurons
     n_steps = springs.shape[0]
-    t = (first_step + np.arange(n_steps)) * dt
-    forces = np.zeros((n_steps, 3, n_slots))
-    starts, onsets, ends, which, stim_onsets, stim_ends, taus, ptr, pushed, peaks = schedule
-    add_schedule_forces(forces.transpose(0, 2, 1), t - t_offset, starts, onsets, ends, which,
-                        stim_onsets, stim_ends, taus, ptr, slots[pushed], peaks)
+    t, forces = _step_times_and_schedule_forces(first_step, dt, t_offset, slots, n_slots,
+                                                springs, schedule)
     q = mechanics[13]
     v = mechanics[14]
     for k in range(n_steps):
