@@ -296,8 +296,9 @@ static void take_record(decoder_t *D, const unsigned char *d, int m) {
                    (long long)le(p, 6), p[20], p[6], p[13], p[27] & 1, D->n_channels, p[25],
                    p[26], (unsigned)le(p + 11, 2), (unsigned)le(p + 14, 4));
             print_float(snr);
-            printf(",\"response_window_us\":%u,\"n_stimuli\":%u,\"table_digest\":%u}}\n",
-                   (unsigned)le(p + 28, 4), D->n_stimuli, D->table_digest);
+            printf(",\"response_window_us\":%u,\"n_stimuli\":%u,\"table_digest\":%u,"
+                   "\"tasks\":%u,\"blind\":%d}}\n", (unsigned)le(p + 28, 4), D->n_stimuli,
+                   D->table_digest, (unsigned)le(p + 32, 2), (p[27] >> 1) & 1);
         } else {
             dut_session(D->n_channels, D->n_stimuli);
         }

@@ -387,7 +387,14 @@ class Board:
             step_us=self._dt_us, tick_us=int(round(self.config.tick_s * 1e6)),
             snr_db=self.snr_db,
             response_window_us=int(round(self.config.response_window_s * 1e6)),
-            n_stimuli=len(table), table_digest=protocols.table_digest(table))
+            n_stimuli=len(table), table_digest=protocols.table_digest(table),
+            tasks=self.posed_tasks(), blind=not self.config.markers)
+
+    def posed_tasks(self) -> int:
+        """The tasks whose ANSWERs this board scores, bit n for task n (SPEC.md §3.7):
+        classification always (a DECISION's), the contact tasks a scenario poses."""
+        posed = [protocols.Task.CLASSIFICATION, *(self.tasks.tasks if self.tasks else ())]
+        return sum(1 << int(t) for t in posed)
 
     def queue_session(self, link: BoardLink, reason: Any) -> None:
         """Queue a SESSION record and the stimulus table's STIMULUS records (SPEC.md §3.7)."""

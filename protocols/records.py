@@ -107,7 +107,9 @@ class Session:
     the publish tick (µs); ``snr_db`` the neuron noise level (dB, ``inf``: none);
     ``response_window_us`` how long after an onset a DECISION is scored (µs);
     ``n_stimuli`` and ``table_digest`` describe the stimulus table whose
-    :class:`StimulusEntry` records follow this one (CRC-32 of their payloads).
+    :class:`StimulusEntry` records follow this one (CRC-32 of their payloads); ``tasks``
+    the tasks whose ANSWERs the board scores, bit ``n`` for :class:`Task` ``n`` (0: not
+    announced, a board of an earlier revision); ``blind``: no MARKER on this link (§3.5.5).
     """
 
     t_us: int
@@ -124,6 +126,8 @@ class Session:
     response_window_us: int
     n_stimuli: int
     table_digest: int
+    tasks: int = 0
+    blind: bool = False
 
 
 @dataclasses.dataclass(frozen=True)

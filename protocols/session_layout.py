@@ -35,12 +35,12 @@ SESSION_FIELDS: tuple[tuple[str, int, int], ...] = (
     ("TimeUs", 0, 6), ("Version", 6, 1), ("NChannels", 7, 4), ("StepUs", 11, 2),
     ("BoardId", 13, 1), ("TickUs", 14, 4), ("NStimuli", 18, 2), ("Reason", 20, 1),
     ("SnrDb", 21, 4), ("Rows", 25, 1), ("Cols", 26, 1), ("Flags", 27, 1),
-    ("ResponseWindowUs", 28, 4), ("TableDigest", 35, 4))
-"""(DBC signal name, payload offset, bytes) of every SESSION field (bytes 32..34 reserved);
-the layout :data:`_SESSION` packs."""
+    ("ResponseWindowUs", 28, 4), ("Tasks", 32, 2), ("TableDigest", 35, 4))
+"""(DBC signal name, payload offset, bytes) of every SESSION field (byte 34 reserved); the
+layout :data:`_SESSION` packs."""
 RUN_END_FIELDS: tuple[tuple[str, int, int], ...] = (("TimeUs", 0, 6), ("Reason", 6, 1))
 """(DBC signal name, payload offset, bytes) of the RUN_END fields."""
-_SESSION = struct.Struct("<6sBIHBIHBfBBBI3sI")
+_SESSION = struct.Struct("<6sBIHBIHBfBBBIHBI")
 SESSION_BYTES = _SESSION.size
 """Length of a SESSION payload (39 bytes; no field straddles a 7-byte classic CAN chunk)."""
 _RUN_END = struct.Struct("<6sB")
@@ -68,9 +68,10 @@ def session_payload(s: Session) -> bytes:
         check_uint(s.board_id, 8, "board id"), check_uint(s.tick_us, 32, "tick_us"),
         check_uint(s.n_stimuli, 16, "stimulus count"),
         check_uint(int(s.reason), 8, "session reason"), float(s.snr_db),
-        check_uint(s.rows, 8, "rows"), check_uint(s.cols, 8, "cols"), int(bool(s.running)),
-        check_uint(s.response_window_us, 32, "response window (µs)"), bytes(3),
-        check_uint(s.table_digest, 32, "table digest"))
+        check_uint(s.rows, 8, "rows"), check_uint(s.cols, 8, "cols"),
+        int(bool(s.running)) | int(bool(s.blind)) << 1,
+        check_uint(s.response_window_us, 32, "response window (µs)"),
+        check_uint(s.tasks, 16, "posed tasks"), 0, check_uint(s.table_digest, 32, "table digest"))
 
 
 def stimulus_payload(e: StimulusEntry) -> bytes:
@@ -116,12 +117,12 @@ def parse(kind: int, p: bytes) -> Session | StimulusEntry | RunEnd | None:
         return None
     if kind == KIND_SESSION:
         (t, version, n_ch, step, board, tick, n_stim, reason, snr, rows, cols, flags, window,
-         _, digest) = _SESSION.unpack(p)
+         tasks, _, digest) = _SESSION.unpack(p)
         if version not in KNOWN_VERSIONS or step == 0 or math.isnan(snr):
             return None
         return Session(int.from_bytes(t, "little"), enum_or_int(SessionReason, reason),
                        version, board, bool(flags & 1), n_ch, rows, cols, step, tick, snr,
-                       window, n_stim, digest)
+                       window, n_stim, digest, tasks, bool(flags & 2))
     if kind == KIND_STIMULUS:
         sid, _ = struct.unpack_from("<IB", p)
         return StimulusEntry(sid, p[STIMULUS_HEAD:].decode("utf-8", errors="replace"))

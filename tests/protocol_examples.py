@@ -70,9 +70,10 @@ TABLE = [StimulusEntry(0, "0deg_0.1N"), StimulusEntry(10, "A")]
 SESSION = Session(t_us=0, reason=SessionReason.START, version=3, board_id=1, running=True,
                   n_channels=338, rows=6, cols=6, step_us=100, tick_us=1000, snr_db=10.0,
                   response_window_us=500_000, n_stimuli=len(TABLE),
-                  table_digest=table_digest(TABLE))
+                  table_digest=table_digest(TABLE), tasks=0x000F, blind=True)
 """The session of a run's start: board 1, the 6x6 skin, 100 µs steps, 1 ms ticks, 10 dB,
-0.5 s response window, the two-row table :data:`TABLE`."""
+0.5 s response window, the two-row table :data:`TABLE`; it scores classification,
+localisation, force and slip (tasks 0x000F) on a blind link."""
 RUN_END = RunEnd(t_us=60_000_000, reason=RunEndReason.DURATION)
 """The run ended after its 60 s."""
 SESSION_RECORDS = (SESSION, *TABLE)

@@ -4,6 +4,7 @@ session replayed with its grip log gives the same truth bit for bit."""
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import threading
 
@@ -192,8 +193,10 @@ def test_a_grasp_run_poses_no_contact_task_and_a_scenario_still_does() -> None:
     """The lifts of a held object pose the grasp task alone: no contact task trial is kept
     (nor work done for one each tick), a FORCE ANSWER is NACKed TASK_NOT_POSED and the score's
     ``tasks`` is empty; the same lifts played as a scenario's contacts still pose and score
-    the contact tasks."""
-    answers, tasks = [], []
+    the contact tasks. Each board's SESSION announces the tasks it poses (SPEC.md §3.7:
+    classification alone, then with localisation, force and slip; no vibration) and, on a
+    blind link, that it is blind."""
+    answers, tasks, sessions = [], [], []
     for grasp in (PARAMS, None):
         host, slave_fd = PtyMasterTransport.open_pair()
         try:
@@ -201,6 +204,7 @@ def test_a_grasp_run_poses_no_contact_task_and_a_scenario_still_does() -> None:
             board = Board(CONFIG, lambda p=path: SerialTransport(p, baud=921600),
                           scene=lift_scene(PARAMS, 1), grasp=grasp)
             answers.append(board.handle(protocols.Answer(7, protocols.Task.FORCE, (0.3,))))
+            sessions.append(board.session(protocols.SessionReason.START))
             tasks.append(board.run(0.1).tasks)
         finally:
             host.shutdown()
@@ -210,3 +214,7 @@ def test_a_grasp_run_poses_no_contact_task_and_a_scenario_still_does() -> None:
     assert tasks[0] == {}
     assert tasks[1]["force"]["trials"] == tasks[1]["localisation"]["trials"] == 1
     assert tasks[1]["force"]["false_alarms"] == 1
+    assert [(s.tasks, s.blind) for s in sessions] == [(0x0001, False), (0x000F, False)]
+    blind = Board(dataclasses.replace(CONFIG, markers=False), lambda: SerialTransport("loop://"))
+    assert (blind.session(protocols.SessionReason.START).tasks,
+            blind.session(protocols.SessionReason.START).blind) == (0x0001, True)

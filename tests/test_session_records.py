@@ -3,6 +3,7 @@ and the commands around the wire: ``skinhil stimuli`` and ``skinhil pty``."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import select
@@ -193,3 +194,17 @@ def test_an_internal_error_ends_the_run_with_run_end_error(pty_pair) -> None:
     assert peer.records[-2:] == [final, protocols.RunEnd(final.t_us,
                                                         protocols.RunEndReason.ERROR)]
     assert final.t_us == 200_000 and final.events_queued == 0
+
+
+def test_a_session_of_an_earlier_revision_announces_no_task_and_no_blind_link() -> None:
+    """Bytes 32..33 and flag bit 1, reserved in the earlier revision (sent as 0), decode as
+    ``tasks`` 0 (not announced) and not blind; the example's 0x000F and blind flag round-trip
+    through every layout (SPEC.md §3.7)."""
+    old = dataclasses.replace(SESSION, tasks=0, blind=False)
+    payload = session_payload(SESSION)
+    assert payload[27] == 0x03 and payload[32:35] == bytes([0x0F, 0, 0])
+    assert session_payload(old)[27] == 0x01 and session_payload(old)[32:35] == bytes(3)
+    assert SerialDecoder().feed(SerialEncoder().session_record(old)).records == [old]
+    for fd in (False, True):
+        frames = CanEncoder(board_id=1, fd=fd).session_record(SESSION)
+        assert CanDecoder(board_id=1, fd=fd).feed(frames).records == [SESSION]
