@@ -20,6 +20,7 @@ import protocols.kernel_cache  # noqa: F401  (numba's cache keyed on the sources
 from protocols.budget import can_frame_seconds, serial_seconds
 from protocols.can_codec import CanDecoder, CanEncoder, full_events_frame
 from protocols.constants import N_CHANNELS
+from protocols.record_fields import answer_range
 from protocols.records import (
     ANSWER_SCALE,
     ANSWER_UNITS,
@@ -65,6 +66,6 @@ __all__ = [
     "SessionReason", "StimulusEntry", "table_digest",
     "Command", "CommandCode", "DecodeResult", "Decision", "LinkCounters", "Marker", "MarkerPhase",
     "MAX_PACKET_BYTES", "NackReason", "Record", "SerialDecoder", "SerialEncoder", "Status",
-    "ANSWER_SCALE", "ANSWER_UNITS", "Answer", "Task",
+    "ANSWER_SCALE", "ANSWER_UNITS", "Answer", "Task", "answer_range",
     "can_frame_seconds", "full_events_frame", "serial_seconds",
 ]

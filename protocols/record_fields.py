@@ -62,10 +62,25 @@ PLACE_BITS = 14
 """Each coordinate of a LOCALISATION answer: a signed 14-bit count of 0.01 mm (±81.91 mm)."""
 
 
-def _steps(value: float, task: int, bits: int, signed: bool, what: str) -> int:
+def _field_steps(task: int) -> tuple[int, int, int]:
+    """The wire field of each value of ``task``: its bits, least and greatest step (the
+    coordinates of LOCALISATION signed, the others not)."""
+    if task == Task.LOCALISATION:
+        return PLACE_BITS, -(1 << (PLACE_BITS - 1)), (1 << (PLACE_BITS - 1)) - 1
+    return ANSWER_FIELD_BITS, 0, (1 << ANSWER_FIELD_BITS) - 1
+
+
+def answer_range(task: int) -> tuple[float, float]:
+    """The least and greatest value (units of :data:`ANSWER_UNITS`) each value of ``task``
+    (LOCALISATION, FORCE or VIBRATION) can carry on the wire (SPEC.md §3.5.3)."""
+    _, lo, hi = _field_steps(task)
+    return lo * ANSWER_SCALE[task], hi * ANSWER_SCALE[task]
+
+
+def _steps(value: float, task: int, what: str) -> int:
     """``value`` in wire steps of ``task`` (:data:`ANSWER_SCALE`), checked to fit."""
     v = float(value)
-    lo, hi = (-(1 << (bits - 1)), (1 << (bits - 1)) - 1) if signed else (0, (1 << bits) - 1)
+    bits, lo, hi = _field_steps(task)
     n = round(v / ANSWER_SCALE[task]) if math.isfinite(v) else lo - 1
     if not lo <= n <= hi:
         raise ProtocolError(f"ANSWER {what} {value!r} is outside "
@@ -86,10 +101,10 @@ def answer_field(answer: Answer) -> int:
     if task == Task.CLASSIFICATION:
         field = check_uint(int(vals[0]), 24, "ANSWER stimulus_id")
     elif task == Task.LOCALISATION:
-        field = (_steps(vals[0], task, PLACE_BITS, True, "x_mm")
-                 | _steps(vals[1], task, PLACE_BITS, True, "y_mm") << PLACE_BITS)
+        field = (_steps(vals[0], task, "x_mm")
+                 | _steps(vals[1], task, "y_mm") << PLACE_BITS)
     elif task in (Task.FORCE, Task.VIBRATION):
-        field = _steps(vals[0], task, ANSWER_FIELD_BITS, False, "value")
+        field = _steps(vals[0], task, "value")
     elif task == Task.SLIP:
         field = 0
     else:

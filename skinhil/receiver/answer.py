@@ -30,11 +30,13 @@ def host_encoder(transport: Any, board_id: int) -> Any:
 
 
 class CommandSender(ReceiverListener):
-    """Sends COMMAND units to the board on ``transport`` and counts them and their ACKs."""
+    """Sends COMMAND units to the board on ``transport`` and counts them and their ACKs;
+    ``encoder`` another sender's encoder when both send on one link (the host's sequence
+    numbers stay one count, SPEC.md §3.5)."""
 
-    def __init__(self, transport: Any, board_id: int) -> None:
+    def __init__(self, transport: Any, board_id: int, encoder: Any = None) -> None:
         self.transport = transport
-        self.encoder = host_encoder(transport, board_id)
+        self.encoder = encoder if encoder is not None else host_encoder(transport, board_id)
         self.sent = 0
         """Commands handed to the link."""
         self.unsent = 0

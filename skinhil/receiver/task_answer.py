@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import json
 import logging
+import math
 from collections import Counter, deque
 from pathlib import Path
 from typing import Any
@@ -26,8 +27,8 @@ from typing import Any
 import numpy as np
 
 import protocols
-from skinhil.errors import ConfigError, TransportError
-from skinhil.receiver.answer import SEND_TIMEOUT_S, host_encoder
+from skinhil.errors import ConfigError
+from skinhil.receiver.answer import CommandSender
 from skinhil.receiver.receiver import Receiver, ReceiverListener
 from skinhil.receiver.scoring import ScoredDecision
 from skinhil.receiver.task_decoders import (
@@ -52,8 +53,9 @@ KEEP_EVENTS_S = 1.0
 
 class TaskAnswerer(ReceiverListener):
     """Sends ANSWERs of the contact tasks for ``receiver``'s detected onsets (``reference``
-    or ``random``) or from a truth file (``oracle``, ``truth_path``); ``encoder`` the host's
-    encoder when another listener sends commands on the link too."""
+    or ``random``) or from a truth file (``oracle``, ``truth_path``), through its
+    :class:`CommandSender`; ``encoder`` the host's encoder when another listener sends
+    commands on the link too (a :class:`~skinhil.receiver.answer.DecisionAnswerer`'s)."""
 
     def __init__(self, receiver: Receiver, answerer: str = "reference",
                  truth_path: Path | None = None, seed: int = 0, encoder: Any = None) -> None:
@@ -64,9 +66,9 @@ class TaskAnswerer(ReceiverListener):
                               "give both, or neither")
         self.receiver = receiver
         self.answerer = answerer
-        self.encoder = encoder or host_encoder(receiver.transport, receiver.board_id)
-        """The host's COMMAND encoder: shared with a :class:`DecisionAnswerer` on the same
-        link, so the host's sequence numbers stay one count (SPEC.md §3.5)."""
+        self.sender = CommandSender(receiver.transport, receiver.board_id, encoder)
+        """Sends the ANSWERs and counts them in all (the per-task counts are here); its
+        encoder shared with a DecisionAnswerer on the same link (SPEC.md §3.5)."""
         self._rng = np.random.default_rng(seed)
         self._events: deque[np.ndarray] = deque()
         self._xy_mm: np.ndarray | None = None
@@ -81,7 +83,8 @@ class TaskAnswerer(ReceiverListener):
         self.sent: Counter[str] = Counter()
         self.acked: Counter[str] = Counter()
         self.nacked: Counter[str] = Counter()
-        self.unsent = 0
+        self.invalid = 0
+        """Answers not sent because a value was not a finite number."""
         self._oracle: list[tuple[int, int, tuple[float, ...]]] = (
             _oracle_answers(truth_path) if truth_path is not None else [])
 
@@ -168,23 +171,25 @@ class TaskAnswerer(ReceiverListener):
     def _send(self, task: protocols.Task, values: tuple[float, ...]) -> None:
         if task in self.off:
             return
-        self._token = (self._token + 1) % 65536
-        try:
-            payload = self.encoder.command(protocols.Answer(self._token, task, values))
-            done = self.receiver.transport.send(payload, timeout=SEND_TIMEOUT_S)
-        except (TransportError, protocols.errors.ProtocolError) as exc:
-            log.warning("ANSWER of %s not sent: %s", task.name, exc)
-            done = -1
-        if done < 1:
-            self.unsent += 1
+        if not all(math.isfinite(v) for v in values):
+            log.warning("ANSWER of %s not sent: a value is not a number: %r", task.name, values)
+            self.invalid += 1
             return
-        self._pending[self._token] = int(task)
-        self.sent[task.name.lower()] += 1
+        if values:  # within what the wire carries (SPEC.md §3.5.3): the nearest it can
+            lo, hi = protocols.answer_range(task)
+            values = tuple(min(max(v, lo), hi) for v in values)
+        self._token = (self._token + 1) % 65536
+        if self.sender.send(protocols.Answer(self._token, task, values),
+                            f"ANSWER of {task.name}"):
+            self._pending[self._token] = int(task)
+            self.sent[task.name.lower()] += 1
 
     def as_dict(self) -> dict[str, Any]:
-        """The answers per task: sent, acked, nacked; and how many could not be sent."""
+        """The answers per task: sent, acked, nacked; how many the link refused (unsent) and
+        how many had a value that is not a number (invalid)."""
         return {"answerer": self.answerer, "sent": dict(self.sent), "acked": dict(self.acked),
-                "nacked": dict(self.nacked), "unsent": self.unsent}
+                "nacked": dict(self.nacked), "unsent": self.sender.unsent,
+                "invalid": self.invalid}
 
 
 def _oracle_answers(path: Path) -> list[tuple[int, int, tuple[float, ...]]]:
