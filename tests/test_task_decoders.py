@@ -1,16 +1,24 @@
 """The reference receiver's task decoders (skinhil/receiver/task_decoders.py) on spikes whose
-answer is known: a centroid, a phase-locked frequency, the slip rule."""
+answer is known: a centroid, the vibration class of phase-locked spikes, the force line, the
+slip rule."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from skinhil.receiver.task_decoders import (
+    SLIP_CHANNELS,
+    SLIP_SPIKES,
+    SLIP_WATCH_S,
+    SLIP_WINDOW_S,
+    VIBRATION_CLASSES_HZ,
     force_n,
     frequency_hz,
-    is_slip,
     locate_mm,
     sensor_xy_mm,
+    slip_time_us,
+    vibration_features,
+    within_touch,
 )
 
 
@@ -23,22 +31,30 @@ def test_locate_is_the_centroid_of_the_spiking_sensors() -> None:
     assert locate_mm(np.zeros(0, dtype=np.int64), xy) == (0.0, 0.0)
 
 
-def test_frequency_finds_the_rhythm_of_the_spikes() -> None:
+def test_frequency_classes_spikes_by_their_phase_locking() -> None:
     rng = np.random.default_rng(0)
-    for hz in (50.0, 120.0, 300.0):
-        cycles = np.arange(int(0.05 * hz))
-        t_us = np.sort((cycles + 0.25) / hz * 1e6 + rng.normal(0, 100, cycles.size))
-        t_us = np.concatenate([t_us, rng.uniform(0, 5e4, 3)])  # a few noise spikes
-        assert abs(frequency_hz(np.sort(t_us).astype(np.int64)) - hz) <= 0.1 * hz
-    # on the busiest channels: noise spread over many others is left out
-    t_us = np.concatenate([np.arange(25) / 100.0 * 1e6 + rng.normal(0, 300, 25),
-                           rng.uniform(0, 2.5e5, 100)])
-    addr = np.concatenate([np.full(25, 7), rng.integers(20, 338, 100)])
-    order = np.argsort(t_us)
-    assert abs(frequency_hz(t_us[order].astype(np.int64), addr[order]) - 100.0) <= 2.0
+    for hz in (50.0, 100.0):  # 170 spikes over 0.3 s, the touched channels' locked to hz
+        locked = (np.arange(60) + rng.normal(0, 0.03, 60)) / hz * 1e6 % 3e5
+        t_us = np.concatenate([locked, rng.uniform(0, 3e5, 110)])
+        addr = np.concatenate([rng.integers(0, 10, 60), rng.integers(10, 338, 110)])
+        order = np.argsort(t_us)
+        features = vibration_features(t_us[order].astype(np.int64), addr[order])
+        assert features[0] == 170 and features[1 + VIBRATION_CLASSES_HZ.index(hz)] > 10
+        assert frequency_hz(t_us[order].astype(np.int64), addr[order]) == hz
 
 
-def test_force_is_a_line_of_spikes_and_slip_needs_a_touch() -> None:
+def test_force_is_a_line_of_spikes_and_a_slip_needs_its_channels() -> None:
     assert force_n(10) != force_n(30) and min(force_n(0), force_n(10**6)) >= 0.0
-    assert not is_slip(100_000, None)
-    assert is_slip(300_000, 100_000) and not is_slip(700_000, 100_000)
+    assert not within_touch(100_000, None)
+    assert within_touch(300_000, 100_000) and not within_touch(700_000, 100_000)
+    start = 1_000_000
+    lo = start + int(SLIP_WATCH_S[0] * 1e6)
+    burst = lo + 20_000 + np.arange(SLIP_SPIKES) * 5_000  # within SLIP_WINDOW_S
+    slip_ch = np.resize(np.asarray(SLIP_CHANNELS), SLIP_SPIKES)
+    other = next(c for c in range(338) if c not in SLIP_CHANNELS)
+    assert slip_time_us(burst, slip_ch, start) == burst[-1]
+    assert slip_time_us(burst, np.full(SLIP_SPIKES, other), start) is None
+    assert slip_time_us(burst[:-1], slip_ch[:-1], start) is None  # one spike short
+    spread = lo + np.arange(SLIP_SPIKES) * int(SLIP_WINDOW_S * 1e6) // (SLIP_SPIKES - 2)
+    assert slip_time_us(spread, slip_ch, start) is None  # too slow for a slip
+    assert slip_time_us(burst - 100_000, slip_ch, start) is None  # the touch-down's burst

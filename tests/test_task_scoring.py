@@ -11,6 +11,8 @@ import threading
 import time
 from pathlib import Path
 
+import pytest
+
 import protocols
 from firmware_sim.board import Board, BoardConfig
 from protocols import Answer, Task
@@ -195,3 +197,14 @@ def test_serve_score_is_blind_unless_markers_are_asked_for() -> None:
     assert _config(parser.parse_args(serve)).markers  # no scoring: today's stream
     assert not _config(parser.parse_args([*serve, "--score", "s.json"])).markers
     assert _config(parser.parse_args([*serve, "--score", "s.json", "--markers"])).markers
+
+
+def test_answer_range_is_what_the_wire_carries() -> None:
+    enc, dec = protocols.SerialEncoder(), protocols.SerialDecoder()
+    for task, n in ((Task.LOCALISATION, 2), (Task.FORCE, 1), (Task.VIBRATION, 1)):
+        lo, hi = protocols.answer_range(task)
+        for v in (lo, hi):
+            got = dec.feed(enc.command(Answer(1, task, (v,) * n))).records
+            assert [a.values for a in got] == [pytest.approx((v,) * n)]
+        with pytest.raises(protocols.errors.ProtocolError):
+            enc.command(Answer(1, task, (hi + 2 * protocols.ANSWER_SCALE[task],) * n))

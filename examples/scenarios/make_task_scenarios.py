@@ -23,34 +23,34 @@ def _write(name: str, about: str, indenter: str, contacts: list[dict[str, object
 
 def main() -> None:
     rng = random.Random(30)
-    places = [(x, y) for x in (-1.0, 0.0, 1.0) for y in (-1.0, 0.0, 1.0)] * 2
+    places = [(x, y) for x in (-1.0, 0.0, 1.0) for y in (-1.0, 0.0, 1.0)] * 4
     rng.shuffle(places)
-    _write("localisation", "18 presses of a 3 mm sphere, 1 mm deep for 0.1 s, at the 9 "
-           "places of a 1 mm grid around the centre (twice each), one every 0.6 s.",
+    _write("localisation", "36 presses of a 3 mm sphere, 1 mm deep for 0.1 s, at the 9 "
+           "places of a 1 mm grid around the centre (four times each), one every 0.6 s.",
            '[[indenter]]\nname = "probe"\nshape = "sphere"\nradius_mm = 3.0',
            [{"indenter": "probe", "start_s": round(0.1 + 0.6 * i, 3), "motion": "press",
              "x_mm": x, "y_mm": y, "depth_mm": 1.0, "ramp_s": 0.01, "hold_s": 0.1}
             for i, (x, y) in enumerate(places)])
-    depths = [0.6, 0.8, 1.0, 1.2, 1.4, 1.6] * 3
+    depths = [0.6, 0.8, 1.0, 1.2, 1.4, 1.6] * 6
     rng.shuffle(depths)
-    _write("force", "18 presses of a 3 mm sphere at the centre, 0.6 to 1.6 mm deep in steps "
-           "of 0.2 mm (three each: neighbouring forces), held 0.15 s, one every 0.6 s.",
+    _write("force", "36 presses of a 3 mm sphere at the centre, 0.6 to 1.6 mm deep in steps "
+           "of 0.2 mm (six each: neighbouring forces), held 0.15 s, one every 0.6 s.",
            '[[indenter]]\nname = "probe"\nshape = "sphere"\nradius_mm = 3.0',
            [{"indenter": "probe", "start_s": round(0.1 + 0.6 * i, 3), "motion": "press",
              "depth_mm": d, "ramp_s": 0.01, "hold_s": 0.15} for i, d in enumerate(depths)])
-    speeds = [5.0, 10.0, 20.0, 40.0] * 3
+    speeds = [5.0, 10.0, 20.0, 40.0] * 6
     rng.shuffle(speeds)
-    _write("slip", "12 slides of a 5 mm ball held by 0.3 N and dragged 2 mm along x with low "
-           "friction at 5, 10, 20 or 40 mm/s (three each): each sticks, then slips; one every "
+    _write("slip", "24 slides of a 5 mm ball held by 1 N and dragged 2 mm along x with low "
+           "friction at 5, 10, 20 or 40 mm/s (six each): each sticks, then slips; one every "
            "1.0 s.", '[[indenter]]\nname = "ball"\nshape = "sphere"\nradius_mm = 5.0',
            [{"indenter": "ball", "start_s": round(0.1 + 1.0 * i, 3), "motion": "slide",
-             "x_mm": -1.0, "to_x_mm": 1.0, "speed_mm_per_s": v, "load_n": 0.3,
+             "x_mm": -1.0, "to_x_mm": 1.0, "speed_mm_per_s": v, "load_n": 1.0,
              "ramp_s": 0.03, "dwell_s": 0.1, "mu_static": 0.4, "mu_kinetic": 0.3}
             for i, v in enumerate(speeds)])
-    freqs = [50.0, 100.0, 200.0, 300.0] * 4
+    freqs = [50.0, 100.0, 200.0, 300.0] * 8
     rng.shuffle(freqs)
-    _write("vibration", "16 presses of a flat 1.5 mm pad, 0.8 mm deep for 0.3 s, vibrating "
-           "0.1 mm along z at 50, 100, 200 or 300 Hz (four each), one every 0.6 s.",
+    _write("vibration", "32 presses of a flat 1.5 mm pad, 0.8 mm deep for 0.3 s, vibrating "
+           "0.1 mm along z at 50, 100, 200 or 300 Hz (eight each), one every 0.6 s.",
            '[[indenter]]\nname = "pad"\nshape = "flat"\nradius_mm = 1.5',
            [{"indenter": "pad", "start_s": round(0.1 + 0.6 * i, 3), "motion": "press",
              "depth_mm": 0.8, "ramp_s": 0.02, "hold_s": 0.3, "vibration_mm": 0.1,

@@ -1,13 +1,15 @@
 """The reference receiver answers the contact tasks (``skinhil listen --answer``): at each
 onset it detects (no ground truth), it sends ANSWERs (``protocols/SPEC.md`` §3.5.3) of
-LOCALISATION and FORCE at the end of the decision window and VIBRATION once the touch's
-vibration window has passed, or a SLIP when the onset falls inside the touch before it,
-computed by :mod:`skinhil.receiver.task_decoders` from the spikes.
+LOCALISATION and FORCE at the end of the decision window, VIBRATION once the touch's
+vibration window has passed, and a SLIP as soon as the touch's spikes show it (within its
+slip watch), computed by :mod:`skinhil.receiver.task_decoders` from the spikes; an onset
+inside the touch before it is no new touch.
 
 Two bounds to compare it with, through the same link and the same answer path:
 
 - ``random``: the same onsets, each value drawn at random (a place on the skin, a force of
-  0.05..0.6 N, a frequency of the vibration band), a slip at random (p = 0.5) between them;
+  0.05..0.6 N, a frequency of the vibration band), a slip with p = 0.5 at a random time of
+  the touch's slip watch;
 - ``oracle``: the truth of an earlier run of the same scenario (``serve --truth FILE``, the
   world's mechanics do not depend on the noise): each trial answered with its true values
   :data:`ORACLE_DELAY_S` after its onset, timed by the board time the stream shows.
@@ -32,13 +34,15 @@ from skinhil.receiver.answer import CommandSender
 from skinhil.receiver.receiver import Receiver, ReceiverListener
 from skinhil.receiver.scoring import ScoredDecision
 from skinhil.receiver.task_decoders import (
+    SLIP_WATCH_S,
     VIBRATION_BAND_HZ,
     VIBRATION_WINDOW_S,
     force_n,
     frequency_hz,
-    is_slip,
     locate_mm,
     sensor_xy_mm,
+    slip_time_us,
+    within_touch,
 )
 
 log = logging.getLogger(__name__)
@@ -75,6 +79,9 @@ class TaskAnswerer(ReceiverListener):
         self._touch_us: int | None = None
         self._vibration: deque[int] = deque()
         """Onsets (µs) whose VIBRATION answer waits for its window's spikes."""
+        self._slip_watch: tuple[int, int | None] | None = None
+        """The touch watched for a slip: its window start (µs) and, for ``random``, the
+        board time (µs) its SLIP is due (None: none)."""
         self._token = 0
         self._pending: dict[int, int] = {}
         """token → task of the ANSWERs not yet ACKed."""
@@ -108,6 +115,7 @@ class TaskAnswerer(ReceiverListener):
             hz = (frequency_hz(ev["t"], ev["addr"]) if self.answerer == "reference"
                   else float(self._rng.uniform(*VIBRATION_BAND_HZ)))
             self._send(protocols.Task.VIBRATION, (round(hz, 2),))
+        self._watch_slip(last)
 
     def on_status(self, status: Any) -> None:
         if self.answerer == "oracle":
@@ -117,11 +125,14 @@ class TaskAnswerer(ReceiverListener):
         if self.answerer == "oracle":
             return
         p = decision.prediction
-        if is_slip(p.detect_t_us, self._touch_us):
-            if self.answerer == "reference" or self._rng.random() < 0.5:
-                self._send(protocols.Task.SLIP, ())
+        if within_touch(p.detect_t_us, self._touch_us):
             return
         self._touch_us = p.detect_t_us
+        lo, hi = (p.window_t_us + int(s * 1e6) for s in SLIP_WATCH_S)
+        due = (None if self.answerer == "reference" or self._rng.random() >= 0.5
+               else int(self._rng.integers(lo, hi)))
+        if self.answerer == "reference" or due is not None:
+            self._slip_watch = (p.window_t_us, due)
         ev = self._window(p.window_t_us, p.decided_t_us)
         if self.answerer == "reference":
             xy = self._xy_mm if self._xy_mm is not None else sensor_xy_mm((6, 6))
@@ -161,6 +172,23 @@ class TaskAnswerer(ReceiverListener):
             return np.zeros(0, dtype=[("t", "<i8"), ("addr", "<u2")])
         ev = np.concatenate(list(self._events))
         return ev[(ev["t"] >= start_us) & (ev["t"] < end_us)]
+
+    def _watch_slip(self, last_us: int) -> None:
+        """Answer SLIP for the watched touch once its spikes up to ``last_us`` (µs) show it
+        (``random``: once its due time passed); stop watching at the watch's end."""
+        if self._slip_watch is None or protocols.Task.SLIP in self.off:
+            return
+        start, due = self._slip_watch
+        end = start + int(SLIP_WATCH_S[1] * 1e6)
+        if due is not None:
+            slipped = due <= last_us
+        else:
+            ev = self._window(start, min(end, last_us + 1))
+            slipped = slip_time_us(ev["t"], ev["addr"], start) is not None
+        if slipped:
+            self._send(protocols.Task.SLIP, ())
+        if slipped or last_us >= end:
+            self._slip_watch = None
 
     def _play_oracle(self) -> None:
         now = self.receiver.known_board_time_us()

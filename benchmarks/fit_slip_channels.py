@@ -1,0 +1,103 @@
+"""Fits the reference SLIP decoder's channels (skinhil/receiver/task_decoders.py): the
+channels that are near silent while a held contact sticks and fire once it slips, on
+calibration runs of examples/scenarios/task_slip.toml.
+
+Each calibration run is ``skinhil simulate`` (offline, no link) at the given SNR and one of the
+seeds. Per slide, from the run's truth: its stick spikes, 50..120 ms after the touch-down, and
+its slip spikes, 20..90 ms after the slip onset (the first tick of gross slip once the touch
+has lasted 20 ms, the board's rule). A channel is a slip channel when, on average over the
+slides, it fires at most STICK_MAX spikes in the stick window and at least RISE_MIN more in
+the slip window:
+
+    python benchmarks/fit_slip_channels.py --snr-db 10 --seeds 1,2,3,4
+    python benchmarks/fit_slip_channels.py --smoke     # one seed, the first 2 s only
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO))
+
+from skinhil.receiver.task_decoders import SLIP_CHANNELS  # noqa: E402
+from skinhil.world.truth import SLIP_STATES  # noqa: E402
+
+SCENARIO = REPO / "examples" / "scenarios" / "task_slip.toml"
+STICK_US = (50_000, 120_000)
+SLIP_US = (20_000, 90_000)
+SETTLE_US = 20_000
+STICK_MAX = 0.5
+RISE_MIN = 0.5
+SMOKE_DURATION_S = 2.0
+N_CHANNELS = 338
+
+
+def slides(snr_db: float, seed: int, duration: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Per slide of one calibration run: the spikes per channel while it sticks and once it
+    slips (two (n_slides, N_CHANNELS) arrays)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "cal.npz"
+        subprocess.run([sys.executable, "-m", "skinhil", "simulate", "--schedule",
+                        str(SCENARIO), "--out", str(out), "--no-progress", "--no-forces",
+                        "--snr-db", str(snr_db), "--seed", str(seed), *duration],
+                       check=True, capture_output=True)
+        z = np.load(out)
+        ev, truth = z["events"], z["truth"]
+
+    def counts(a: int, b: int) -> np.ndarray:
+        sel = ev["addr"][(ev["t"] >= a) & (ev["t"] < b)].astype(np.int64)
+        return np.bincount(sel, minlength=N_CHANNELS)[:N_CHANNELS]
+
+    stick, slip = [], []
+    gross = SLIP_STATES.index("gross")
+    for c in np.unique(truth["contact"]):
+        rows = truth[(truth["contact"] == c) & (truth["nodes"] > 0)]
+        if not len(rows):
+            continue
+        down = int(rows["t_us"][0])
+        slipping = rows["t_us"][(rows["slip"] == gross) & (rows["t_us"] >= down + SETTLE_US)]
+        if not len(slipping):
+            continue
+        onset = int(slipping[0])
+        stick.append(counts(down + STICK_US[0], down + STICK_US[1]))
+        slip.append(counts(onset + SLIP_US[0], onset + SLIP_US[1]))
+    return (np.array(stick, float).reshape(-1, N_CHANNELS),
+            np.array(slip, float).reshape(-1, N_CHANNELS))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--snr-db", type=float, default=10.0)
+    ap.add_argument("--seeds", default="1,2,3,4")
+    ap.add_argument("--smoke", action="store_true",
+                    help=f"one seed, the first {SMOKE_DURATION_S:g} s of board time only (a "
+                         "check that the script runs, not a fit to use)")
+    args = ap.parse_args()
+    seeds = [int(s) for s in args.seeds.split(",") if s]
+    duration = ["--duration", str(SMOKE_DURATION_S)] if args.smoke else []
+    if args.smoke:
+        seeds = seeds[:1]
+    runs = [slides(args.snr_db, s, duration) for s in seeds]
+    stick = np.vstack([r[0] for r in runs])
+    slip = np.vstack([r[1] for r in runs])
+    if not len(stick):
+        raise SystemExit("no slide slipped: nothing to fit")
+    a, b = stick.mean(axis=0), slip.mean(axis=0)
+    chosen = np.flatnonzero((a <= STICK_MAX) & (b - a >= RISE_MIN))
+    print(f"{len(stick)} slides over seeds {','.join(map(str, seeds))}; "
+          f"{len(chosen)} slip channels: {a[chosen].sum():.1f} spikes while sticking, "
+          f"{b[chosen].sum():.1f} once slipping (per 70 ms, mean per slide)")
+    print("SLIP_CHANNELS = (" + ", ".join(str(int(c)) for c in chosen) + ")")
+    same = tuple(int(c) for c in chosen) == SLIP_CHANNELS
+    print(f"the constants in task_decoders.py: {'the same' if same else 'differ'}")
+
+
+if __name__ == "__main__":
+    main()
