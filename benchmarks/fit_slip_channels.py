@@ -15,41 +15,29 @@ the slip window:
 
 from __future__ import annotations
 
-import argparse
-import subprocess
 import sys
-import tempfile
-from pathlib import Path
 
 import numpy as np
+from task_calibration import REPO, calibration_args, calibration_run
 
-REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from skinhil.receiver.task_decoders import SLIP_CHANNELS  # noqa: E402
 from skinhil.world.truth import SLIP_STATES  # noqa: E402
 
-SCENARIO = REPO / "examples" / "scenarios" / "task_slip.toml"
 STICK_US = (50_000, 120_000)
 SLIP_US = (20_000, 90_000)
 SETTLE_US = 20_000
+"""Gross slip in a touch's first this long (µs) is its touch-down (the board's rule)."""
 STICK_MAX = 0.5
 RISE_MIN = 0.5
-SMOKE_DURATION_S = 2.0
 N_CHANNELS = 338
 
 
 def slides(snr_db: float, seed: int, duration: list[str]) -> tuple[np.ndarray, np.ndarray]:
     """Per slide of one calibration run: the spikes per channel while it sticks and once it
     slips (two (n_slides, N_CHANNELS) arrays)."""
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "cal.npz"
-        subprocess.run([sys.executable, "-m", "skinhil", "simulate", "--schedule",
-                        str(SCENARIO), "--out", str(out), "--no-progress", "--no-forces",
-                        "--snr-db", str(snr_db), "--seed", str(seed), *duration],
-                       check=True, capture_output=True)
-        z = np.load(out)
-        ev, truth = z["events"], z["truth"]
+    ev, truth = calibration_run("slip", snr_db, seed, duration)
 
     def counts(a: int, b: int) -> np.ndarray:
         sel = ev["addr"][(ev["t"] >= a) & (ev["t"] < b)].astype(np.int64)
@@ -73,18 +61,8 @@ def slides(snr_db: float, seed: int, duration: list[str]) -> tuple[np.ndarray, n
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--snr-db", type=float, default=10.0)
-    ap.add_argument("--seeds", default="1,2,3,4")
-    ap.add_argument("--smoke", action="store_true",
-                    help=f"one seed, the first {SMOKE_DURATION_S:g} s of board time only (a "
-                         "check that the script runs, not a fit to use)")
-    args = ap.parse_args()
-    seeds = [int(s) for s in args.seeds.split(",") if s]
-    duration = ["--duration", str(SMOKE_DURATION_S)] if args.smoke else []
-    if args.smoke:
-        seeds = seeds[:1]
-    runs = [slides(args.snr_db, s, duration) for s in seeds]
+    snr_db, seeds, duration = calibration_args(__doc__ or "", "1,2,3,4")
+    runs = [slides(snr_db, s, duration) for s in seeds]
     stick = np.vstack([r[0] for r in runs])
     slip = np.vstack([r[1] for r in runs])
     if not len(stick):
