@@ -4,8 +4,20 @@ slip rule."""
 
 from __future__ import annotations
 
-import numpy as np
+import math
+import os
+import select
+import time
+from types import SimpleNamespace
 
+import numpy as np
+import pytest
+from conftest import PtyPair
+
+import protocols
+from protocols import Task
+from skinhil.receiver.answer import CommandSender
+from skinhil.receiver.task_answer import TaskAnswerer
 from skinhil.receiver.task_decoders import (
     SLIP_CHANNELS,
     SLIP_SPIKES,
@@ -20,6 +32,7 @@ from skinhil.receiver.task_decoders import (
     vibration_features,
     within_touch,
 )
+from skinhil.transports.serial import SerialTransport
 
 
 def test_locate_is_the_centroid_of_the_spiking_sensors() -> None:
@@ -58,3 +71,30 @@ def test_force_is_a_line_of_spikes_and_a_slip_needs_its_channels() -> None:
     spread = lo + np.arange(SLIP_SPIKES) * int(SLIP_WINDOW_S * 1e6) // (SLIP_SPIKES - 2)
     assert slip_time_us(spread, slip_ch, start) is None  # too slow for a slip
     assert slip_time_us(burst - 100_000, slip_ch, start) is None  # the touch-down's burst
+
+
+def test_task_answers_leave_through_the_command_sender_within_the_wire_range(
+        pty_pair: PtyPair) -> None:
+    transport = SerialTransport(pty_pair.path, baud=921600)
+    try:
+        decisions = CommandSender(transport, 0)
+        receiver = SimpleNamespace(transport=transport, board_id=0, session=None)
+        tasks = TaskAnswerer(receiver, "random", encoder=decisions.encoder)  # type: ignore[arg-type]
+        tasks._send(Task.FORCE, (1e9,))         # beyond the wire: its greatest value
+        tasks._send(Task.FORCE, (math.nan,))    # not a number: not sent
+        tasks._send(Task.LOCALISATION, (-500.0, 1.25))
+        decisions.send(protocols.Decision(7, 3), "DECISION")
+        got: list = []
+        decoder = protocols.SerialDecoder()
+        end = time.monotonic() + 5.0
+        while len(got) < 3 and time.monotonic() < end:
+            if select.select([pty_pair.master], [], [], 0.2)[0]:
+                got += decoder.feed(os.read(pty_pair.master, 4096)).records
+    finally:
+        transport.shutdown()
+    assert [type(r).__name__ for r in got] == ["Answer", "Answer", "Decision"]
+    assert got[0].values == pytest.approx((protocols.answer_range(Task.FORCE)[1],))
+    assert got[1].values == pytest.approx((protocols.answer_range(Task.LOCALISATION)[0], 1.25))
+    assert tasks.as_dict()["sent"] == {"force": 1, "localisation": 1}
+    assert tasks.invalid == 1 and tasks.sender.sent == 2 and decisions.sent == 1
+    assert tasks.sender.encoder is decisions.encoder  # one sequence count on the link

@@ -154,6 +154,7 @@ class TaskAnswerer(ReceiverListener):
         if ack.opcode != protocols.CommandCode.ANSWER or ack.token not in self._pending:
             return
         task = self._pending.pop(ack.token)
+        self.sender.count_ack(ack)
         name = protocols.Task(task).name.lower()
         if ack.ok:
             self.acked[name] += 1
