@@ -418,12 +418,15 @@ class NeuronPopulation:
     def step_block(self, current_n: np.ndarray, dt_s: float) -> np.ndarray:
         """Advance ``n_steps`` steps of ``dt_s`` (s) with input forces ``current_n`` (N).
 
-        ``current_n`` is (n_steps, n) — shared by every trial — or (n_steps, batch, n);
-        returns bool spikes (n_steps, n) without a batch, else (n_steps, batch, n).
+        ``current_n`` is (n_steps, n) — shared by every trial — or (n_steps, batch, n), in
+        single (read as it is, as the fused kernels read the leapfrog's forces) or double
+        precision; returns bool spikes (n_steps, n) without a batch, else (n_steps, batch, n).
         """
         if not (math.isfinite(dt_s) and dt_s > 0):
             raise ConfigError(f"dt_s must be a finite number of seconds > 0, got {dt_s!r}")
-        cur = np.asarray(current_n, dtype=np.float64)
+        cur = np.asarray(current_n)
+        if cur.dtype != np.float32:  # single precision (the leapfrog's forces) as it is
+            cur = cur.astype(np.float64, copy=False)
         if cur.ndim == 2:
             cur = cur[:, None, :]
         if cur.ndim != 3 or cur.shape[2] != self.n_channels or cur.shape[1] not in (
