@@ -11,8 +11,9 @@ default 10 dB), spikes to events, and the events encoded for the wire
 
 - per step: mechanics (µs and ns per spring; the leapfrog's and the geometric mechanics'
   kernels on their input by slot, as the tick runs them),
-  neurons (µs and ns per channel), each timed alone on the same forces, and per tick the
-  events and encoding (µs);
+  neurons (µs and ns per channel), each timed alone on the same forces, the two together in
+  the one compiled call the tick makes (``m+n``: one call's overhead per tick, not two), and
+  per tick the events and encoding (µs);
 - memory: the peak of the bytes allocated (tracemalloc, kernels compiled beforehand) while
   the model, the timeline and the encoder are built and run for 20 ticks;
 - the real-time factor of the whole loop (simulated s per wall s; >= 1 keeps real time),
@@ -69,7 +70,11 @@ from skinhil.model.geometry import format_size, parse_size  # noqa: E402
 from skinhil.model.mechanics.geometric import GeometricMechanics, rk4_kernel  # noqa: E402
 from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, leapfrog_kernel  # noqa: E402
 from skinhil.model.pipeline import SensorPipeline  # noqa: E402
-from skinhil.model.sensor import SkinSensor  # noqa: E402
+from skinhil.model.sensor import (  # noqa: E402
+    SkinSensor,
+    _geometric_sensor_kernel,
+    _leapfrog_sensor_kernel,
+)
 from skinhil.model.skin import SkinModel, SkinParams  # noqa: E402
 from skinhil.model.stimuli import Schedule  # noqa: E402
 from skinhil.model.strain import max_strain  # noqa: E402
@@ -90,6 +95,9 @@ class SizeResult:
     regime: str
     mech_us: float
     neur_us: float
+    both_us: float
+    """Mechanics and neurons per step in the one compiled call the tick makes (NaN where
+    the tick makes two: the modal stepper, or the neurons on other threads)."""
     events_us: float
     encode_us: float
     loop_us: float
@@ -108,6 +116,7 @@ def _best_per_tick(fn, seconds: float, repeats: int) -> float:  # type: ignore[n
     (time.process_time: the time the machine's other work takes from it does not count)."""
     clock = time.process_time if CLOCK == "cpu" else time.perf_counter
     best = math.inf
+    fn()  # compiled (or loaded from the cache) for its arguments' types before it is timed
     for _ in range(repeats):
         calls = 0
         t0 = time.perf_counter()
@@ -181,6 +190,19 @@ def measure(size: tuple[int, int], threads: int, snr_db: float, seconds: float,
         mech_us = _best_per_tick(lambda: stepper.advance(forces), seconds / 4, repeats)
     neurons = sensor.neurons
     neur_us = _best_per_tick(lambda: neurons.step_block(springs, DT_S), seconds / 4, repeats)
+    both_us = math.nan  # the two in one compiled call, as the tick runs them (one thread)
+    fused = sensor.stepper
+    if threads == 1 and isinstance(fused, LeapfrogMechanics | GeometricMechanics):
+        slotted = fused.by_slot(forces)
+        out, raster = np.empty_like(springs), np.empty(springs.shape, dtype=np.bool_)
+        if isinstance(fused, LeapfrogMechanics):
+            both_us = _best_per_tick(lambda: _leapfrog_sensor_kernel(
+                slotted, out, raster, DT_S, fused.substeps, fused.operands,
+                neurons.kernel_operands()), seconds / 4, repeats)
+        else:
+            both_us = _best_per_tick(lambda: _geometric_sensor_kernel(
+                slotted, out, raster, DT_S, fused.operands, neurons.kernel_operands()),
+                seconds / 4, repeats)
     first = sensor.step_index
     events = sensor.events(spikes, first)
     events_us = _best_per_tick(lambda: sensor.events(spikes, first), seconds / 8, repeats)
@@ -196,8 +218,9 @@ def measure(size: tuple[int, int], threads: int, snr_db: float, seconds: float,
     encode_us = _best_per_tick(encode, seconds / 8, repeats)
     regime = "geometric" if model.params.dynamics == "geometric" else model.linear_regime
     return SizeResult(size, threads, model.n_springs, regime,
-                      mech_us / STEPS_PER_TICK, neur_us / STEPS_PER_TICK, events_us, encode_us,
-                      loop_us, memory / 1e6, events_per_s)
+                      mech_us / STEPS_PER_TICK, neur_us / STEPS_PER_TICK,
+                      both_us / STEPS_PER_TICK, events_us, encode_us, loop_us, memory / 1e6,
+                      events_per_s)
 
 
 CONTACT_S = 600.0
@@ -285,18 +308,19 @@ def measure_contact(size: tuple[int, int], kind: str, snr_db: float, seconds: fl
 def _row(r: SizeResult) -> str:
     return (f"{format_size(r.size):>6} {r.threads:>2} {r.springs:>7} {r.regime:>9} "
             f"{r.mech_us:8.1f} {1e3 * r.mech_us / r.springs:6.2f} "
-            f"{r.neur_us:8.1f} {1e3 * r.neur_us / r.springs:6.2f} "
+            f"{r.neur_us:8.1f} {1e3 * r.neur_us / r.springs:6.2f} {r.both_us:7.1f} "
             f"{r.events_us:7.1f} {r.encode_us:7.1f} {r.loop_us / STEPS_PER_TICK:8.1f} "
             f"{1e3 * r.loop_us / STEPS_PER_TICK / r.springs:6.2f} {r.memory_mb:7.1f} "
             f"{r.events_per_s / 1e3:8.1f} {r.rtf:6.2f}")
 
 
 HEADER = (f"{'size':>6} {'th':>2} {'springs':>7} {'stepper':>9} "
-          f"{'mech µs':>8} {'ns/sp':>6} {'neur µs':>8} {'ns/ch':>6} "
+          f"{'mech µs':>8} {'ns/sp':>6} {'neur µs':>8} {'ns/ch':>6} {'m+n µs':>7} "
           f"{'ev µs':>7} {'enc µs':>7} {'loop µs':>8} {'ns/sp':>6} {'mem MB':>7} "
           f"{'kev/s':>8} {'RTF':>6}\n"
-          "(mech, neur and loop per 0.1 ms step; ev and enc per 1 ms tick; mem: model bytes "
-          "allocated, tracemalloc; RTF: real-time factor of the loop)")
+          "(mech, neur, m+n and loop per 0.1 ms step, m+n the two in the tick's one compiled "
+          "call; ev and enc per 1 ms tick; mem: model bytes allocated, tracemalloc; RTF: "
+          "real-time factor of the loop)")
 
 
 def growth_exponent(results: list[SizeResult]) -> float:
