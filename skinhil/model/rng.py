@@ -30,7 +30,8 @@ function of where it is used:
   1,024 layers (8 KiB) twice as many pairs miss the fast path (0.85 %), with 4,096 (32 KiB) it
   fills the first-level cache; 2,048 was the fastest of the three on the Zen 4 VM.
 - **The slow path** (the wedges and the tail beyond :data:`ZIG_R`, 0.23 % of normals, 0.45 %
-  of pairs) runs out of line (:func:`normal_pair`): its uniforms come from a SplitMix64
+  of pairs) runs outside the vectorised loop (:func:`normal_pair`, inlined into the
+  kernel's second pass): its uniforms come from a SplitMix64
   sub-stream seeded by the word's own input and the half, so it too depends on nothing but
   ``(key, k)``.
 
