@@ -62,7 +62,7 @@ from skinhil.model.geometry import PAPER_SIZE, MeshSize
 from skinhil.model.neurons import MAX_SNR_DB, MIN_SNR_DB, NoiseParams, check_threads
 from skinhil.model.pipeline import SensorPipeline
 from skinhil.model.sensor import SkinSensor
-from skinhil.model.skin import SkinModel, SkinParams
+from skinhil.model.skin import DEFAULT_AMPLITUDE, SkinModel, SkinParams
 from skinhil.model.stimuli import Schedule, ScheduledStimulus
 from skinhil.model.stimulus_table import stimulus_table
 from skinhil.model.timeline import MarkerEvent, Timeline
@@ -129,6 +129,9 @@ class BoardConfig:
     "geometric" (:class:`skinhil.model.skin.SkinParams`)."""
     readout: str = "length"
     """What each spring reports: "length" (its length change) or "axial"."""
+    amplitude: str = DEFAULT_AMPLITUDE
+    """The skin's regime: "small" (the default) or "paper" (the paper's: M, K and C x0.01;
+    :data:`skinhil.model.skin.AMPLITUDES`)."""
     size: MeshSize = PAPER_SIZE
     """The skin's top layer (rows, cols) of masses; 6x6 is the paper's 338-channel skin."""
     threads: int = 1
@@ -241,9 +244,8 @@ class Board:
                               "on one thread: give --threads 1")
         self._open_link = open_link
         self.on_link = on_link or (lambda msg: log.warning("%s", msg))
-        model = SkinModel(SkinParams(mechanics=config.mechanics,  # type: ignore[arg-type]
-                                     readout=config.readout,  # type: ignore[arg-type]
-                                     size=config.size))
+        model = SkinModel(SkinParams.at_amplitude(config.amplitude, mechanics=config.mechanics,
+                                                  readout=config.readout, size=config.size))
         self.sensor = SkinSensor(model, config.dt_s, config.snr_db, config.seed,
                                  noise=config.noise, threads=max(1, config.threads - 1),
                                  state_forces=scene is not None)

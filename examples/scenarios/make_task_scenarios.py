@@ -25,19 +25,19 @@ def main() -> None:
     rng = random.Random(30)
     places = [(x, y) for x in (-1.0, 0.0, 1.0) for y in (-1.0, 0.0, 1.0)] * 4
     rng.shuffle(places)
-    _write("localisation", "36 presses of a 3 mm sphere, 1 mm deep for 0.1 s, at the 9 "
+    _write("localisation", "36 presses of a 3 mm sphere with 0.5 N for 0.1 s, at the 9 "
            "places of a 1 mm grid around the centre (four times each), one every 0.6 s.",
            '[[indenter]]\nname = "probe"\nshape = "sphere"\nradius_mm = 3.0',
            [{"indenter": "probe", "start_s": round(0.1 + 0.6 * i, 3), "motion": "press",
-             "x_mm": x, "y_mm": y, "depth_mm": 1.0, "ramp_s": 0.01, "hold_s": 0.1}
+             "x_mm": x, "y_mm": y, "load_n": 0.5, "ramp_s": 0.01, "hold_s": 0.1}
             for i, (x, y) in enumerate(places)])
-    depths = [0.6, 0.8, 1.0, 1.2, 1.4, 1.6] * 6
-    rng.shuffle(depths)
-    _write("force", "36 presses of a 3 mm sphere at the centre, 0.6 to 1.6 mm deep in steps "
-           "of 0.2 mm (six each: neighbouring forces), held 0.15 s, one every 0.6 s.",
+    loads = [0.2, 0.3, 0.4, 0.5, 0.6, 0.7] * 6
+    rng.shuffle(loads)
+    _write("force", "36 presses of a 3 mm sphere at the centre, 0.2 to 0.7 N in steps of "
+           "0.1 N (six each: neighbouring forces), held 0.15 s, one every 0.6 s.",
            '[[indenter]]\nname = "probe"\nshape = "sphere"\nradius_mm = 3.0',
            [{"indenter": "probe", "start_s": round(0.1 + 0.6 * i, 3), "motion": "press",
-             "depth_mm": d, "ramp_s": 0.01, "hold_s": 0.15} for i, d in enumerate(depths)])
+             "load_n": f, "ramp_s": 0.01, "hold_s": 0.15} for i, f in enumerate(loads)])
     speeds = [5.0, 10.0, 20.0, 40.0] * 6
     rng.shuffle(speeds)
     _write("slip", "24 slides of a 5 mm ball held by 1 N and dragged 2 mm along x with low "
@@ -49,11 +49,11 @@ def main() -> None:
             for i, v in enumerate(speeds)])
     freqs = [50.0, 100.0, 200.0, 300.0] * 8
     rng.shuffle(freqs)
-    _write("vibration", "32 presses of a flat 1.5 mm pad, 0.8 mm deep for 0.3 s, vibrating "
-           "0.1 mm along z at 50, 100, 200 or 300 Hz (eight each), one every 0.6 s.",
+    _write("vibration", "32 presses of a flat 1.5 mm pad, 20 µm deep for 0.3 s, vibrating "
+           "8 µm along z at 50, 100, 200 or 300 Hz (eight each), one every 0.6 s.",
            '[[indenter]]\nname = "pad"\nshape = "flat"\nradius_mm = 1.5',
            [{"indenter": "pad", "start_s": round(0.1 + 0.6 * i, 3), "motion": "press",
-             "depth_mm": 0.8, "ramp_s": 0.02, "hold_s": 0.3, "vibration_mm": 0.1,
+             "depth_mm": 0.02, "ramp_s": 0.02, "hold_s": 0.3, "vibration_mm": 0.008,
              "vibration_hz": f} for i, f in enumerate(freqs)])
 
 

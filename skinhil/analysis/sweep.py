@@ -98,12 +98,18 @@ class SweepSpec:
 
     @classmethod
     def log_grid(cls, n_stiffness: int, n_damping: int, mechanics: Mechanics = "linear",
-                 stiffness_range: tuple[float, float] = (5.0, 500.0),
-                 damping_range: tuple[float, float] = (0.005, 0.5),
-                 tension_n: Sequence[float] = (0.0,), dt_s: float = 2.5e-4) -> SweepSpec:
-        """Log-spaced grid; the default ranges span a decade either side of the defaults."""
-        return cls(log_values(*stiffness_range, n_stiffness),
-                   log_values(*damping_range, n_damping), tuple(tension_n), mechanics, dt_s)
+                 stiffness_range: tuple[float, float] | None = None,
+                 damping_range: tuple[float, float] | None = None,
+                 tension_n: Sequence[float] = (0.0,), dt_s: float = 2.5e-4,
+                 base: SkinParams | None = None) -> SweepSpec:
+        """Log-spaced grid around ``base`` (default ``SkinParams()``); the default ranges
+        span a decade either side of its stiffness (N/m) and damping (N·s/m)."""
+        base = base or SkinParams()
+        k, c = base.stiffness_n_per_m, base.damping_n_s_per_m
+        k_range = stiffness_range or (k / 10, k * 10)
+        c_range = damping_range or (c / 10, c * 10)
+        return cls(log_values(*k_range, n_stiffness), log_values(*c_range, n_damping),
+                   tuple(tension_n), mechanics, dt_s, base=base)
 
     @property
     def shape(self) -> tuple[int, int, int]:

@@ -12,7 +12,13 @@ from skinhil.model.geometry import PAPER_SIZE, MeshSize
 from skinhil.model.mechanics.readout import READOUTS
 from skinhil.model.neurons import NoiseParams
 from skinhil.model.schedule_file import MAX_FILE_BYTES, load_schedule
-from skinhil.model.skin import AUTO_GEOMETRIC_MAX_SPRINGS, SkinModel, SkinParams
+from skinhil.model.skin import (
+    AMPLITUDES,
+    AUTO_GEOMETRIC_MAX_SPRINGS,
+    DEFAULT_AMPLITUDE,
+    SkinModel,
+    SkinParams,
+)
 from skinhil.model.stimuli import Schedule
 from skinhil.world.scenario_file import Scenario, load_scenario
 
@@ -35,8 +41,8 @@ def add_size_option(parser: argparse.ArgumentParser) -> None:
 
 
 def add_model_options(parser: argparse.ArgumentParser, snr_default: float = math.inf) -> None:
-    """Add --size, --mechanics, --readout, --dt, --snr-db, --noise, --seed, --threads to
-    ``parser``."""
+    """Add --size, --mechanics, --readout, --amplitude, --dt, --snr-db, --noise, --seed,
+    --threads to ``parser``."""
     add_size_option(parser)
     parser.add_argument("--mechanics", choices=("auto", "linear", "geometric"), default="auto",
                         help="skin mechanics: 'geometric' (true spring lengths; reproduces "
@@ -48,6 +54,11 @@ def add_model_options(parser: argparse.ArgumentParser, snr_default: float = math
                         help="what each spring reports: 'length', k x its length change "
                              "(default), or 'axial', the small-displacement projection "
                              "k e.(q_j - q_i)")
+    parser.add_argument("--amplitude", choices=tuple(AMPLITUDES), default=DEFAULT_AMPLITUDE,
+                        help="the skin's regime: 'small' (default: M 10 g, K 5000 N/m, C 5 "
+                             "N.s/m per mass and spring, a 0.5 N touch at ~3 %% strain) or "
+                             "'paper' (M, K and C x0.01, the paper's regime: the same modes "
+                             "and linear forces at 100x the displacement, 150-400 %% strain)")
     parser.add_argument("--dt", dest="dt_s", type=real(*DT_RANGE_S, "seconds"), default=1e-4,
                         metavar="SECONDS",
                         help=f"simulation step in seconds, {DT_RANGE_S[0]:g}..{DT_RANGE_S[1]:g}"
@@ -76,8 +87,8 @@ def noise_from_args(args: argparse.Namespace) -> NoiseParams:
 
 def model_from_args(args: argparse.Namespace) -> SkinModel:
     """The skin model selected by :func:`add_model_options`' options."""
-    return SkinModel(SkinParams(mechanics=args.mechanics, readout=args.readout,
-                                size=args.size))
+    return SkinModel(SkinParams.at_amplitude(args.amplitude, mechanics=args.mechanics,
+                                             readout=args.readout, size=args.size))
 
 
 SCHEDULE_HELP = ("schedule or scenario file (TOML: stimuli and contacts; format and limits: "

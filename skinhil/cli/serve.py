@@ -172,7 +172,7 @@ def _config(args: argparse.Namespace) -> BoardConfig:
                        status_period_s=args.status_period_s, snr_db=args.snr_db,
                        noise=noise_from_args(args),
                        seed=args.seed, board_id=args.board_id, mechanics=args.mechanics,
-                       readout=args.readout,
+                       readout=args.readout, amplitude=args.amplitude,
                        size=args.size, threads=args.threads, schedule_mode=mode, rest_s=args.rest_s,
                        start_running=not args.stopped, reconnect=args.reconnect,
                        response_window_s=args.response_window_s,
@@ -294,7 +294,8 @@ BOARD_OPTIONS: dict[str, str] = {
     "rest_s": "--rest", "duration_s": "--duration", "board_id": "--board-id",
     "tick_s": "--tick", "fifo_events": "--fifo", "status_period_s": "--status-period",
     "stopped": "--stopped", "reconnect": "--reconnect", "size": "--size",
-    "mechanics": "--mechanics", "readout": "--readout", "dt_s": "--dt", "snr_db": "--snr-db",
+    "mechanics": "--mechanics", "readout": "--readout",
+    "amplitude": "--amplitude", "dt_s": "--dt", "snr_db": "--snr-db",
     "noise": "--noise", "seed": "--seed", "threads": "--threads"}
 """Options of the emulated board (dest: option), which a replay has none of."""
 

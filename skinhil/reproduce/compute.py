@@ -2,7 +2,8 @@
 defaults.
 
 Nothing here is tuned to a figure: the model is :class:`skinhil.SkinParams` with its defaults
-(only ``mechanics`` and ``readout`` change), the stimuli are the built-in paper stimuli, and
+at each amplitude (``SkinParams.at_amplitude``: only ``mechanics``, ``readout`` and the
+amplitude change), the stimuli are the built-in paper stimuli, and
 every analysis choice is the documented default of its module. The rules that pick what a
 figure shows are fixed here, before any run: the sensors of M15, the paper's "sensor #5", the
 operating SNR, and how far the damping grid is extended (:data:`EXTENSION_DECADES`).
@@ -68,13 +69,12 @@ optimum still at the edge then is reported as none within the extended grid."""
 VALID_RATIO = 0.1
 """The regime: the small-displacement model counts as valid while every spring's relative
 displacement |q_j − q_i| / L0 stays below this."""
-AMPLITUDES: dict[str, float] = {"paper": 1.0, "small": 100.0}
-"""The amplitude, the design's third factor: ``SkinParams()``'s mass, stiffness and damping
-multiplied together by this factor (and the sweep grids with them). The modes, the damping
-ratios and the spring forces of the linear model stay what they are; every displacement, so
-every strain, is divided by it. "paper": the paper's 0.5 N on the default skin (strain of
-100-200 %); "small": the same touch at 1/100 of the strain, where the geometric dynamics and
-the length readout reduce to their small-displacement limits."""
+AMPLITUDES: tuple[str, ...] = ("paper", "small")
+"""The amplitude, the design's third factor, in the design's order
+(:data:`skinhil.model.skin.AMPLITUDES`): "paper", the paper's regime (M, K and C of the
+default skin x0.01: the paper's 0.5 N at 150-400 % strain); "small", the default skin, the
+same modes, damping ratios and linear spring forces at 1/100 of the strain, where the
+geometric dynamics and the length readout reduce to their small-displacement limits."""
 TENSION_N: tuple[float, ...] = (0.0, 0.005, 0.0158, 0.05, 0.158, 0.5)
 """Baseline tensions (N) of the tension sweep: none, then log-spaced 5 mN..0.5 N, whose
 transverse stiffness T/L on the 1 mm mesh (5..500 N/m) spans the stiffness sweep's range."""
@@ -106,7 +106,7 @@ class ReproduceConfig:
     progress: bool = True
     extensions: int = MAX_EXTENSIONS
     """How many times the damping grid may be extended per end for 2B/2C (--quick: 0)."""
-    amplitudes: tuple[str, ...] = tuple(AMPLITUDES)
+    amplitudes: tuple[str, ...] = AMPLITUDES
     """Amplitude levels of the design (:data:`AMPLITUDES`); the tension sweeps run at the
     first only."""
 
@@ -226,27 +226,17 @@ def figure_snr_index(snrs_db: tuple[float, ...]) -> int:
                           for s in snrs_db]))
 
 
-def scaled_params(params: SkinParams, factor: float) -> SkinParams:
-    """``params`` with mass, stiffness and damping multiplied by ``factor`` (:data:`AMPLITUDES`)."""
-    return replace(params, mass_kg=params.mass_kg * factor,
-                   stiffness_n_per_m=params.stiffness_n_per_m * factor,
-                   damping_n_s_per_m=params.damping_n_s_per_m * factor)
-
-
 def sweep_grid(n_k: int, n_c: int, base: SkinParams) -> SweepSpec:
     """The K x C grid a decade either side of ``base``'s stiffness and damping."""
-    k, c = base.stiffness_n_per_m, base.damping_n_s_per_m
-    spec = SweepSpec.log_grid(n_k, n_c, mechanics=base.mechanics if base.mechanics != "auto"
-                              else base.dynamics, stiffness_range=(k / 10, k * 10),
-                              damping_range=(c / 10, c * 10))
-    return replace(spec, base=base)
+    return SweepSpec.log_grid(n_k, n_c, mechanics=base.mechanics if base.mechanics != "auto"
+                              else base.dynamics, base=base)
 
 
 def _tension_sweeps(mechanics: Dynamics, readout: Readout, n: int, config: ReproduceConfig
                     ) -> tuple[SweepResult, SweepResult]:
-    """Tension x K at the default C, and tension x C at the default K."""
-    base = SkinParams(readout=readout)
-    full = SweepSpec.log_grid(n, n, mechanics=mechanics)
+    """Tension x K at the first amplitude's C, and tension x C at its K."""
+    base = SkinParams.at_amplitude(config.amplitudes[0], readout=readout)
+    full = SweepSpec.log_grid(n, n, mechanics=mechanics, base=base)
     specs = (SweepSpec(log_values(full.stiffness_n_per_m[0], full.stiffness_n_per_m[-1], n),
                        (base.damping_n_s_per_m,), TENSION_N, mechanics, base=base),
              SweepSpec((base.stiffness_n_per_m,),
@@ -294,7 +284,7 @@ def extended_sweep(first: SweepResult, config: ReproduceConfig) -> SweepResult:
 
 @dataclass(frozen=True)
 class Regime:
-    """How large the deformation is at the default parameters, per mechanics: the largest
+    """How large the deformation is in the paper regime, per mechanics: the largest
     relative displacement per stimulus, and for the linear dynamics the force below which
     the small-displacement model holds (:data:`VALID_RATIO`) and how far the readouts part
     there and at the paper's force."""
@@ -310,16 +300,16 @@ class Regime:
 
 
 def compute_regime(dt_s: float) -> Regime:
-    """The regime at the default parameters: every paper stimulus (over the 0.5 s of the
+    """The regime of the paper amplitude: every paper stimulus (over the 0.5 s of the
     analyses) and every Figure 4 condition (over :data:`FIGURE_TRIAL_S`), both mechanics."""
     per: dict[str, dict[str, Deformation]] = {}
     for mechanics in ("linear", "geometric"):
-        model = SkinModel(SkinParams(mechanics=mechanics))  # type: ignore[arg-type]
+        model = SkinModel(SkinParams.at_amplitude("paper", mechanics=mechanics))
         runs = [(s, 0.5) for s in paper_stimuli()]
         runs += [(s, FIGURE_TRIAL_S) for s in [*direction_conditions(), figure_4a_stimulus()]]
         per[mechanics] = {s.name: largest_relative_displacement(model, s, d, dt_s)
                           for s, d in runs}
-    linear = SkinModel(SkinParams(mechanics="linear"))
+    linear = SkinModel(SkinParams.at_amplitude("paper", mechanics="linear"))
     paper = direction_conditions()[FOCUS_CONDITION]
     factor = VALID_RATIO / per["linear"][paper.name].ratio  # linear in the force
     force = float(np.linalg.norm(next(iter(paper.forces.values()))))
@@ -332,7 +322,7 @@ def compute_mechanics(mechanics: Dynamics, readout: Readout, config: ReproduceCo
                       amplitude: str = "paper") -> MechanicsResults:
     """Run every analysis for one mechanics, readout and amplitude (:data:`AMPLITUDES`) with
     default parameters otherwise."""
-    base = scaled_params(SkinParams(mechanics=mechanics, readout=readout), AMPLITUDES[amplitude])
+    base = SkinParams.at_amplitude(amplitude, mechanics=mechanics, readout=readout)
     model = SkinModel(base)
     seconds: dict[str, float] = {}
     t0 = time.perf_counter()
@@ -394,7 +384,8 @@ def compute_mechanics(mechanics: Dynamics, readout: Readout, config: ReproduceCo
 
 
 SUPPLEMENTARY_FACTORS: tuple[float, ...] = (0.1, 1.0, 10.0)
-"""Supplementary Figure 1: stiffness and damping at these multiples of the defaults (3 x 3)."""
+"""Supplementary Figure 1: stiffness and damping at these multiples of the paper regime's
+(3 x 3)."""
 
 
 @dataclass(frozen=True)
@@ -413,7 +404,7 @@ def compute_supplementary(dt_s: float) -> list[SupplementaryPoint]:
     """Supplementary Figure 1 on the paper's linear model (linear dynamics, axial readout):
     the sensor responses to stimulus 1 and the variance-explained curves of each phase, per
     K x C of :data:`SUPPLEMENTARY_FACTORS` (K-major)."""
-    base = SkinParams(mechanics="linear", readout="axial")
+    base = SkinParams.at_amplitude("paper", mechanics="linear", readout="axial")
     stimulus = paper_stimuli()[:1]
     windows = PhaseWindows.of(stimulus)
     out = []

@@ -152,7 +152,7 @@ def evaluate_setting(params: SkinParams, timing: tuple[float, float, float]
 def setting_strain(stiffness_n_per_m: float, damping_n_s_per_m: float,
                    timing: tuple[float, float, float]) -> float:
     """Largest strain of any spring under the five inputs at one setting (linear, axial)."""
-    params = replace(SkinParams(mechanics="linear", readout="axial"),
+    params = replace(SkinParams.at_amplitude("paper", mechanics="linear", readout="axial"),
                      stiffness_n_per_m=stiffness_n_per_m, damping_n_s_per_m=damping_n_s_per_m)
     stimuli = [replace(s, indentation_s=timing[0], decay_tau_s=timing[1])
                for s in paper_stimuli()]
@@ -163,7 +163,7 @@ def setting_strain(stiffness_n_per_m: float, damping_n_s_per_m: float,
 
 def _grid_eval(ks: tuple[float, ...], cs: tuple[float, ...],
                timing: tuple[float, float, float]) -> dict[str, np.ndarray]:
-    base = SkinParams(mechanics="linear", readout="axial")
+    base = SkinParams.at_amplitude("paper", mechanics="linear", readout="axial")
     rows = [evaluate_setting(replace(base, stiffness_n_per_m=k, damping_n_s_per_m=c), timing)
             for k in ks for c in cs]
     return {key: np.array([r[key] for r in rows]).reshape(len(ks), len(cs))
@@ -173,7 +173,8 @@ def _grid_eval(ks: tuple[float, ...], cs: tuple[float, ...],
 def _map_verdicts(ks: tuple[float, ...], cs: tuple[float, ...],
                   values: dict[str, np.ndarray]) -> dict[str, claims.Verdict]:
     spec = SweepSpec(ks, cs, mechanics="linear",
-                     base=SkinParams(mechanics="linear", readout="axial"))
+                     base=SkinParams.at_amplitude("paper", mechanics="linear",
+                                                  readout="axial"))
     sweep = SweepResult(spec, {"area": values["stacked_area"][None],
                                "npc_ratio": values["stacked_npc_ratio"][None],
                                "sir_ratio": values["stacked_sir_ratio"][None]}, 0.0)
@@ -252,7 +253,8 @@ def run_search(space: SearchSpace | None = None) -> dict[str, Any]:
                       "indentation_s": list(sp.indentation_s),
                       "decay_tau_s": [t if math.isfinite(t) else "inf" for t in sp.decay_tau_s],
                       "post_factor": list(sp.post_factor), "refine_best": sp.refine_best,
-                      "refine_points": sp.refine_points, "mass_kg": SkinParams().mass_kg},
+                      "refine_points": sp.refine_points,
+                      "mass_kg": SkinParams.at_amplitude("paper").mass_kg},
             "settings": sum(st["points"] for st in stages), "seconds": time.perf_counter() - start,
             "stages": stages, "reproduced_somewhere": claims_any, "best": top}
 

@@ -14,14 +14,14 @@ from skinhil.analysis.decoding_snr import CHANCE, split_standard_error, trial_st
 from skinhil.analysis.pca import N_SIR_COMPONENTS
 from skinhil.analysis.sweep import SweepResult
 from skinhil.decoding import CVResult
-from skinhil.model.skin import SkinModel
+from skinhil.model.skin import AMPLITUDES as SKIN_AMPLITUDES
+from skinhil.model.skin import DEFAULT_AMPLITUDE, SkinModel
 from skinhil.model.stimuli import paper_stimuli
 from skinhil.model.strain import StrainSummary
 from skinhil.output_files import write_text
 from skinhil.reproduce import claims
 from skinhil.reproduce.compute import (
     ALL_SET,
-    AMPLITUDES,
     EXTENSION_DECADES,
     FIGURE_SNR_DB,
     FIGURE_TRIAL_S,
@@ -223,7 +223,8 @@ def _regime_lines(regime: Regime) -> list[str]:
     mechs = list(regime.per_stimulus)
     lines = ["## Regime: how large the deformation is", "",
              "Largest relative displacement |q_j − q_i| / L0 of any spring (its ends' relative "
-             "displacement over its rest length) at the default parameters, per stimulus "
+             "displacement over its rest length) in the paper regime (the paper amplitude), "
+             "per stimulus "
              "(paper inputs over 0.5 s, Figure 4 conditions over "
              f"{FIGURE_TRIAL_S:g} s), per mechanics; the spring (0-based) and when:", "",
              "| stimulus | " + " | ".join(mechs) + " |", "|---" * (len(mechs) + 1) + "|"]
@@ -423,11 +424,14 @@ def write_report(results: Sequence[MechanicsResults], regime: Regime, config: Re
     """Write ``REPORT.md`` (and ``results.json``) into ``out``; returns the report's path.
     ``search``: the paper preset's search (:mod:`skinhil.reproduce.paper_search`), if run."""
     d = config.decoding
-    amps = ", ".join(f"{a} (M, K and C x{AMPLITUDES[a]:g})" for a in config.amplitudes)
+    amps = ", ".join(f"{a} (M, K and C x{SKIN_AMPLITUDES[a]:g}"
+                     + (": the default skin)" if a == DEFAULT_AMPLITUDE else ")")
+                     for a in config.amplitudes)
     lines = ["# skinhil reproduction report", "",
              f"Run: {'--quick (small grids, few repeats)' if quick else 'full'}; "
-             f"{total_s:.1f} s in total. Model: `SkinParams()` defaults (only `mechanics`, "
-             "`readout` and the amplitude differ: a 2 x 2 x 2 design whose swaps name the "
+             f"{total_s:.1f} s in total. Model: `SkinParams.at_amplitude(amplitude)` defaults "
+             "(only `mechanics`, `readout` and the amplitude differ: a 2 x 2 x 2 design whose "
+             "swaps name the "
              f"cause of each outcome); amplitudes: {amps}: scaling mass, stiffness and "
              "damping together keeps the modes, damping ratios and the linear model's "
              "spring forces and divides every strain by the factor. Nothing tuned per "

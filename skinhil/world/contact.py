@@ -17,16 +17,20 @@ indenter's frame, so the indenter drags it). The mass gets ``(f_x, f_y, −N)``,
 top layer exactly as a stimulus's force is, held over the step. Per contact the kernel writes
 the ground truth (:mod:`skinhil.world.truth`).
 
-Parameters (:class:`ContactParams`): ``k_n = 500 N/m`` per mass, about 4x the vertical
-stiffness a top-layer mass has in the skin (about 130 N/m: its four springs to layer 2 at
-50 N/m, 2/3 of each along z), so the indenter is firm (a held depth is 80 % surface
-displacement, 20 % penetration) without setting the step: the fastest contact mode
-``sqrt((k_n + 130)/m)`` is 2,500 rad/s, ``ω·dt = 0.25`` at 0.1 ms. A force held over a step
+Parameters (:class:`ContactParams`, at the default skin; :meth:`ContactParams.for_skin`
+scales them with any other skin's stiffness): ``k_n = 50,000 N/m`` per mass, about 4x the
+vertical stiffness a top-layer mass has in the skin (about 13,000 N/m: its four springs to
+layer 2 at 5,000 N/m, 2/3 of each along z), so the indenter is firm (a held depth is 80 %
+surface displacement, 20 % penetration) without setting the step: the fastest contact mode
+``sqrt((k_n + 13,000)/m)`` is 2,500 rad/s, ``ω·dt = 0.25`` at 0.1 ms. A force held over a step
 lags the state by half a step, which feeds a penalty spring energy at a rate like a negative
-damper ``k·dt/2``; the contact's dampers are chosen above it (``c_n = 0.05 ≥ k_n·dt``,
-``c_t = 0.02 ≥ k_t·dt`` N·s/m at dt ≤ 0.1 ms), so the contact only takes energy out:
-:meth:`ContactParams.check` refuses a step where they would not. ``k_t = 200 N/m``: the
-stick spring, near the skin's own in-plane stiffness at a mass.
+damper ``k·dt/2``; the contact's dampers are chosen above it (``c_n = 5 ≥ k_n·dt``,
+``c_t = 2 ≥ k_t·dt`` N·s/m at dt ≤ 0.1 ms), so the contact only takes energy out:
+:meth:`ContactParams.check` refuses a step where they would not. ``k_t = 20,000 N/m``: the
+stick spring, near the skin's own in-plane stiffness at a mass. Every constant scales with
+the skin (x0.01 on the paper regime's skin, ``--amplitude paper``), the admittances inversely,
+so the contact's modes, its force control's loop gain and its forces at a given load are the
+same on both.
 """
 
 from __future__ import annotations
@@ -66,12 +70,19 @@ STICK, SLIP = 1, 2
 class ContactParams:
     """Penalty and friction constants (module docstring), per top-layer mass."""
 
-    normal_stiffness_n_per_m: float = 500.0
-    normal_damping_n_s_per_m: float = 0.05
-    tangential_stiffness_n_per_m: float = 200.0
-    tangential_damping_n_s_per_m: float = 0.02
-    admittance_m_per_n_s: float = 0.2
-    """Force control: the indenter moves at this speed (m/s) per newton of load error."""
+    normal_stiffness_n_per_m: float = 50_000.0
+    normal_damping_n_s_per_m: float = 5.0
+    tangential_stiffness_n_per_m: float = 20_000.0
+    tangential_damping_n_s_per_m: float = 2.0
+    admittance_m_per_n_s: float = 0.01
+    """Normal force control: the indenter moves at this speed (m/s) per newton of load error:
+    a loop gain b·k_n·dt of 0.05 per touching mass at 0.1 ms, so it settles in ~10 ms on one
+    mass (the penalty spring in series with the skin), faster on more, and stays stable up to
+    ~20 touching masses (a force-controlled pad wider than that needs a lower one)."""
+    tangential_admittance_m_per_n_s: float = 0.02
+    """Tangential force control (the grasp's load): an object pulled past its friction slides
+    at this speed per newton of excess load (6 mm/s at 0.3 N), with a stick loop gain
+    b_t·k_t·dt of 0.04 per touching mass."""
     margin_m: float = 2e-3
     """Masses whose rest position is within reach + margin of the axis are tested."""
 
@@ -80,6 +91,18 @@ class ContactParams:
             if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
                 raise ConfigError(f"ContactParams.{name} must be a finite number > 0, "
                                   f"got {value!r}")
+
+    @classmethod
+    def for_skin(cls, stiffness_n_per_m: float, reference_n_per_m: float) -> ContactParams:
+        """The defaults for a skin of spring stiffness ``stiffness_n_per_m`` (N/m), made for
+        one of ``reference_n_per_m`` (the default skin's): stiffnesses and dampers scaled by
+        their ratio, the admittance by its inverse (module docstring)."""
+        f = stiffness_n_per_m / reference_n_per_m
+        d = cls()
+        return cls(d.normal_stiffness_n_per_m * f, d.normal_damping_n_s_per_m * f,
+                   d.tangential_stiffness_n_per_m * f, d.tangential_damping_n_s_per_m * f,
+                   d.admittance_m_per_n_s / f, d.tangential_admittance_m_per_n_s / f,
+                   d.margin_m)
 
     def check(self, dt_s: float, mass_kg: float) -> None:
         """:class:`ConfigError` unless the contact is stable and takes energy out at step
@@ -95,10 +118,12 @@ class ContactParams:
                               f"(omega·dt = {omega * dt_s:.2f}) is not resolved; lower --dt")
 
     def packed(self) -> np.ndarray:
-        """k_n, c_n, k_t, c_t, admittance, margin as the kernel reads them."""
+        """k_n, c_n, k_t, c_t, admittance, margin, tangential admittance as the kernel reads
+        them."""
         return np.array([self.normal_stiffness_n_per_m, self.normal_damping_n_s_per_m,
                          self.tangential_stiffness_n_per_m, self.tangential_damping_n_s_per_m,
-                         self.admittance_m_per_n_s, self.margin_m])
+                         self.admittance_m_per_n_s, self.margin_m,
+                         self.tangential_admittance_m_per_n_s])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -115,6 +140,7 @@ def contact_forces(t_s: float, dt_s: float, q: np.ndarray, v: np.ndarray, out: n
     counter[0] += 1
     now = counter[0]
     kn, cn, kt, ct, bn, margin = params[0], params[1], params[2], params[3], params[4], params[5]
+    bt = params[6]
     rows, cols = grid[0], grid[1]
     half_w = 0.5 * (cols - 1) * spacing
     half_h = 0.5 * (rows - 1) * spacing
@@ -143,8 +169,8 @@ def contact_forces(t_s: float, dt_s: float, q: np.ndarray, v: np.ndarray, out: n
         elif live[c] == 0:
             x, y = origin[c, 0], origin[c, 1]
         else:
-            x = pose[c, 0] + dt_s * bn * (x - meas[c, 0])
-            y = pose[c, 1] + dt_s * bn * (y - meas[c, 1])
+            x = pose[c, 0] + dt_s * bt * (x - meas[c, 0])
+            y = pose[c, 1] + dt_s * bt * (y - meas[c, 1])
         if control[c, 0] == 0:
             z = -val
             if axis == 2:

@@ -24,6 +24,7 @@ from skinhil.model.mechanics.geometric import GeometricMechanics, rk4_step
 from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, leapfrog_kernel
 from skinhil.model.neurons import _izhikevich_kernel
 from skinhil.model.sensor import SkinSensor
+from skinhil.model.skin import SkinParams
 from skinhil.model.stimuli import Schedule, add_schedule_forces
 from skinhil.world.contact import ContactParams, contact_forces
 from skinhil.world.scene import Scene, World
@@ -103,8 +104,9 @@ class TouchSensor:
         if sensor.threads != 1:
             raise ConfigError("contact runs the neurons on one thread: give --threads 1")
         self.sensor = sensor
-        self.params = params or ContactParams()
         model = sensor.model
+        self.params = params or ContactParams.for_skin(model.params.stiffness_n_per_m,
+                                                       SkinParams().stiffness_n_per_m)
         self.params.check(sensor.dt_s, model.params.mass_kg)
         rows, cols = model.size
         n_top = rows * cols
