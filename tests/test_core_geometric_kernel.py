@@ -23,8 +23,8 @@ operations (measured: at most 1.4e-14 of the peak, at 10x10 over 3,000 steps).""
     ((10, 10), 0.0, "length")])
 def test_the_strip_kernel_is_the_per_spring_formulation_to_rounding(
         size: tuple[int, int], tension: float, readout: str) -> None:
-    model = SkinModel(SkinParams(mechanics="geometric", size=size, tension_n=tension,
-                                 readout=readout))  # type: ignore[arg-type]
+    model = SkinModel(SkinParams.at_amplitude(  # the paper regime: large deformations
+        "paper", mechanics="geometric", size=size, tension_n=tension, readout=readout))
     g = model.stepper(1e-4 if tension == 0 else 2e-5)
     assert isinstance(g, GeometricMechanics)
     ref = ReferenceGeometric(g)

@@ -146,7 +146,7 @@ def test_single_precision_gives_the_spikes_of_double_precision() -> None:
     # scheme's own error is 1e-3), and the spikes are the reference's, spike for spike:
     # noise-free on the paper's five stimuli and the nine direction conditions, and at 10 dB
     # with the same noise streams under a random schedule
-    model = SkinModel(SkinParams(size=(16, 16)))
+    model = SkinModel(SkinParams.at_amplitude("paper", size=(16, 16)))  # large deformations
     p = model.params
     assert DTYPE == np.float32 and model.stepper(1e-4).dtype == np.float32
 

@@ -35,7 +35,7 @@ def test_a_scenario_plays_through_simulate(path: Path, tmp_path: Path,
     assert main(["simulate", "--schedule", str(path), "--out", str(out), "--no-progress"]) == 0
     said = capsys.readouterr().out
     strain = float(said.split("max strain ")[1].split(" %")[0])
-    assert 0 < strain < (200 if path.stem == "edge_and_pins" else 100)  # tens of percent
+    assert 0 < strain < 10  # within the bound: the default skin's touches stay near-linear
     data = np.load(out)
     truth, meta = data["truth"], json.loads(str(data["meta"]))
     scenario = load_scenario(path)
@@ -46,10 +46,10 @@ def test_a_scenario_plays_through_simulate(path: Path, tmp_path: Path,
     touching = truth[truth["nodes"] > 0]
     assert len(touching) and np.all(touching["normal_n"] > 0)
     assert np.allclose(touching["area_mm2"], touching["nodes"] * 1.0)  # 1 mm² per mass
-    if path.stem == "slip":  # stick, then slip at the edge, then gross slip
-        slip = touching["slip"]
-        assert slip[0] == 1 and 2 in slip and 3 in slip
-        assert np.flatnonzero(slip == 2)[0] < np.flatnonzero(slip == 3)[0]
+    if path.stem == "slip":  # stick, then gross slip (the ball touches two masses, which
+        slip = touching["slip"]  # slip together on the default skin)
+        assert slip[0] == 1 and 3 in slip
+        assert np.all(slip[:np.flatnonzero(slip == 3)[0]] == 1)
     if path.stem.startswith("vibrate"):
         hz = float(path.stem.split("_")[1][:-2])
         depth = touching["indenter_depth_mm"]

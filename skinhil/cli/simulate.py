@@ -23,6 +23,7 @@ from skinhil.cli.options import (
 from skinhil.cli.values import check_memory, real
 from skinhil.errors import ConfigError
 from skinhil.model.sensor import SkinSensor
+from skinhil.model.skin import STRAIN_BOUND
 from skinhil.model.stimuli import Schedule, ScheduledStimulus, builtin_catalog
 from skinhil.model.strain import max_strain
 from skinhil.nwb import require_pynwb, write_simulation
@@ -151,7 +152,7 @@ def run(args: argparse.Namespace) -> int:
     rate = len(ev) / (n_steps * args.dt_s) / model.n_springs
     print(f"wrote {out}: {n_steps} steps of {args.dt_s * 1e3:g} ms, {len(ev)} spikes "
           f"({rate:.1f} Hz per sensor), peak |force| {peak:.3g} N, max strain "
-          f"{100 * strain:.1f} %")
+          f"{100 * strain:.3g} % (bound {100 * STRAIN_BOUND:g} %)")
     if scene is not None:
         print(f"contact truth: {len(truth_rec)} records ({len(scene.contacts)} contact(s), "
               f"one per {every * args.dt_s * 1e3:g} ms), peak normal force "
