@@ -184,16 +184,6 @@ class SkinParams:
         return cls(**kwargs).scaled(AMPLITUDES[amplitude])  # type: ignore[arg-type]
 
     @property
-    def amplitude(self) -> str | None:
-        """The :data:`AMPLITUDES` regime these mass, stiffness and damping are, or None."""
-        for name, factor in AMPLITUDES.items():
-            ref = SkinParams().scaled(factor)
-            if (ref.mass_kg, ref.stiffness_n_per_m, ref.damping_n_s_per_m) == (
-                    self.mass_kg, self.stiffness_n_per_m, self.damping_n_s_per_m):
-                return name
-        return None
-
-    @property
     def dynamics(self) -> Dynamics:
         """The mechanics that steps this skin: ``mechanics`` itself, or for ``"auto"`` the
         geometric one up to :data:`AUTO_GEOMETRIC_MAX_SPRINGS` springs and the linear one
