@@ -19,7 +19,8 @@ Defaults and their reasoning (the paper gives the structure, not SI values):
   small-displacement limit of the true spring lengths), and it departs from the geometric
   mechanics with the length readout by about the strain itself (the largest force gap over
   the paper's inputs and the nine conditions, relative to the largest force: 1 % at 1 %
-  strain, 3 % at 3 %, 10 % at 10 %, 40 % at 36 %, 270 % at 200 %), so below 10 % the paper's
+  strain, 3 % at 3 %, 10 % at 10 %, 40 % at 36 %, 270 % at 200 %;
+  ``benchmarks/strain_bound.py``), so below 10 % the paper's
   equations describe the skin they model within 10 %; soft tissue and skin elastomers are
   near-linear only over small strains too (skin's J-shaped stress-strain curve stiffens
   beyond). The paper regime (``SkinParams.at_amplitude("paper")``, ``--amplitude paper``: M
