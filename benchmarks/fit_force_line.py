@@ -1,5 +1,6 @@
 """Fits the reference FORCE decoder's line (skinhil/receiver/task_decoders.py): the normal
-force at the end of each detected touch's decision window against the window's spikes, by
+force at the end of each detected touch's decision window against the count of the touch's
+spikes (task_decoders.touch_spikes), by
 least squares, on calibration runs of examples/scenarios/task_force.toml.
 
 Each calibration run is ``skinhil simulate`` (offline, no link) at the given SNR and one of the
@@ -13,21 +14,29 @@ left out, and their windows are the receiver's (from 3 ms before the detection, 
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
-from task_calibration import calibration_args, calibration_run, detected_touches
+from task_calibration import REPO, calibration_args, calibration_run, detected_touches
+
+sys.path.insert(0, str(REPO))
+
+from skinhil.receiver.task_decoders import sensor_xy_mm, touch_spikes  # noqa: E402
 
 WINDOW_US = 50_000
 
 
 def touches(snr_db: float, seed: int, duration: list[str]) -> tuple[list[int], list[float]]:
-    """Per detected touch of one calibration run: its window's spikes and its contact's
-    normal force (N) at the window's end."""
+    """Per detected touch of one calibration run: the count of its spikes (the decoder's
+    touch_spikes of its window) and its contact's normal force (N) at the window's end."""
     ev, truth = calibration_run("force", snr_db, seed, duration)
     touching = truth[truth["nodes"] > 0]
+    xy_mm = sensor_xy_mm((6, 6))
     spikes, force = [], []
     for t0, contact in detected_touches(ev, truth):
         at = touching[(touching["contact"] == contact) & (touching["t_us"] <= t0 + WINDOW_US)]
-        spikes.append(int(((ev["t"] >= t0) & (ev["t"] < t0 + WINDOW_US)).sum()))
+        w = ev[(ev["t"] >= t0) & (ev["t"] < t0 + WINDOW_US)]
+        spikes.append(touch_spikes(w["t"], w["addr"], t0, xy_mm)[1])
         force.append(float(at["normal_n"][-1]))
     return spikes, force
 

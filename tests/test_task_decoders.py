@@ -23,25 +23,37 @@ from skinhil.receiver.task_decoders import (
     SLIP_SPIKES,
     SLIP_WATCH_S,
     SLIP_WINDOW_S,
+    TOUCH_SPIKES_S,
     VIBRATION_CLASSES_HZ,
     force_n,
     frequency_hz,
-    locate_mm,
     sensor_xy_mm,
     slip_time_us,
+    touch_spikes,
     vibration_features,
     within_touch,
 )
 from skinhil.transports.serial import SerialTransport
 
 
-def test_locate_is_the_centroid_of_the_spiking_sensors() -> None:
+def test_a_touch_is_the_trimmed_centroid_and_count_of_its_early_spikes() -> None:
     xy = sensor_xy_mm((6, 6))
     assert xy.shape == (338, 2) and np.allclose(xy.mean(axis=0), 0.0, atol=1e-9)
+    rng = np.random.default_rng(0)
+    start = 1_000_000
     near = np.flatnonzero(np.hypot(xy[:, 0] - 1.0, xy[:, 1] + 1.0) < 0.8)
-    x, y = locate_mm(near, xy)
+    far = np.flatnonzero((xy[:, 0] < -1.5) & (xy[:, 1] > 1.0))  # noise, 3 mm away and more
+    early = int(TOUCH_SPIKES_S * 1e6)
+    t = np.concatenate([start + rng.integers(0, early, near.shape[0]),
+                        start + rng.integers(0, early, 4),       # noise within the burst
+                        start + early + rng.integers(0, 30_000, 40)])  # noise after it
+    addr = np.concatenate([near, rng.choice(far, 4), rng.integers(0, 338, 40)])
+    (x, y), spikes = touch_spikes(t, addr, start, xy)
     assert abs(x - 1.0) < 0.3 and abs(y + 1.0) < 0.3
-    assert locate_mm(np.zeros(0, dtype=np.int64), xy) == (0.0, 0.0)
+    assert spikes == near.shape[0]  # neither the far nor the late spikes
+    everything = xy[addr].mean(axis=0)  # the centroid of all of them: pulled away
+    assert math.hypot(everything[0] - 1.0, everything[1] + 1.0) > 0.5
+    assert touch_spikes(t, addr, start + 10**6, xy) == ((0.0, 0.0), 0)
 
 
 def test_frequency_classes_spikes_by_their_phase_locking() -> None:

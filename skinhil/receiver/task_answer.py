@@ -39,9 +39,9 @@ from skinhil.receiver.task_decoders import (
     VIBRATION_WINDOW_S,
     force_n,
     frequency_hz,
-    locate_mm,
     sensor_xy_mm,
     slip_time_us,
+    touch_spikes,
     within_touch,
 )
 
@@ -136,9 +136,9 @@ class TaskAnswerer(ReceiverListener):
         ev = self._window(p.window_t_us, p.decided_t_us)
         if self.answerer == "reference":
             xy = self._xy_mm if self._xy_mm is not None else sensor_xy_mm((6, 6))
-            ok = ev["addr"] < xy.shape[0]
-            values = {protocols.Task.LOCALISATION: locate_mm(ev["addr"][ok], xy),
-                      protocols.Task.FORCE: (force_n(ev.shape[0]),)}
+            centre, spikes = touch_spikes(ev["t"], ev["addr"], p.window_t_us, xy)
+            values = {protocols.Task.LOCALISATION: centre,
+                      protocols.Task.FORCE: (force_n(spikes),)}
         else:
             rows, cols = self._size()
             values = {protocols.Task.LOCALISATION: (
