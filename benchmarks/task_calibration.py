@@ -23,7 +23,7 @@ STEP_US = 100
 MATCH_US = 50_000
 """An onset this long (µs) at most after a touch-down is that touch's (the others, releases
 and noise, are left out)."""
-SMOKE_DURATION_S = 2.0
+SMOKE_DURATION_S = 8.0
 """--smoke: board time (s) simulated, the scenario's first trials."""
 
 

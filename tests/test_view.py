@@ -190,9 +190,11 @@ def test_udp_view_and_lsl_at_26x26_fit_a_laptop_and_show_the_touch(
         url = wait_for_stderr(listen, "live view at").split()[-1]
         with Chromium(1366, 768) as browser:
             browser.open(url)
+            # the paper's amplitude: its 0.3 N poke lights its place 4x the rest (2.9x on the
+            # default skin, whose small strain spreads the forces wider)
             board = ServeProcess("--udp", f"127.0.0.1:{port}", "--size", "26x26", "--duration",
                                  "3", "--seed", "1", "--snr-db", "10", "--schedule",
-                                 str(schedule), "--json")
+                                 str(schedule), "--amplitude", "paper", "--json")
             found = pylsl.resolve_byprop("name", "lab34-link", timeout=60)
             assert len(found) == 1
             inlet = pylsl.StreamInlet(found[0], max_buflen=60)
@@ -312,8 +314,8 @@ def test_grasp_demo_view_plots_grip_load_and_slip(tmp_path: Path) -> None:
     assert len(slid) == 2, text
     assert not state["hidden"] and state["points"] > 150, state  # 2.35 s of 10 ms points
     assert state["min_grip"] == state["max"]["grip_n"] == 0.3, state  # the hand's low grip
-    # the grip while the object is held, none after it dropped: about 0.3 s of each lift
-    assert 40 <= state["gripped"] <= 80 and state["gripped_after_drop"] == 0, state
+    # the grip while the object is held, none after it dropped: 0.2-0.5 s of each lift
+    assert 40 <= state["gripped"] <= 100 and state["gripped_after_drop"] == 0, state
     assert 0.64 <= state["max"]["load_n"] <= 0.65, state  # m·g + the pull: 0.49 + 0.15 N
     assert 0.2 < state["max"]["normal_n"] < 0.4, state
     assert state["max"]["slip"] == 3 and round(state["max"]["slip_mm"], 2) == max(slid), state
