@@ -9,7 +9,7 @@ default parameters), an onset more than 50 ms after the latest touch-down (a rel
 left out, and their windows are the receiver's (from 3 ms before the detection, 50 ms long):
 
     python benchmarks/fit_force_line.py --snr-db 10 --seeds 1,2,3,4,5,6
-    python benchmarks/fit_force_line.py --smoke     # one seed, the first 2 s only
+    python benchmarks/fit_force_line.py --smoke     # one seed, the first 8 s only
 """
 
 from __future__ import annotations

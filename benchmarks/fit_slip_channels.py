@@ -10,7 +10,7 @@ slides, it fires at most STICK_MAX spikes in the stick window and at least RISE_
 the slip window:
 
     python benchmarks/fit_slip_channels.py --snr-db 10 --seeds 1,2,3,4
-    python benchmarks/fit_slip_channels.py --smoke     # one seed, the first 2 s only
+    python benchmarks/fit_slip_channels.py --smoke     # one seed, the first 8 s only
 """
 
 from __future__ import annotations

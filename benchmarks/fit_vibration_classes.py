@@ -9,7 +9,7 @@ for VIBRATION_WINDOW_S, and labelled with the frequency of the contact touching 
 more than 50 ms after the latest touch-down is a release or noise: left out):
 
     python benchmarks/fit_vibration_classes.py --snr-db 10 --seeds 1,2,3,4,5,6
-    python benchmarks/fit_vibration_classes.py --smoke     # one seed, the first 2 s only
+    python benchmarks/fit_vibration_classes.py --smoke     # one seed, the first 8 s only
 """
 
 from __future__ import annotations
