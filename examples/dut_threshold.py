@@ -137,6 +137,8 @@ def main() -> None:
             for rec in res.records:
                 if isinstance(rec, protocols.Marker):
                     dut.marker(rec)
+                elif isinstance(rec, protocols.RunEnd):  # the board's run is over
+                    return
             for stimulus_id, confidence in dut.events(res.events["t"], res.events["addr"]):
                 token = (token + 1) % 65536
                 send(encoder.command(protocols.Decision(token, stimulus_id, confidence)))

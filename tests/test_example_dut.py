@@ -34,7 +34,7 @@ def test_example_dut_is_scored_above_chance_on_a_pty(tmp_path: Path) -> None:
     board, dut = host_beside_serve(
         tmp_path, [sys.executable, str(EXAMPLE), "--port", "{HOST}"],
         ["--duration", str(DURATION_S), "--seed", "2", "--snr-db", "10", "--score", str(score),
-         "--markers", "--quiet"], timeout_s=DURATION_S + 60)
+         "--markers", "--quiet"], timeout_s=DURATION_S + 60, own_end_s=10.0)
     assert board.returncode == 0, board.stderr
     assert dut.returncode == 0, dut.stderr
     out = dut.stdout
