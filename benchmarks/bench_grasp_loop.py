@@ -12,7 +12,7 @@ So the loop's latency, all in board time, is
     executed_us + dt − spike_us
 
 the board's 1 ms publish tick, the link both ways, the host's decoding and the board's
-command poll (once a tick) included. A ``--smoke`` run plays one short lift on a pty.
+command poll (once a tick) included. A ``--smoke`` run plays two short lifts on a pty.
 
     python benchmarks/bench_grasp_loop.py [--lifts 3] [--links pty,udp,vcan] [--smoke]
     python tests/uml_vcan.py -- python benchmarks/bench_grasp_loop.py --links vcan
@@ -127,10 +127,10 @@ def main() -> int:
     ap.add_argument("--snr-db", type=float, default=10.0)
     ap.add_argument("--lifts", type=int, default=3)
     ap.add_argument("--links", default="pty,udp,vcan", help="links (vcan where vcan0 exists)")
-    ap.add_argument("--smoke", action="store_true", help="one lift on a pty (a quick check)")
+    ap.add_argument("--smoke", action="store_true", help="two lifts on a pty (a quick check)")
     args = ap.parse_args()
     if args.smoke:
-        args.lifts, args.links = 1, "pty"
+        args.lifts, args.links = 2, "pty"
     print(describe())
     failed = 0
     for kind in args.links.split(","):
