@@ -324,8 +324,9 @@ def files(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def test_bad_inputs_refused_with_one_line(files: Path, warm_kernels: None) -> None:
-    cases = [c for c in _bad_cases(files) if c.prefix or c.name in AS_A_USER]
-    assert len(cases) == len(AS_A_USER) + sum(1 for c in _bad_cases(files) if c.prefix)
+    every = _bad_cases(files)
+    cases = [c for c in every if c.prefix or c.name in AS_A_USER]
+    assert len(cases) == len(AS_A_USER) + sum(1 for c in every if c.prefix)
 
     def one(case: Case) -> tuple[Case, subprocess.CompletedProcess[str]]:
         argv = [*case.prefix, sys.executable, "-m", "skinhil", *case.argv]
