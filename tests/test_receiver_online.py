@@ -198,23 +198,23 @@ def test_online_accuracy_through_vcan_matches_offline_at_10_db():
 
 
 @pytest.mark.vcan
-def test_online_accuracy_through_vcan_matches_offline_without_noise():
+def test_online_accuracy_through_vcan_matches_offline_without_noise(decoder_inf):
     """Without noise: 27 stimuli through vcan0 against the decoder on the board's own stream
     simulated offline. Not against its cross-validated accuracy: that is 1.0 on its 45
     training stimuli, a figure with no spread to bound by, while on the board's stream
     (another sequence of the same stimuli) the same decoder errs now and then offline too."""
-    decoder, trained = train_decoder(math.inf, reps=5, seed=0, rest_s=REST_S)
-    receiver = run_vcan(WindowDecoder(decoder), math.inf, 27)
-    check_online_matches_offline("vcan", receiver, WindowDecoder(decoder), trained,
+    decoder, trained = decoder_inf
+    receiver = run_vcan(decoder, math.inf, 27)
+    check_online_matches_offline("vcan", receiver, decoder, trained,
                                  snr_db=math.inf, n_stimuli=27, against_cv=False)
 
 
 @pytest.mark.vcan
-def test_dropped_can_frames_equal_the_sequence_gaps():
-    decoder, _ = train_decoder(math.inf, reps=5, seed=0, rest_s=REST_S)
+def test_dropped_can_frames_equal_the_sequence_gaps(decoder_inf):
+    decoder, _ = decoder_inf
     bus = FaultyTransport(CanTransport("vcan0"), FaultParams(drop_p=0.01, seed=2),
                           keep_clean=True)
-    receiver = Receiver(bus, WindowDecoder(decoder))
+    receiver = Receiver(bus, decoder)
     play(receiver, ["--can", "vcan0"], math.inf, 10)
     link = receiver.link_report()
     assert bus.injected.units_dropped > 0
