@@ -7,13 +7,13 @@ same rule (:mod:`skinhil.scoring.matching`), the board's time later by the decis
 0.1 s longer for it. The two can differ only where the rule tells the two times apart (an
 onset between them: a detection of noise just before a stimulus; or a window's end between
 them), and for a later decision on an onset such a decision took on one side; the test
-tells those apart by their times (0 to 3 of ~100 decisions on an idle machine, up to a
+tells those apart by their times (0 to 3 of ~60 decisions on an idle machine, up to a
 tenth on a loaded one), checks every other decision alike, and the counts and accuracy
 equal up to those.
 
-100 stimuli at the paper's 10 dB from a schedule file (0.3 s apart, as the receiver's own
+60 stimuli at the paper's 10 dB from a schedule file (0.3 s apart, as the receiver's own
 end-to-end test; then 1 s of tail so every answer arrives and every onset is resolved while
-the board runs: 31 s of real time per link). The board scores what it
+the board runs: 19 s of real time per link). The board scores what it
 receives; the receiver scores itself. Decision for decision (DECISIONs go in order over one
 link, so the board's log lines up with the receiver's decisions): a decision the receiver
 matched to an onset is matched by the board to the same onset with the same verdict, and the
@@ -42,7 +42,7 @@ from skinhil.receiver.session import run_against_board, serve_command
 from skinhil.receiver.training import LEAD_S, train_decoder
 from skinhil.transports import CanTransport, PtyMasterTransport
 
-N_STIMULI, SPACING_S, TAIL_S = 100, 0.3, 1.0
+N_STIMULI, SPACING_S, TAIL_S = 60, 0.3, 1.0
 WAY_BACK_S = 0.1
 """The board's response window is the receiver's own (0.15 s) and this: the way back of a
 decision (the receiver's guard, the link, a loaded machine's delays) up to it does not turn
