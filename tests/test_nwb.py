@@ -119,7 +119,9 @@ def test_listen_record_nwb_validates_and_holds_the_session(tmp_path: Path) -> No
              str(model), "--json", "--record", str(session)],
             cwd=RUN_DIR, env=serve_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
             text=True)
-        time.sleep(2.0)
+        assert listen.stderr is not None
+        ready = listen.stderr.readline()  # listen says so once its link is open
+        assert ready.startswith("skinhil listen: "), ready
         board = ServeProcess("--port", str(board_end), "--duration", "3", "--seed", "1",
                              "--snr-db", "10", "--json")
         assert board.wait(120) == 0, board.stderr

@@ -272,10 +272,10 @@ def listen_until_stopped(args: argparse.Namespace, rx: Receiver | BusReceiver,
 
 def run_bus(args: argparse.Namespace, bus: BusReceiver, names: dict[int, str]) -> int:
     """``listen`` over several boards: per-board decisions and summaries, a combined view."""
-    if not args.json:
-        print(f"skinhil listen: {describe_transport(args)}, boards "
-              f"{', '.join(map(str, bus.boards)) or 'as they send'}, model {args.model}; "
-              "Ctrl-C stops", file=sys.stderr, flush=True)
+    # on stderr, with --json too: the link is open, a program starting the board may go on
+    print(f"skinhil listen: {describe_transport(args)}, boards "
+          f"{', '.join(map(str, bus.boards)) or 'as they send'}, model {args.model}; "
+          "Ctrl-C stops", file=sys.stderr, flush=True)
     t0 = time.monotonic()
     listen_until_stopped(args, bus, lambda: {
         "boards": {str(k): r.as_dict() for k, r in bus.link_reports().items()},
@@ -371,9 +371,9 @@ def listen_one(args: argparse.Namespace, receiver: Receiver, names: dict[int, st
                tasks: TaskAnswerer | None = None) -> dict[str, Any]:
     """Receive until Ctrl-C or --duration; the summary (with ``answerer``'s DECISION counts
     when the receiver answers the board)."""
-    if not args.json:
-        print(f"skinhil listen: {describe_transport(args)}, model {args.model}; Ctrl-C stops",
-              file=sys.stderr, flush=True)
+    # on stderr, with --json too: the link is open, a program starting the board may go on
+    print(f"skinhil listen: {describe_transport(args)}, model {args.model}; Ctrl-C stops",
+          file=sys.stderr, flush=True)
     t0 = time.monotonic()
     with lab_outputs(args, receiver, names, args.size, "listen",
                      answerer.as_dict if answerer is not None else None,
