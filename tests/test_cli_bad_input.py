@@ -236,6 +236,8 @@ def _cases_of_issue_32(tmp: Path, loop: tuple[str, ...]) -> list[Case]:
         Case("replay --grasp-truth", (*replay, "--grasp-truth", str(tmp / "g.bin")),
              "drop --grasp-truth"),
         Case("replay --markers", (*replay, "--markers"), "drop --markers"),
+        Case("serve --markers without --score", ("serve", *loop, "--markers"),
+             "add --score FILE or drop --markers"),
         Case("listen --answer-with oracle without its truth",
              (*listen, "--answer", "--answer-with", "oracle"), "truth file"),
         Case("listen --answer-with without --answer", (*listen, "--answer-with", "random"),

@@ -396,6 +396,10 @@ def run(args: argparse.Namespace) -> int:
         return run_replay(args)
     if args.speed != 1.0:
         raise ConfigError("--speed sets the pace of --replay: add --replay FILE or drop it")
+    if args.markers and args.score is None:
+        raise ConfigError("--markers keeps the MARKERs on a scored (blind) link; without "
+                          "--score the link carries them anyway: add --score FILE or drop "
+                          "--markers")
     if args.record is None:
         return run_board(args, open_link=lambda: open_transport(args))
     n_channels = spring_count(args.size)
