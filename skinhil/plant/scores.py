@@ -4,7 +4,8 @@ per run (docs/grasp.md "Scores").
 Per lift: held or dropped; the largest slip distance; the slip onset (the first tick in
 partial or gross slip while loaded); the reaction latency, from the onset to the first tick
 whose grip is above the grip at the onset (None without a slip, or without an increase before
-the lift ends); the grip economy, the median safety margin ``(G/L − r)/(G/L)`` over the
+the object drops or the lift ends: a grip raised after the drop saves nothing); the grip
+economy, the median safety margin ``(G/L − r)/(G/L)`` over the
 lift's ticks while it is held with a load of at least half its weight (``r`` the slip ratio
 1/mu_static: 0 grips at the slip ratio, 0.5 twice it; negative: below it).
 """
@@ -34,7 +35,7 @@ def trial_scores(held: np.ndarray, params: GraspParams) -> list[dict[str, Any]]:
         if onset.size:
             k = int(onset[0])
             onset_ms = (int(r["t_us"][k]) - int(r["t_us"][0])) / 1e3
-            up = np.flatnonzero(r["grip_n"][k:] > r["grip_n"][k])
+            up = np.flatnonzero((r["grip_n"][k:] > r["grip_n"][k]) & ~r["dropped"][k:])
             if up.size:
                 latency = (int(r["t_us"][k + int(up[0])]) - int(r["t_us"][k])) / 1e3
         hold = loaded & r["held"]
