@@ -17,12 +17,15 @@ sys.path.insert(0, str(REPO))
 
 from skinhil.receiver.onset import OnsetDetector  # noqa: E402
 from skinhil.receiver.params import OnsetParams  # noqa: E402
+from skinhil.receiver.touch_kind import TOUCH_DOWN, in_layer, touch_kind  # noqa: E402
 
 STEP_US = 100
 """The receiver's step (µs) the onsets are found on."""
 MATCH_US = 50_000
 """An onset this long (µs) at most after a touch-down is that touch's (the others, releases
 and noise, are left out)."""
+RELEASE_US = (-20_000, 60_000)
+"""An onset within this (µs) of a touch's last touching tick is its release's."""
 SMOKE_DURATION_S = 8.0
 """--smoke: board time (s) simulated, the scenario's first trials."""
 
@@ -57,20 +60,40 @@ def calibration_run(task: str, snr_db: float, seed: int,
         return z["events"], z["truth"]
 
 
-def detected_touches(ev: np.ndarray, truth: np.ndarray) -> list[tuple[int, int]]:
-    """(decision window start µs, contact) of each onset the receiver's rule
-    (skinhil/receiver/onset.py, default parameters) finds at most :data:`MATCH_US` after a
-    contact's touch-down (each contact of a task scenario touches once)."""
+def truth_onsets(ev: np.ndarray, truth: np.ndarray) -> list[tuple[int, int, str]]:
+    """(decision window start µs, contact, what it is) of each onset the receiver's rule
+    (skinhil/receiver/onset.py, default parameters) finds: ``touch-down`` at most
+    :data:`MATCH_US` after a contact's touch-down (each contact of a task scenario touches
+    once), ``release`` within :data:`RELEASE_US` of a contact's last touching tick, else
+    ``other`` (noise, or activity within a touch; contact -1)."""
     touching = truth[truth["nodes"] > 0]
+    contacts = np.unique(touching["contact"])
     downs = sorted((int(touching["t_us"][touching["contact"] == c].min()), int(c))
-                   for c in np.unique(touching["contact"]))
+                   for c in contacts)
+    ups = [(int(touching["t_us"][touching["contact"] == c].max()), int(c)) for c in contacts]
     n_steps = int(truth["t_us"].max() // STEP_US) + 1
     counts = np.bincount(ev["t"] // STEP_US, minlength=n_steps)[:n_steps]
     params = OnsetParams()
     lookback = int(round(params.lookback_s * 1e6))
     out = []
     for step in OnsetDetector(STEP_US * 1e-6, params).process(counts):
-        before = [(t, c) for t, c in downs if t <= step * STEP_US]
-        if before and step * STEP_US - before[-1][0] <= MATCH_US:
-            out.append((step * STEP_US - lookback, before[-1][1]))
+        t = step * STEP_US
+        before = [(d, c) for d, c in downs if d <= t]
+        up = [c for u, c in ups if RELEASE_US[0] <= t - u <= RELEASE_US[1]]
+        if before and t - before[-1][0] <= MATCH_US:
+            out.append((t - lookback, before[-1][1], "touch-down"))
+        elif up:
+            out.append((t - lookback, up[0], "release"))
+        else:
+            out.append((t - lookback, -1, "other"))
     return out
+
+
+def detected_touches(ev: np.ndarray, truth: np.ndarray) -> list[tuple[int, int]]:
+    """(decision window start µs, contact) of each onset the receiver answers as a touch
+    (its rule, skinhil/receiver/onset.py with default parameters, and the touch-down/release
+    rule, skinhil/receiver/touch_kind.py) found at most :data:`MATCH_US` after a contact's
+    touch-down (:func:`truth_onsets`)."""
+    mask = in_layer((6, 6))
+    return [(t0, c) for t0, c, what in truth_onsets(ev, truth) if what == "touch-down"
+            and touch_kind(ev["t"], ev["addr"], t0, mask) == TOUCH_DOWN]

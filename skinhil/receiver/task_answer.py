@@ -1,15 +1,19 @@
 """The reference receiver answers the contact tasks (``skinhil listen --answer``): at each
-onset it detects (no ground truth), it sends ANSWERs (``protocols/SPEC.md`` §3.5.3) of
-LOCALISATION and FORCE at the end of the decision window, VIBRATION once the touch's
-vibration window has passed, and a SLIP as soon as the touch's spikes show it (within its
-slip watch), computed by :mod:`skinhil.receiver.task_decoders` from the spikes; an onset
-inside the touch before it is no new touch.
+onset it detects (no ground truth) it reads which springs the onset's burst excites
+(:mod:`skinhil.receiver.touch_kind`). At a touch-down it sends ANSWERs (``protocols/SPEC.md``
+§3.5.3) of LOCALISATION and FORCE at the end of the decision window, VIBRATION once the
+touch's vibration window has passed, and a SLIP as soon as the touch's spikes show it
+(within its slip watch), computed by :mod:`skinhil.receiver.task_decoders` from the spikes;
+an onset inside the touch after it is no new touch. At a release outside a touch (a
+touch whose touch-down went unseen) it sends LOCALISATION, from the release's burst, and
+VIBRATION, from the spikes of the vibration window before it (the touch was held then),
+and no FORCE (the object has let go). An onset that is neither (noise) is not answered.
 
 Two bounds to compare it with, through the same link and the same answer path:
 
-- ``random``: the same onsets, each value drawn at random (a place on the skin, a force of
-  0.05..0.6 N, a frequency of the vibration band), a slip with p = 0.5 at a random time of
-  the touch's slip watch;
+- ``random``: the same onsets and the same tasks at each, each value drawn at random (a
+  place on the skin, a force of 0.05..0.6 N, a frequency of the vibration band), a slip with
+  p = 0.5 at a random time of the touch's slip watch;
 - ``oracle``: the truth of an earlier run of the same scenario (``serve --truth FILE``, the
   world's mechanics do not depend on the noise): each trial answered with its true values
   :data:`ORACLE_DELAY_S` after its onset, timed by the board time the stream shows.
@@ -44,6 +48,7 @@ from skinhil.receiver.task_decoders import (
     touch_spikes,
     within_touch,
 )
+from skinhil.receiver.touch_kind import RELEASE, TOUCH_DOWN, in_layer, touch_kind
 
 log = logging.getLogger(__name__)
 
@@ -127,28 +132,44 @@ class TaskAnswerer(ReceiverListener):
         p = decision.prediction
         if within_touch(p.detect_t_us, self._touch_us):
             return
+        ev = self._window(p.window_t_us, p.decided_t_us)
+        kind = touch_kind(ev["t"], ev["addr"], p.window_t_us, in_layer(self._size()))
+        if kind == RELEASE:
+            self._answer_release(p.window_t_us, ev)
+        if kind != TOUCH_DOWN:
+            return
         self._touch_us = p.detect_t_us
         lo, hi = (p.window_t_us + int(s * 1e6) for s in SLIP_WATCH_S)
         due = (None if self.answerer == "reference" or self._rng.random() >= 0.5
                else int(self._rng.integers(lo, hi)))
         if self.answerer == "reference" or due is not None:
             self._slip_watch = (p.window_t_us, due)
-        ev = self._window(p.window_t_us, p.decided_t_us)
         if self.answerer == "reference":
-            xy = self._xy_mm if self._xy_mm is not None else sensor_xy_mm((6, 6))
-            centre, spikes = touch_spikes(ev["t"], ev["addr"], p.window_t_us, xy)
+            centre, spikes = touch_spikes(ev["t"], ev["addr"], p.window_t_us, self._xy())
             values = {protocols.Task.LOCALISATION: centre,
                       protocols.Task.FORCE: (force_n(spikes),)}
         else:
-            rows, cols = self._size()
-            values = {protocols.Task.LOCALISATION: (
-                          float(self._rng.uniform(-(cols - 1) / 2, (cols - 1) / 2)),
-                          float(self._rng.uniform(-(rows - 1) / 2, (rows - 1) / 2))),
+            values = {protocols.Task.LOCALISATION: self._random_place(),
                       protocols.Task.FORCE: (float(self._rng.uniform(0.05, 0.6)),)}
         for task, vals in values.items():
             self._send(task, tuple(round(v, 3) for v in vals))
         if protocols.Task.VIBRATION not in self.off:
             self._vibration.append(p.window_t_us)
+
+    def _answer_release(self, start_us: int, ev: np.ndarray) -> None:
+        """A release at a decision window starting at ``start_us`` (µs; its events ``ev``)
+        ends a touch whose touch-down went unseen: its place from the release's burst, its
+        vibration from the :data:`VIBRATION_WINDOW_S` before it."""
+        window_us = int(VIBRATION_WINDOW_S * 1e6)
+        held = self._window(start_us - window_us, start_us)
+        if self.answerer == "reference":
+            place = touch_spikes(ev["t"], ev["addr"], start_us, self._xy())[0]
+            hz = frequency_hz(held["t"], held["addr"])
+        else:
+            place = self._random_place()
+            hz = float(self._rng.uniform(*VIBRATION_BAND_HZ))
+        self._send(protocols.Task.LOCALISATION, tuple(round(v, 3) for v in place))
+        self._send(protocols.Task.VIBRATION, (round(hz, 2),))
 
     def on_ack(self, ack: Any) -> None:
         if ack.opcode != protocols.CommandCode.ANSWER or ack.token not in self._pending:
@@ -167,6 +188,14 @@ class TaskAnswerer(ReceiverListener):
     def _size(self) -> tuple[int, int]:
         s = self.receiver.session
         return (int(s.rows), int(s.cols)) if s is not None and s.rows else (6, 6)
+
+    def _xy(self) -> np.ndarray:
+        return self._xy_mm if self._xy_mm is not None else sensor_xy_mm(self._size())
+
+    def _random_place(self) -> tuple[float, float]:
+        rows, cols = self._size()
+        return (float(self._rng.uniform(-(cols - 1) / 2, (cols - 1) / 2)),
+                float(self._rng.uniform(-(rows - 1) / 2, (rows - 1) / 2)))
 
     def _window(self, start_us: int, end_us: int) -> np.ndarray:
         if not self._events:
