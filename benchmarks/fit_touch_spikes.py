@@ -5,8 +5,9 @@ centroid, on calibration runs of examples/scenarios/task_localisation.toml.
 
 Each calibration run is ``skinhil simulate`` (offline, no link) at the given SNR and one of the
 seeds; the touches are found by the receiver's own onset rule (skinhil/receiver/onset.py,
-default parameters), an onset more than 50 ms after the latest touch-down left out, and their
-windows are the receiver's (from 3 ms before the detection, 50 ms long):
+default parameters) and called touch-downs by its skinhil/receiver/touch_kind.py, an onset more
+than 50 ms after the latest touch-down left out, and their windows are the receiver's (from 3
+ms before the detection, 50 ms long):
 
     python benchmarks/fit_touch_spikes.py --snr-db 10 --seeds 1,2,3,4,5,6
     python benchmarks/fit_touch_spikes.py --smoke     # one seed, the first 8 s only

@@ -4,9 +4,10 @@ feature's within-class spread, on calibration runs of examples/scenarios/task_vi
 
 Each calibration run is ``skinhil simulate`` (offline, no link) at the given SNR and one of the
 seeds; the touches are found by the receiver's own onset rule (skinhil/receiver/onset.py,
-default parameters), each read from its decision window's start (3 ms before the detection)
-for VIBRATION_WINDOW_S, and labelled with the frequency of the contact touching then (an onset
-more than 50 ms after the latest touch-down is a release or noise: left out):
+default parameters) and called touch-downs by its skinhil/receiver/touch_kind.py, each read
+from its decision window's start (3 ms before the detection) for VIBRATION_WINDOW_S, and
+labelled with the frequency of the contact touching then (an onset more than 50 ms after the
+latest touch-down is a release or noise: left out):
 
     python benchmarks/fit_vibration_classes.py --snr-db 10 --seeds 1,2,3,4,5,6
     python benchmarks/fit_vibration_classes.py --smoke     # one seed, the first 8 s only

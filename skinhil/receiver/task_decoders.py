@@ -1,6 +1,7 @@
 """The reference receiver's decoders of the contact tasks (``protocols/SPEC.md`` §3.5.3): the
 baseline a user's decoder is compared against. Each reads the spikes of one detected touch's
-decision window (the onset rule of :mod:`skinhil.receiver.onset`, no ground truth):
+decision window (the onset rule of :mod:`skinhil.receiver.onset`, an onset called a
+touch-down by :mod:`skinhil.receiver.touch_kind`; no ground truth):
 
 - the touch's spikes (:func:`touch_spikes`): those of the window's first
   :data:`TOUCH_SPIKES_S` (the touch-down's burst; the noise, about 1 spike/s on each of the
@@ -39,8 +40,9 @@ TOUCH_SPIKES_S = 0.015
 window's start. With :data:`TOUCH_RADIUS_MM`, chosen among 10, 15, 20, 30 and 50 ms and 1,
 1.5, 2 and 2.5 mm on the presses of ``examples/scenarios/task_localisation.toml`` simulated at
 the paper's 10 dB with seeds 1-6 on the default skin, ``python benchmarks/fit_touch_spikes.py
---snr-db 10 --seeds 1,2,3,4,5,6`` (98 touches detected of 216): 52 % of them located within
-0.5 mm (median 0.49 mm), against 26 % (0.81 mm) by the centroid of all the 50 ms window's
+--snr-db 10 --seeds 1,2,3,4,5,6`` (90 touches detected of 216, their onsets called
+touch-downs by :mod:`skinhil.receiver.touch_kind`): 56 % of them located within 0.5 mm
+(median 0.48 mm), against 27 % (0.81 mm) by the centroid of all the 50 ms window's
 spikes."""
 TOUCH_RADIUS_MM = 2.0
 """LOCALISATION, FORCE: the touch's spikes lie this near (mm) their trimmed centroid (chosen
@@ -48,16 +50,17 @@ with :data:`TOUCH_SPIKES_S`)."""
 TRIM_ROUNDS = 3
 """LOCALISATION, FORCE: the trimmed centroid moves this many times to the mean of the spikes
 within :data:`TOUCH_RADIUS_MM` of it."""
-FORCE_OFFSET_N = 0.1930
+FORCE_OFFSET_N = 0.2018
 """FORCE: the line's offset (N); with :data:`FORCE_N_PER_SPIKE`, the least-squares fit of
 the normal force at the end of each detected touch's decision window on the count of the
 touch's spikes (:func:`touch_spikes`), over the presses of
 ``examples/scenarios/task_force.toml`` simulated at the paper's 10 dB with seeds 1-6, on the
-default skin: ``python benchmarks/fit_force_line.py --snr-db 10 --seeds 1,2,3,4,5,6`` (129
-touches detected of 216, correlation 0.83, median |error| 0.044 N; 53 % within 0.05 N, where
-the line through all the 50 ms window's spikes had 47 %). Another SNR or skin needs its own
+default skin, their onsets called touch-downs (:mod:`skinhil.receiver.touch_kind`):
+``python benchmarks/fit_force_line.py --snr-db 10 --seeds 1,2,3,4,5,6`` (124 touches
+detected of 216, correlation 0.82, median |error| 0.045 N; 52 % within 0.05 N, where the
+line through all the 50 ms window's spikes has 48 %). Another SNR or skin needs its own
 fit; the README's runs use another seed."""
-FORCE_N_PER_SPIKE = 0.0220
+FORCE_N_PER_SPIKE = 0.0216
 """FORCE: newtons per spike of the touch (the fit above)."""
 VIBRATION_BAND_HZ = (40.0, 500.0)
 """VIBRATION: the band (Hz) of the frequencies asked (the random answerer draws from it)."""
@@ -71,17 +74,18 @@ VIBRATION_CLASSES_HZ = (50.0, 100.0, 200.0, 300.0)
 """VIBRATION: the frequencies (Hz) of the calibration scenario
 (``examples/scenarios/task_vibration.toml``), the answers the decoder gives."""
 VIBRATION_MEANS = (
-    (158.74, 31.67, 5.91, 0.84, 1.06),
-    (148.74, 1.17, 8.20, 1.65, 1.00),
+    (158.58, 31.65, 5.89, 0.86, 1.05),
+    (149.36, 1.03, 8.32, 1.58, 0.95),
     (147.90, 1.31, 0.71, 1.10, 1.01),
     (164.23, 1.05, 1.24, 0.95, 1.07),
 )
 """VIBRATION: per class of :data:`VIBRATION_CLASSES_HZ`, the mean of
-:func:`vibration_features` over the calibration touches: ``python
-benchmarks/fit_vibration_classes.py --snr-db 10 --seeds 1,2,3,4,5,6`` on the default skin
-(161 touches detected of 192; 86 % of them classed right on their own fit). Another SNR, skin
-or set of frequencies needs its own fit; the README's runs use another seed."""
-VIBRATION_SPREAD = (9.22, 2.94, 2.59, 1.10, 1.00)
+:func:`vibration_features` over the calibration touches, their onsets called touch-downs
+(:mod:`skinhil.receiver.touch_kind`): ``python benchmarks/fit_vibration_classes.py --snr-db
+10 --seeds 1,2,3,4,5,6`` on the default skin (157 touches detected of 192; 85 % of them
+classed right on their own fit). Another SNR, skin or set of frequencies needs its own fit;
+the README's runs use another seed."""
+VIBRATION_SPREAD = (9.20, 2.94, 2.59, 1.08, 0.99)
 """VIBRATION: the within-class standard deviation of each feature (the fit above)."""
 TOUCH_S = 0.5
 """An onset this soon (s) after a touch's onset belongs to that touch."""
