@@ -75,11 +75,13 @@ def main() -> None:
     held, pressed = np.round(level, 1), np.round(presses, 1)
     for n in np.unique(pressed):
         at = held == n
+        found = f"  presses of {n:.1f} N: {at.sum()} of {np.sum(pressed == n)} found"
+        if not at.any():
+            print(found)
+            continue
         sd = f"{x[at].std():.1f}" if at.sum() > 1 else "-"
-        print(f"  presses of {n:.1f} N: {at.sum()} of {np.sum(pressed == n)} found, "
-              f"{np.mean(err[at] <= TOLERANCE_N) if at.any() else 0:.0%} within "
-              f"{TOLERANCE_N} N, spikes {x[at].mean() if at.any() else 0:.1f} ± {sd}")
-
+        print(f"{found}, {np.mean(err[at] <= TOLERANCE_N):.0%} within {TOLERANCE_N} N, "
+              f"spikes {x[at].mean():.1f} ± {sd}")
 
 if __name__ == "__main__":
     main()
