@@ -16,6 +16,7 @@ from conftest import PtyPair
 
 import protocols
 from protocols import Task
+from skinhil.events import make_events
 from skinhil.receiver.answer import CommandSender
 from skinhil.receiver.task_answer import TaskAnswerer
 from skinhil.receiver.task_decoders import (
@@ -110,3 +111,14 @@ def test_task_answers_leave_through_the_command_sender_within_the_wire_range(
     assert tasks.as_dict()["sent"] == {"force": 1, "localisation": 1}
     assert tasks.invalid == 1 and tasks.sender.sent == 2 and decisions.sent == 1
     assert tasks.sender.encoder is decisions.encoder  # one sequence count on the link
+
+
+def test_an_empty_batch_of_events_answers_nothing(pty_pair: PtyPair) -> None:
+    transport = SerialTransport(pty_pair.path, baud=921600)
+    try:
+        receiver = SimpleNamespace(transport=transport, board_id=0, session=None)
+        tasks = TaskAnswerer(receiver)  # type: ignore[arg-type]
+        tasks.on_events(make_events(np.zeros(0), np.zeros(0)), 0.0)
+    finally:
+        transport.shutdown()
+    assert dict(tasks.sent) == {}

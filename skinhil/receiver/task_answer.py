@@ -109,6 +109,8 @@ class TaskAnswerer(ReceiverListener):
         if self.answerer == "oracle":
             self._play_oracle()
             return
+        if events.shape[0] == 0:
+            return
         self._events.append(events)
         last = int(events["t"][-1])
         while len(self._events) > 1 and int(self._events[0]["t"][-1]) < last - KEEP_EVENTS_S * 1e6:
