@@ -316,3 +316,39 @@ def test_demo_sigterm_prints_the_figures_so_far(tmp_path: Path) -> None:
     out, err = demo.communicate(timeout=30)
     assert demo.returncode == 143, (out, err)
     assert "demo: stopped after" in out and "link:" in out and "Traceback" not in err, out
+
+
+def test_sigint_inside_a_compiled_functions_callback_stops_cleanly_after_it() -> None:
+    """A SIGINT while a compiled function calls back into Python (numba's unpickler, as it
+    returns an array) is delivered once it has returned: the call completes and the stop
+    comes as :class:`Stopped`, not as "SystemError: ... returned a result with an exception
+    set" (seen once in ``simulate`` in CI)."""
+    from skinhil.cli import signals
+    from skinhil.model.neurons import raster_to_events
+
+    raster = np.zeros((10, 338), dtype=np.bool_)
+    raster[3, 7] = True
+    raster_to_events(raster, 1e-4)  # compiled (or loaded) before the signal
+    sent: list[str] = []
+
+    def send_in_callback(frame, event, arg):  # type: ignore[no-untyped-def]
+        if event == "call" and frame.f_code.co_name == "_numba_unpickle" and not sent:
+            sent.append(frame.f_code.co_filename)
+            os.kill(os.getpid(), signal.SIGINT)  # handled at the callback's next bytecode
+
+    old = signals.install()
+    signals.resume()
+    events = None
+    try:
+        with pytest.raises(signals.Stopped):
+            sys.setprofile(send_in_callback)
+            try:
+                events = raster_to_events(raster, 1e-4)
+            finally:
+                sys.setprofile(None)
+            time.sleep(5 * signals.RESEND_S + 1.0)  # the signal delivered again meanwhile
+    finally:
+        signals.finish()
+        signals.restore(old)
+    assert sent, "the compiled call made no callback to numba's unpickler"
+    assert events is not None and events["addr"].tolist() == [7]

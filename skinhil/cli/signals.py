@@ -63,9 +63,13 @@ class Stopped(KeyboardInterrupt):
         return 128 + self.signum
 
 
-NATIVE_CALLBACKS: tuple[str, ...] = ("llvmlite",)
-"""Packages whose Python functions native code calls back (numba's compiler, through
-llvmlite): an exception raised there is printed as "Exception ignored" and lost."""
+NATIVE_CALLBACKS: tuple[str, ...] = (os.path.join("", "llvmlite", ""),
+                                     os.path.join("", "numba", "core", "serialize.py"))
+"""Where the Python functions live that native code calls back: llvmlite (numba's compiler),
+whose exceptions are printed as "Exception ignored" and lost, and numba's unpickler, which a
+compiled function calls as it returns an array (its dtype), whose exception the compiled
+code does not check (a Ctrl-C there ended ``simulate`` with "SystemError: CPUDispatcher(...)
+returned a result with an exception set")."""
 RESEND_S = 0.02
 """How soon (s) a signal that arrived inside such a callback is delivered again."""
 
@@ -78,8 +82,8 @@ def _in_native_callback(frame: FrameType | None) -> bool:
         return True
     while frame is not None:
         code = frame.f_code
-        if code.co_name == "__del__" or any(f"{os.sep}{pkg}{os.sep}" in code.co_filename
-                                            for pkg in NATIVE_CALLBACKS):
+        if code.co_name == "__del__" or any(place in code.co_filename
+                                            for place in NATIVE_CALLBACKS):
             return True
         frame = frame.f_back
     return False
