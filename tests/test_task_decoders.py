@@ -122,3 +122,23 @@ def test_an_empty_batch_of_events_answers_nothing(pty_pair: PtyPair) -> None:
     finally:
         transport.shutdown()
     assert dict(tasks.sent) == {}
+
+
+def test_the_tasks_the_session_announces_are_the_only_ones_answered(pty_pair: PtyPair) -> None:
+    """A SESSION that announces its tasks (bit n for Task n) switches the others off before
+    any ANSWER; one that announces none (an earlier board) leaves every task on."""
+    transport = SerialTransport(pty_pair.path, baud=921600)
+    try:
+        receiver = SimpleNamespace(transport=transport, board_id=0, session=None)
+        tasks = TaskAnswerer(receiver, "random")  # type: ignore[arg-type]
+        tasks.on_session(SimpleNamespace(rows=6, cols=6, tasks=0))
+        assert tasks.off == set()
+        tasks.on_session(SimpleNamespace(rows=6, cols=6,
+                                         tasks=1 << Task.FORCE | 1 << Task.SLIP))
+        for task, values in ((Task.FORCE, (0.3,)), (Task.LOCALISATION, (0.0, 0.0)),
+                             (Task.SLIP, ()), (Task.VIBRATION, (100.0,))):
+            tasks._send(task, values)
+    finally:
+        transport.shutdown()
+    assert tasks.off == {Task.CLASSIFICATION, Task.LOCALISATION, Task.VIBRATION}
+    assert tasks.as_dict()["sent"] == {"force": 1, "slip": 1}

@@ -18,7 +18,9 @@ Two bounds to compare it with, through the same link and the same answer path:
   world's mechanics do not depend on the noise): each trial answered with its true values
   :data:`ORACLE_DELAY_S` after its onset, timed by the board time the stream shows.
 
-A task the board NACKs as TASK_NOT_POSED is not answered again.
+A task the SESSION does not announce (its ``tasks`` bitmask, SPEC §3.7) is not answered;
+from a board that announces none (an earlier revision), a task it NACKs as TASK_NOT_POSED is
+not answered again.
 """
 
 from __future__ import annotations
@@ -91,7 +93,8 @@ class TaskAnswerer(ReceiverListener):
         self._pending: dict[int, int] = {}
         """token → task of the ANSWERs not yet ACKed."""
         self.off: set[int] = set()
-        """Tasks the board does not pose (NACKed TASK_NOT_POSED): no longer answered."""
+        """Tasks the board does not pose (not in the SESSION's tasks, or NACKed
+        TASK_NOT_POSED): not answered."""
         self.sent: Counter[str] = Counter()
         self.acked: Counter[str] = Counter()
         self.nacked: Counter[str] = Counter()
@@ -104,6 +107,8 @@ class TaskAnswerer(ReceiverListener):
     def on_session(self, session: Any) -> None:
         if session.rows and session.cols:
             self._xy_mm = sensor_xy_mm((int(session.rows), int(session.cols)))
+        if session.tasks:  # the board says which tasks it scores
+            self.off = {t for t in protocols.Task if not session.tasks >> t & 1}
 
     def on_events(self, events: np.ndarray, host_time_s: float) -> None:
         if self.answerer == "oracle":
