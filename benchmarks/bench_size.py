@@ -45,9 +45,9 @@ Usage::
 
 Every figure is the best of ``--repeats`` runs (the machine is shared): the load average is
 printed before and after. A brief run of the same command in a process of its own comes first
-(:func:`warm_up`), so that the kernels are loaded from the disk cache as ``serve`` loads them. ``--clock cpu`` (one thread only) times this process's CPU time
-instead of the wall clock: the figures a dedicated core would give on a machine busy with
-other work.
+(:func:`warm_up`), so that the kernels are loaded from the disk cache as ``serve`` loads
+them. ``--clock cpu`` (one thread only) times this process's CPU time instead of the wall
+clock: the figures a dedicated core would give on a machine busy with other work.
 """
 
 from __future__ import annotations
