@@ -20,6 +20,7 @@ SUBCOMMANDS: tuple[str, ...] = (
     "pty",
     "compile",
     "bench",
+    "suites",
 )
 
 ERROR_STATUS = 2

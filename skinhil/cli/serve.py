@@ -47,6 +47,7 @@ from skinhil.recording import (
     open_recording,
 )
 from skinhil.scoring import DecisionScoreboard, scoreboard_text, truth_lines
+from skinhil.suites import suite_trials
 from skinhil.world.scene import MAX_CONTACTS as MAX_LIFTS
 
 LIVE_WINDOW_TICKS = 1000
@@ -82,6 +83,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                           "the decoder under test grips it with GRIP commands; its scores go "
                           "to --score "
                           "under \"grasp\"")
+    src.add_argument("--suite", metavar="SUITE:CASE",
+                     help="play a case of a task suite (skinhil suites lists them, "
+                          "docs/suites.md), its trials drawn from --seed; the run ends with "
+                          "the case unless --duration says otherwise")
     src.add_argument("--replay", type=Path, metavar="FILE",
                      help="play this recording (serve --record) onto the link instead of "
                           "running the board: byte for byte (serial, UDP), frame for frame "
@@ -162,7 +167,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
 
 
 def _config(args: argparse.Namespace) -> BoardConfig:
-    if args.schedule is not None or args.grasp is not None:
+    if args.schedule is not None or args.grasp is not None or args.suite is not None:
         mode = Timeline.SCHEDULE_FILE
     elif args.host_driven:
         mode = Timeline.SCHEDULE_NONE
@@ -425,6 +430,11 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
     grasp = GraspParams() if args.grasp is not None else None
     if grasp is not None:
         scene = lift_scene(grasp, args.grasp)
+    duration_s = args.duration_s
+    if args.suite is not None:
+        trials = suite_trials(args.suite, args.seed, args.size)
+        schedule, scene, grasp = trials.scenario.schedule, trials.scenario.scene, trials.grasp
+        duration_s = trials.duration_s if duration_s is None else duration_s
     tty = sys.stderr.isatty() and not args.quiet and not args.json
     where = describe_transport(args)
 
@@ -438,7 +448,7 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
     truth_path = check_output_path(args.truth) if args.truth is not None else None
     if args.grasp_truth is not None and grasp is None:
         raise ConfigError("--grasp-truth writes a held object's truth: give --grasp LIFTS "
-                          "too, or leave it out")
+                          "(or --suite SUITE:grasp) too, or leave it out")
     grasp_truth_path = (check_output_path(args.grasp_truth) if args.grasp_truth is not None
                         else None)
     # the board's model compiles as it is built (the geometric mechanics' rest forces come
@@ -480,7 +490,7 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
             return _drain_notice(board)
 
         with signals.stop_event(on_signal, lambda: _undrained(board)) as stop:
-            summary = board.run(args.duration_s, stop,
+            summary = board.run(duration_s, stop,
                                 on_second if (args.json or tty) else None)
     finally:
         if tty:

@@ -12,11 +12,16 @@ under force control on both axes: the normal load is the grip (set at run time,
     .. + settle_s                L = 0, then the contact ends (the hand opens)
 
 followed by ``gap_s`` with nothing touching before the next lift.
+
+A drawn run (:func:`drawn_lift_scene`) gives each lift its own :class:`Lift`: its start, its
+grasp time, its object's mass and break force, its pull's size and place in the hold; the
+scene it makes (:class:`LiftScene`) carries them to the held object.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -92,12 +97,32 @@ class GraspParams:
         """From one lift's start to the next (s)."""
         return self.lift_s + self.gap_s
 
-    def load_keyframes(self) -> np.ndarray:
-        """(t_s, load_n) of one lift's load profile (module docstring)."""
-        w, p = self.weight_n, self.pull_n
-        t1 = self.grasp_s
+    def pull_start_s(self, lift: Lift | None = None) -> float:
+        """When the pull starts to ramp up (s from the lift's start): the middle of the hold,
+        or ``lift``'s own place in it."""
+        t2 = (self.grasp_s if lift is None else lift.grasp_s) + self.rise_s
+        if lift is None:
+            return t2 + 0.5 * (self.hold_s - self.pull_s) - self.ramp_s
+        return t2 + lift.pull_at_s
+
+    def pull_end_s(self, lift: Lift | None = None) -> float:
+        """When the pull has ramped down (s from the lift's start)."""
+        return self.pull_start_s(lift) + 2 * self.ramp_s + self.pull_s
+
+    def lift_duration_s(self, lift: Lift | None = None) -> float:
+        """One lift's contact (s): :attr:`lift_s`, or ``lift``'s with its own grasp time."""
+        if lift is None:
+            return self.lift_s
+        return lift.grasp_s + self.rise_s + self.hold_s + self.lower_s + self.settle_s
+
+    def load_keyframes(self, lift: Lift | None = None) -> np.ndarray:
+        """(t_s, load_n) of one lift's load profile (module docstring): the object of these
+        parameters, or ``lift``'s object, grasp time and pull."""
+        w = self.weight_n if lift is None else lift.mass_kg * G_M_PER_S2
+        p = self.pull_n if lift is None else lift.pull_n
+        t1 = self.grasp_s if lift is None else lift.grasp_s
         t2 = t1 + self.rise_s
-        tp = t2 + 0.5 * (self.hold_s - self.pull_s) - self.ramp_s
+        tp = self.pull_start_s(lift)
         t3 = t2 + self.hold_s
         t4 = t3 + self.lower_s
         rows = [(0.0, 0.0), (t1, 0.0), (t2, w), (tp, w), (tp + self.ramp_s, w + p),
@@ -106,14 +131,76 @@ class GraspParams:
         return np.array(rows)
 
 
-def lift_scene(params: GraspParams, lifts: int) -> Scene:
-    """``lifts`` lifts of the object, one every ``params.period_s`` from scene time 0."""
-    if not (isinstance(lifts, int) and 1 <= lifts <= MAX_CONTACTS):
-        raise ConfigError(f"a run holds 1..{MAX_CONTACTS} lifts, got {lifts!r}")
-    load = params.load_keyframes()
+@dataclass(frozen=True)
+class Lift:
+    """One lift of a drawn run (SI units): it starts at ``start_s`` (s, scene time), the
+    hand closes for ``grasp_s`` (s) before the rise, the object weighs ``mass_kg`` and
+    breaks under a grip above ``break_n`` (N; inf: never), and a pull of ``pull_n`` (N)
+    starts to ramp up ``pull_at_s`` (s) after the hold starts (unannounced: its time and size
+    are the run's secret)."""
+
+    start_s: float
+    mass_kg: float
+    break_n: float = math.inf
+    grasp_s: float = 0.15
+    pull_n: float = 0.15
+    pull_at_s: float = 0.155
+
+    def check(self, params: GraspParams) -> Lift:
+        """Itself, refused unless every value is in range and its pull fits in the hold."""
+        values = (self.start_s, self.mass_kg, self.grasp_s, self.pull_n, self.pull_at_s)
+        if not all(math.isfinite(v) and v >= 0 for v in values) or self.mass_kg <= 0:
+            raise ConfigError(f"lift {self!r}: times, mass and pull must be finite, >= 0 "
+                              "(mass > 0)")
+        if not self.break_n > params.initial_grip_n:
+            raise ConfigError(f"lift at {self.start_s:g} s: break_n {self.break_n!r} must be "
+                              f"above the initial grip {params.initial_grip_n:g} N")
+        latest = params.hold_s - 2 * params.ramp_s - params.pull_s
+        if self.pull_at_s > latest:
+            raise ConfigError(f"lift at {self.start_s:g} s: its pull ends after the hold; "
+                              f"give pull_at_s <= {latest:g} s")
+        return self
+
+
+@dataclass(frozen=True)
+class LiftScene(Scene):
+    """A drawn run's scene: one contact per lift and the lifts it was made of."""
+
+    lifts: tuple[Lift, ...] = ()
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if len(self.lifts) != len(self.contacts):
+            raise ConfigError(f"a lift scene needs one lift per contact: {len(self.lifts)} "
+                              f"lifts, {len(self.contacts)} contacts")
+
+
+def _lift_contact(params: GraspParams, lift: Lift | None, start_s: float, name: str) -> Contact:
+    load = params.load_keyframes(lift)
     keys = np.column_stack([load[:, 0], load[:, 1], np.zeros(len(load)),
                             np.full(len(load), params.initial_grip_n)])
     trajectory = Trajectory(keys, normal="force", tangential="force")
     pad = Indenter("flat", params.pad_radius_m)
-    return Scene(tuple(Contact(pad, trajectory, i * params.period_s, params.mu_static,
-                               params.mu_kinetic, f"lift{i + 1}") for i in range(lifts)))
+    return Contact(pad, trajectory, start_s, params.mu_static, params.mu_kinetic, name)
+
+
+def drawn_lift_scene(params: GraspParams, lifts: Sequence[Lift]) -> LiftScene:
+    """The run of ``lifts`` (each its own object, timing and pull; start times increasing,
+    no two lifts overlapping)."""
+    if not 1 <= len(lifts) <= MAX_CONTACTS:
+        raise ConfigError(f"a run holds 1..{MAX_CONTACTS} lifts, got {len(lifts)}")
+    for a, b in zip(lifts, lifts[1:], strict=False):
+        if b.start_s < a.start_s + params.lift_duration_s(a):
+            raise ConfigError(f"the lift at {b.start_s:g} s starts before the one at "
+                              f"{a.start_s:g} s has ended: space them further apart")
+    checked = tuple(lift.check(params) for lift in lifts)
+    return LiftScene(tuple(_lift_contact(params, lift, lift.start_s, f"lift{i + 1}")
+                           for i, lift in enumerate(checked)), checked)
+
+
+def lift_scene(params: GraspParams, lifts: int) -> Scene:
+    """``lifts`` lifts of the object, one every ``params.period_s`` from scene time 0."""
+    if not (isinstance(lifts, int) and 1 <= lifts <= MAX_CONTACTS):
+        raise ConfigError(f"a run holds 1..{MAX_CONTACTS} lifts, got {lifts!r}")
+    return Scene(tuple(_lift_contact(params, None, i * params.period_s, f"lift{i + 1}")
+                       for i in range(lifts)))

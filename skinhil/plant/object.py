@@ -6,19 +6,22 @@ contact that has not dropped, 0 N on a dropped one) and, after the model's steps
 distance grows by ``Σ v_slip·dt`` over the steps in gross slip (every touching mass slipping;
 ``v_slip`` the contact's slip speed), and once it passes ``drop_distance_m`` the object drops
 (its grip goes to 0 N: the hand no longer holds it); it drops too when, loaded, it touches
-no mass of the skin at some step (it has left the skin's patch). A GRIP
+no mass of the skin at some step (it has left the skin's patch). An object of a drawn run
+(:class:`skinhil.plant.lifts.LiftScene`) breaks once its lift runs, not dropped, under a grip
+above its break force: the lift fails, whatever follows. A GRIP
 (:meth:`HeldObject.set_grip`) changes the grip from the next tick on, within the bounds of
 :class:`GraspParams`.
 """
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from skinhil.plant.lifts import GraspParams
+from skinhil.plant.lifts import GraspParams, Lift, LiftScene
 from skinhil.plant.truth import HELD_DTYPE
 from skinhil.world import World
 from skinhil.world.truth import T_FX, T_FY, T_NODES, T_NORMAL, T_SLIP, T_SLIP_SPEED
@@ -50,7 +53,22 @@ class HeldObject:
         self.world = world
         self.tick_us = int(tick_us)
         self.loads = params.load_keyframes()
-        n = len(world.scene.contacts)
+        scene = world.scene
+        self.lifts: tuple[Lift, ...] | None = (
+            scene.lifts if isinstance(scene, LiftScene) else None)
+        """The drawn run's lifts (None: every lift the object of ``params``, one every
+        ``period_s``)."""
+        n = len(scene.contacts)
+        self._loads = ([params.load_keyframes(lift) for lift in self.lifts] if self.lifts
+                       else [self.loads] * n)
+        self._starts = [c.start_s for c in scene.contacts]
+        self._durations = ([params.lift_duration_s(lift) for lift in self.lifts] if self.lifts
+                           else [params.lift_s] * n)
+        self.break_n = np.array([lift.break_n for lift in self.lifts] if self.lifts
+                                else [math.inf] * n)
+        """Each lift's break force (N)."""
+        self.broken = np.zeros(n, dtype=bool)
+        """Whether each lift's object has broken."""
         self.grip_n = params.initial_grip_n
         self._last_us = 0
         self.slid_m = np.zeros(n)
@@ -67,6 +85,7 @@ class HeldObject:
         self._last_us = 0
         self.slid_m[:] = 0.0
         self.dropped[:] = False
+        self.broken[:] = False
 
     def set_grip(self, grip_n: float, now_us: int, arrival_us: int | None = None,
                  token: int = 0) -> str:
@@ -99,6 +118,11 @@ class HeldObject:
     def lift_at(self, scene_s: float) -> int:
         """The lift running at scene time ``scene_s`` (s): its index, or -1."""
         p = self.params
+        if self.lifts is not None:
+            i = bisect.bisect_right(self._starts, scene_s) - 1
+            if i < 0 or scene_s - self._starts[i] > self._durations[i]:
+                return -1
+            return i
         i = int(math.floor(scene_s / p.period_s)) if scene_s >= 0 else -1
         if not 0 <= i < len(self.dropped) or scene_s - i * p.period_s > p.lift_s:
             return -1
@@ -115,17 +139,21 @@ class HeldObject:
         if i < 0:
             return row
         r = raw[:, i]
-        tau = scene_s - i * self.params.period_s
-        load = float(np.interp(tau, self.loads[:, 0], self.loads[:, 1]))
+        tau = scene_s - (i * self.params.period_s if self.lifts is None else self._starts[i])
+        loads = self._loads[i]
+        load = float(np.interp(tau, loads[:, 0], loads[:, 1]))
         gross = r[:, T_SLIP] == GROSS
         if not self.dropped[i]:
             self.slid_m[i] += float(r[gross, T_SLIP_SPEED].sum()) * dt_s
             if self.slid_m[i] > self.params.drop_distance_m or (
                     load > 0 and (r[:, T_NODES] == 0).any()):
                 self.dropped[i] = True  # slid too far, or off the skin under its load
+            if self.grip_n > self.break_n[i]:
+                self.broken[i] = True
         row["lift"] = i + 1
         row["dropped"] = self.dropped[i]
-        row["held"] = not self.dropped[i]
+        row["held"] = not (self.dropped[i] or self.broken[i])
+        row["broken"] = self.broken[i]
         row["load_n"] = load
         row["normal_n"] = r[0, T_NORMAL]
         row["tangential_n"] = math.hypot(r[0, T_FX], r[0, T_FY])

@@ -16,7 +16,7 @@ def plant_scores(plant: HeldObject, truth: TruthLog) -> dict[str, Any]:
     grips = {"accepted": len(plant.log), **{f"refused_{k}": n for k, n in plant.refused.items()}}
     if held is None:
         return {"lifts": 0, "grips": grips}
-    out = grasp_scores(held, plant.params, grips)
+    out = grasp_scores(held, plant.params, grips, plant.lifts)
     out["grip_log"] = [[e.token, e.arrival_us, e.applied_us, e.grip_n] for e in plant.log]
     return out
 
@@ -26,15 +26,16 @@ def _num(value: float | None, fmt: str) -> str:
 
 
 def grasp_text(scores: dict[str, Any]) -> str:
-    """A few lines: lifts held and dropped, reaction latency, slip distance, grip economy,
-    the GRIPs accepted and refused."""
+    """A few lines: the score, lifts held, dropped and broken, reaction latency, slip
+    distance, grip economy, the GRIPs accepted and refused."""
     if not scores.get("lifts"):
         return "grasp: no lift scored"
     g = scores["grips"]
     lat = scores["reaction_latency_ms"]
     refused = sum(v for k, v in g.items() if k.startswith("refused_"))
-    return (f"grasp: {scores['held']}/{scores['lifts']} lifts held "
-            f"({100 * scores['held_fraction']:.0f} %), {scores['dropped']} dropped; "
+    return (f"grasp: score {scores['score']:.2f}; {scores['held']}/{scores['lifts']} lifts "
+            f"held ({100 * scores['held_fraction']:.0f} %), {scores['dropped']} dropped, "
+            f"{scores['broken']} broken; "
             f"{scores['slips']} slipped, reaction latency median "
             f"{_num(lat['median'], '.0f')} ms over {lat['count']}; slip distance median "
             f"{_num(scores['slip_distance_mm']['median'], '.3f')} mm; grip economy "
