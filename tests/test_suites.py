@@ -209,3 +209,13 @@ def test_serve_suite_case_ends_by_itself(case: str) -> None:
     assert summary["ticks"] == int(round(trials.duration_s / 1e-3))
     if case == "grasp":
         assert summary["grasp"]["lifts"] == len(trials.scenario.scene.contacts)
+
+
+def test_a_case_plays_fewer_trials_when_asked_never_more() -> None:
+    case = SUITE.case("localisation")
+    short = case.generate(SUITE.id, 4, trials=2)
+    assert short.scenario.scene is not None and len(short.scenario.scene.contacts) == 2
+    assert short.duration_s == short.scenario.duration_s + case.tail_s
+    assert short.duration_s < case.generate(SUITE.id, 4).duration_s
+    with pytest.raises(ConfigError, match="1..8 trials"):
+        case.generate(SUITE.id, 4, trials=9)
