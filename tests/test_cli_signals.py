@@ -66,11 +66,28 @@ def _main_started(proc: subprocess.Popen[str], timeout_s: float = 30.0) -> None:
         time.sleep(0.002)
 
 
-def _start(argv: list[str], tag: str) -> subprocess.Popen[str]:
+def _start(argv: list[str], tag: str, pass_fds: tuple[int, ...] = ()) -> subprocess.Popen[str]:
     return subprocess.Popen([sys.executable, "-m", "skinhil", *argv], cwd=RUN_DIR,
                             env={**serve_env(), "SKINHIL_TEST_TAG": tag}, text=True,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            stdin=subprocess.DEVNULL)
+                            stdin=subprocess.DEVNULL, pass_fds=pass_fds)
+
+
+def _read_ready(fd: int, timeout_s: float) -> dict[str, object]:
+    """The ready line a process writes to the pipe ``fd`` (``--ready-fd``), read to the end
+    of file it gives by closing its end."""
+    end = time.monotonic() + timeout_s
+    data = b""
+    with os.fdopen(fd, "rb") as pipe:
+        os.set_blocking(fd, False)
+        while time.monotonic() < end:
+            chunk = pipe.read()
+            if chunk == b"":
+                break
+            data += chunk or b""
+            time.sleep(0.05)
+    assert data.endswith(b"\n") and data.count(b"\n") == 1, data
+    return json.loads(data)
 
 
 def _tagged(tag: str) -> list[int]:
@@ -279,8 +296,12 @@ def _wait_for(proc: subprocess.Popen[str], stream: str, text: str, timeout_s: fl
 
 
 def test_sigterm_gives_the_summary_and_143(tmp_path: Path) -> None:
-    serve = _start(["serve", "--port", "loop://", "--duration", "60"], uuid.uuid4().hex)
-    _wait_for(serve, "stderr", "Ctrl-C stops", 120)
+    read_end, write_end = os.pipe()
+    serve = _start(["serve", "--port", "loop://", "--duration", "60", "--ready-fd",
+                    str(write_end)], uuid.uuid4().hex, pass_fds=(write_end,))
+    os.close(write_end)
+    ready = _read_ready(read_end, 120)  # the ready line, without --json
+    assert ready["type"] == "ready" and ready["pid"] == serve.pid, ready
     time.sleep(1.0)
     serve.send_signal(signal.SIGTERM)
     out, err = serve.communicate(timeout=30)
