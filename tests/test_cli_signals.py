@@ -37,7 +37,7 @@ from harness.serve import RUN_DIR, serve_env
 from skinhil.decoding import DirectionDecoder
 
 TRIES = int(os.environ.get("SKINHIL_SIGNAL_TRIES", "5"))
-"""SIGTERMs per command at random moments (5 in CI; a soak: SKINHIL_SIGNAL_TRIES=50)."""
+"""SIGTERMs per command at random moments (5 by default; a soak: SKINHIL_SIGNAL_TRIES=50)."""
 CLEAN_SIGINT = (0, 2, 130, -signal.SIGINT)
 """Exit statuses after a SIGINT: finished, refused, stopped; or ended by its default action
 while the interpreter shut down after finishing (Python restores the default handlers then;
@@ -50,7 +50,7 @@ REPRODUCE = ("reproduce", "--quick", "--workers", "2", "--grid", "2", "--repeats
 def _main_started(proc: subprocess.Popen[str], timeout_s: float = 30.0) -> None:
     """Wait until ``proc`` runs skinhil's code: it catches SIGTERM (``SigCgt`` in
     /proc/PID/status), which Python alone does not. Before that the interpreter is still
-    starting (site-packages' .pth files, ~0.1 s): a SIGINT there is the interpreter's own,
+    starting (site-packages' .pth files): a SIGINT there is the interpreter's own,
     whatever the program."""
     bit = 1 << (signal.SIGTERM - 1)
     end = time.monotonic() + timeout_s
@@ -343,7 +343,7 @@ def test_sigint_inside_a_compiled_functions_callback_stops_cleanly_after_it() ->
     """A SIGINT while a compiled function calls back into Python (numba's unpickler, as it
     returns an array) is delivered once it has returned: the call completes and the stop
     comes as :class:`Stopped`, not as "SystemError: ... returned a result with an exception
-    set" (seen once in ``simulate`` in CI)."""
+    set" (what ``simulate`` ended with when the signal was handled inside the callback)."""
     from skinhil.cli import signals
     from skinhil.model.neurons import raster_to_events
 
