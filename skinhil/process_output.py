@@ -39,8 +39,8 @@ SUMMARY = "summary"
 def ready_record(command: str, link: str, link_up: bool, wire_versions: Iterable[int],
                  **fields: Any) -> dict[str, Any]:
     """The ready line of ``command`` (``"serve"``, ``"listen"``) running on ``link`` (the
-    link as the command describes it); ``link_up``: the link is open (False: a board with
-    ``--reconnect`` waits for it); ``wire_versions``: the protocol versions it sends or
+    link as the command describes it); ``link_up``: the link is open as the run starts;
+    ``wire_versions``: the protocol versions it sends or
     reads; ``fields``: the command's own (board id, model, ...)."""
     return {"type": READY, "format": FORMAT, "command": command, "pid": os.getpid(),
             "link": link, "link_up": bool(link_up),
