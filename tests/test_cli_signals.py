@@ -20,6 +20,7 @@ import hashlib
 import json
 import os
 import random
+import select
 import signal
 import subprocess
 import sys
@@ -295,6 +296,22 @@ def _wait_for(proc: subprocess.Popen[str], stream: str, text: str, timeout_s: fl
     return "".join(seen)
 
 
+def _wait_for_bytes(proc: subprocess.Popen[str], text: str, timeout_s: float) -> None:
+    """Read ``proc``'s stderr, unbuffered (a progress bar ends no line), until it holds
+    ``text``."""
+    assert proc.stderr is not None
+    fd = proc.stderr.fileno()
+    end = time.monotonic() + timeout_s
+    seen = b""
+    while time.monotonic() < end and text.encode() not in seen:
+        ready, _, _ = select.select([fd], [], [], 0.1)
+        if ready:
+            chunk = os.read(fd, 4096)
+            assert chunk, seen  # ended before it said so
+            seen += chunk
+    assert text.encode() in seen, seen
+
+
 def test_sigterm_gives_the_summary_and_143(tmp_path: Path) -> None:
     read_end, write_end = os.pipe()
     serve = _start(["serve", "--port", "loop://", "--duration", "60", "--ready-fd",
@@ -316,7 +333,8 @@ def test_sigterm_gives_the_summary_and_143(tmp_path: Path) -> None:
 
     train = _start(["train", "--reps", "200", "--out", str(tmp_path / "m.npz")],
                    uuid.uuid4().hex)
-    time.sleep(5.0)  # in training (the imports take ~2 s)
+    _wait_for_bytes(train, "simulating the board stream", 120)  # its progress bar: training
+    time.sleep(1.0)
     train.send_signal(signal.SIGTERM)
     out, err = train.communicate(timeout=30)
     assert train.returncode == 143, (out, err)
