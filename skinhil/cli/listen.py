@@ -284,8 +284,8 @@ def say_ready(args: argparse.Namespace, boards: list[int] | None) -> None:
         model=str(args.model), size=format_size(args.size),
         answer=args.answer_with if args.answer else None))
     if not args.json:
-        which = ("" if boards is None or len(boards) == 1 else
-                 f", boards {', '.join(map(str, boards))}")
+        which = (", boards as they send" if boards is None else "" if len(boards) == 1
+                 else f", boards {', '.join(map(str, boards))}")
         print(f"skinhil listen: {describe_transport(args)}{which}, model {args.model}; "
               "Ctrl-C stops", file=sys.stderr, flush=True)
 

@@ -1,4 +1,5 @@
-"""``skinhil serve``: run the emulated sensor board in real time over a serial port or CAN."""
+"""``skinhil serve``: run the emulated sensor board in real time over a serial port, CAN or
+UDP; its ready and summary lines are docs/process-output.md's."""
 
 from __future__ import annotations
 
