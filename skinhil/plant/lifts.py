@@ -16,12 +16,13 @@ followed by ``gap_s`` with nothing touching before the next lift.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from skinhil.errors import ConfigError
+from skinhil.validation import Constraints, non_negative, validate_params
 from skinhil.world import Contact, Indenter, Scene, Trajectory
 from skinhil.world.scene import MAX_CONTACTS
 
@@ -60,11 +61,28 @@ class GraspParams:
     settle_s: float = 0.05
     gap_s: float = 0.1
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "mass_kg": non_negative("kg"),
+        "pull_n": non_negative("N"),
+        "pad_radius_m": non_negative("m"),
+        "mu_static": non_negative("coefficient"),
+        "mu_kinetic": non_negative("coefficient"),
+        "initial_grip_n": non_negative("N"),
+        "max_grip_n": non_negative("N"),
+        "max_rate_n_per_s": non_negative("N/s"),
+        "drop_distance_m": non_negative("m"),
+        "grasp_s": non_negative("s"),
+        "rise_s": non_negative("s"),
+        "hold_s": non_negative("s"),
+        "pull_s": non_negative("s"),
+        "ramp_s": non_negative("s"),
+        "lower_s": non_negative("s"),
+        "settle_s": non_negative("s"),
+        "gap_s": non_negative("s"),
+    }
+
     def __post_init__(self) -> None:
-        for name, value in vars(self).items():
-            if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
-                raise ConfigError(f"GraspParams.{name} must be a finite number >= 0, "
-                                  f"got {value!r}")
+        validate_params(self)
         if not 0 < self.mu_kinetic <= self.mu_static:
             raise ConfigError("GraspParams: friction needs 0 < mu_kinetic <= mu_static")
         if not self.hold_s >= self.pull_s + 2 * self.ramp_s:

@@ -5,10 +5,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from numbers import Real
+from typing import ClassVar
 
 import numpy as np
 
 from skinhil.errors import ConfigError
+from skinhil.validation import Constraints, Interval, non_negative, validate_params
 from skinhil.world.contact import ContactParams
 from skinhil.world.indenters import Indenter
 from skinhil.world.trajectory import AXES, Trajectory
@@ -17,6 +20,7 @@ MAX_CONTACTS = 64
 """Most contacts in one scene."""
 MAX_MU = 5.0
 """Largest friction coefficient."""
+_MU = Interval(Real, 0, MAX_MU, closed="both", unit="friction coefficient")
 
 
 @dataclass(frozen=True)
@@ -31,13 +35,18 @@ class Contact:
     mu_kinetic: float = 0.6
     name: str = "contact"
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "start_s": non_negative("s"),
+        "mu_static": _MU,
+        "mu_kinetic": _MU,
+    }
+
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.start_s) and self.start_s >= 0):
-            raise ConfigError(f"contact {self.name!r}: start_s must be >= 0 s")
-        if not (0 <= self.mu_kinetic <= self.mu_static <= MAX_MU):
-            raise ConfigError(f"contact {self.name!r}: friction needs 0 <= mu_kinetic <= "
-                              f"mu_static <= {MAX_MU:g}, got {self.mu_kinetic!r}, "
-                              f"{self.mu_static!r}")
+        validate_params(self, where=f"contact {self.name!r}: ")
+        if self.mu_kinetic > self.mu_static:
+            raise ConfigError(f"contact {self.name!r}: friction needs mu_kinetic <= "
+                              f"mu_static, got {self.mu_kinetic!r} > {self.mu_static!r}: "
+                              "lower mu_kinetic or raise mu_static")
 
     @property
     def end_s(self) -> float:
