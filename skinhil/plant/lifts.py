@@ -22,7 +22,7 @@ from typing import ClassVar
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.validation import Constraints, non_negative, validate_params
+from skinhil.validation import Constraints, non_negative, positive, validate_params
 from skinhil.world import Contact, Indenter, Scene, Trajectory
 from skinhil.world.scene import MAX_CONTACTS
 
@@ -65,9 +65,9 @@ class GraspParams:
         "mass_kg": non_negative("kg"),
         "pull_n": non_negative("N"),
         "pad_radius_m": non_negative("m"),
-        "mu_static": non_negative("coefficient"),
-        "mu_kinetic": non_negative("coefficient"),
-        "initial_grip_n": non_negative("N"),
+        "mu_static": positive("friction coefficient"),
+        "mu_kinetic": positive("friction coefficient"),
+        "initial_grip_n": positive("N"),
         "max_grip_n": non_negative("N"),
         "max_rate_n_per_s": non_negative("N/s"),
         "drop_distance_m": non_negative("m"),
@@ -83,12 +83,18 @@ class GraspParams:
 
     def __post_init__(self) -> None:
         validate_params(self)
-        if not 0 < self.mu_kinetic <= self.mu_static:
-            raise ConfigError("GraspParams: friction needs 0 < mu_kinetic <= mu_static")
-        if not self.hold_s >= self.pull_s + 2 * self.ramp_s:
-            raise ConfigError("GraspParams: the hold must be long enough for the pull")
-        if not 0 < self.initial_grip_n <= self.max_grip_n:
-            raise ConfigError("GraspParams: 0 < initial_grip_n <= max_grip_n")
+        if self.mu_kinetic > self.mu_static:
+            raise ConfigError(f"GraspParams: friction needs mu_kinetic <= mu_static, got "
+                              f"{self.mu_kinetic!r} > {self.mu_static!r}: lower mu_kinetic "
+                              "or raise mu_static")
+        if self.hold_s < self.pull_s + 2 * self.ramp_s:
+            raise ConfigError(f"GraspParams: hold_s = {self.hold_s!r} is shorter than the pull "
+                              f"and its ramps (pull_s + 2 ramp_s = "
+                              f"{self.pull_s + 2 * self.ramp_s:g} s): lengthen the hold")
+        if self.initial_grip_n > self.max_grip_n:
+            raise ConfigError(f"GraspParams: initial_grip_n = {self.initial_grip_n!r} N is "
+                              f"above max_grip_n = {self.max_grip_n!r} N: lower it or raise "
+                              "max_grip_n")
 
     @property
     def weight_n(self) -> float:

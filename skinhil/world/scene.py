@@ -3,7 +3,6 @@ time, and the world's packed operands and state that the compiled step reads and
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from numbers import Real
 from typing import ClassVar
@@ -11,7 +10,7 @@ from typing import ClassVar
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.validation import Constraints, Interval, non_negative, validate_params
+from skinhil.validation import Constraints, Interval, check_param, non_negative, validate_params
 from skinhil.world.contact import ContactParams
 from skinhil.world.indenters import Indenter
 from skinhil.world.trajectory import AXES, Trajectory
@@ -125,6 +124,6 @@ class World:
                               f"{len(self.scene.contacts)}")
         if self.scene.contacts[contact].trajectory.normal != "force":
             raise ConfigError(f"contact {contact} is position-controlled: no load to set")
-        if load_n is not None and not (math.isfinite(load_n) and load_n >= 0):
-            raise ConfigError(f"a load must be a finite number of newtons >= 0, got {load_n!r}")
+        if load_n is not None:
+            check_param("load_n", load_n, non_negative("N"))
         self.state[4][contact] = np.nan if load_n is None else float(load_n)

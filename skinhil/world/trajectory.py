@@ -27,7 +27,14 @@ from typing import ClassVar, Literal
 import numpy as np
 
 from skinhil.errors import ConfigError
-from skinhil.validation import Constraints, StrOptions, non_negative, validate_params
+from skinhil.validation import (
+    Constraints,
+    StrOptions,
+    check_param,
+    non_negative,
+    positive,
+    validate_params,
+)
 
 Control = Literal["position", "force"]
 CONTROLS: tuple[Control, ...] = ("position", "force")
@@ -104,8 +111,7 @@ class Trajectory:
               load: bool = False) -> Trajectory:
         """Press at ``start_m`` (x, y) over ``ramp_s``, dwell ``dwell_s``, slide in a straight
         line to ``end_m`` at ``speed_m_per_s``, dwell, lift over ``ramp_s``."""
-        if not (math.isfinite(speed_m_per_s) and speed_m_per_s > 0):
-            raise ConfigError(f"slide speed must be > 0 m/s, got {speed_m_per_s!r}")
+        check_param("speed_m_per_s", speed_m_per_s, positive("m/s"))
         (x0, y0), (x1, y1) = start_m, end_m
         travel = math.hypot(x1 - x0, y1 - y0) / speed_m_per_s
         t1 = ramp_s + dwell_s
