@@ -30,6 +30,7 @@ from skinhil.cli.parser import build_parser
 from skinhil.cli.transport_args import transport_argv
 from skinhil.decoding.classifier import DirectionDecoder
 from skinhil.decoding.model_file import save_decoder
+from skinhil.process_output import READY, SUMMARY, last_record, records
 from skinhil.receiver.training import feature_spec
 
 SMOKE = REPO / "examples" / "campaigns" / "smoke.toml"
@@ -99,6 +100,13 @@ def test_smoke_campaign_on_a_clean_link(model: Path, tmp_path: Path) -> None:
         assert record["criteria"][0] == {"criterion": "decisions >= 1",
                                          "value": record["criteria"][0]["value"],
                                          "holds": record["criteria"][0]["value"] >= 1}
+    for record in summary["cases"]:  # the runner read the processes' own lines, by type
+        folder = Path(record["folder"])
+        ready = last_record(records((folder / "decoder.out").read_text()), READY)
+        assert ready is not None and ready["command"] == "listen", record
+        assert ready["answer"] == "reference" and ready["link_up"], ready
+        board = last_record(records((folder / "board.out").read_text()), SUMMARY)
+        assert board is not None and record["rig"]["board"]["ticks"] == board["ticks"] > 0
     # nobody answers a touch within 5 ms: the decoder's failure, unless the rig erred
     assert press["outcome"] in ("failed", "error")
     if press["outcome"] == "failed":

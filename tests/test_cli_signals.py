@@ -20,6 +20,7 @@ import hashlib
 import json
 import os
 import random
+import select
 import signal
 import subprocess
 import sys
@@ -37,7 +38,7 @@ from harness.serve import RUN_DIR, serve_env
 from skinhil.decoding import DirectionDecoder
 
 TRIES = int(os.environ.get("SKINHIL_SIGNAL_TRIES", "5"))
-"""SIGTERMs per command at random moments (5 in CI; a soak: SKINHIL_SIGNAL_TRIES=50)."""
+"""SIGTERMs per command at random moments (5 by default; a soak: SKINHIL_SIGNAL_TRIES=50)."""
 CLEAN_SIGINT = (0, 2, 130, -signal.SIGINT)
 """Exit statuses after a SIGINT: finished, refused, stopped; or ended by its default action
 while the interpreter shut down after finishing (Python restores the default handlers then;
@@ -50,7 +51,7 @@ REPRODUCE = ("reproduce", "--quick", "--workers", "2", "--grid", "2", "--repeats
 def _main_started(proc: subprocess.Popen[str], timeout_s: float = 30.0) -> None:
     """Wait until ``proc`` runs skinhil's code: it catches SIGTERM (``SigCgt`` in
     /proc/PID/status), which Python alone does not. Before that the interpreter is still
-    starting (site-packages' .pth files, ~0.1 s): a SIGINT there is the interpreter's own,
+    starting (site-packages' .pth files): a SIGINT there is the interpreter's own,
     whatever the program."""
     bit = 1 << (signal.SIGTERM - 1)
     end = time.monotonic() + timeout_s
@@ -66,11 +67,28 @@ def _main_started(proc: subprocess.Popen[str], timeout_s: float = 30.0) -> None:
         time.sleep(0.002)
 
 
-def _start(argv: list[str], tag: str) -> subprocess.Popen[str]:
+def _start(argv: list[str], tag: str, pass_fds: tuple[int, ...] = ()) -> subprocess.Popen[str]:
     return subprocess.Popen([sys.executable, "-m", "skinhil", *argv], cwd=RUN_DIR,
                             env={**serve_env(), "SKINHIL_TEST_TAG": tag}, text=True,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            stdin=subprocess.DEVNULL)
+                            stdin=subprocess.DEVNULL, pass_fds=pass_fds)
+
+
+def _read_ready(fd: int, timeout_s: float) -> dict[str, object]:
+    """The ready line a process writes to the pipe ``fd`` (``--ready-fd``), read to the end
+    of file it gives by closing its end."""
+    end = time.monotonic() + timeout_s
+    data = b""
+    with os.fdopen(fd, "rb") as pipe:
+        os.set_blocking(fd, False)
+        while time.monotonic() < end:
+            chunk = pipe.read()
+            if chunk == b"":
+                break
+            data += chunk or b""
+            time.sleep(0.05)
+    assert data.endswith(b"\n") and data.count(b"\n") == 1, data
+    return json.loads(data)
 
 
 def _tagged(tag: str) -> list[int]:
@@ -278,9 +296,29 @@ def _wait_for(proc: subprocess.Popen[str], stream: str, text: str, timeout_s: fl
     return "".join(seen)
 
 
+def _wait_for_bytes(proc: subprocess.Popen[str], text: str, timeout_s: float) -> None:
+    """Read ``proc``'s stderr, unbuffered (a progress bar ends no line), until it holds
+    ``text``."""
+    assert proc.stderr is not None
+    fd = proc.stderr.fileno()
+    end = time.monotonic() + timeout_s
+    seen = b""
+    while time.monotonic() < end and text.encode() not in seen:
+        ready, _, _ = select.select([fd], [], [], 0.1)
+        if ready:
+            chunk = os.read(fd, 4096)
+            assert chunk, seen  # ended before it said so
+            seen += chunk
+    assert text.encode() in seen, seen
+
+
 def test_sigterm_gives_the_summary_and_143(tmp_path: Path) -> None:
-    serve = _start(["serve", "--port", "loop://", "--duration", "60"], uuid.uuid4().hex)
-    _wait_for(serve, "stderr", "Ctrl-C stops", 120)
+    read_end, write_end = os.pipe()
+    serve = _start(["serve", "--port", "loop://", "--duration", "60", "--ready-fd",
+                    str(write_end)], uuid.uuid4().hex, pass_fds=(write_end,))
+    os.close(write_end)
+    ready = _read_ready(read_end, 120)  # the ready line, without --json
+    assert ready["type"] == "ready" and ready["pid"] == serve.pid, ready
     time.sleep(1.0)
     serve.send_signal(signal.SIGTERM)
     out, err = serve.communicate(timeout=30)
@@ -295,7 +333,8 @@ def test_sigterm_gives_the_summary_and_143(tmp_path: Path) -> None:
 
     train = _start(["train", "--reps", "200", "--out", str(tmp_path / "m.npz")],
                    uuid.uuid4().hex)
-    time.sleep(5.0)  # in training (the imports take ~2 s)
+    _wait_for_bytes(train, "simulating the board stream", 120)  # its progress bar: training
+    time.sleep(1.0)
     train.send_signal(signal.SIGTERM)
     out, err = train.communicate(timeout=30)
     assert train.returncode == 143, (out, err)
@@ -322,7 +361,7 @@ def test_sigint_inside_a_compiled_functions_callback_stops_cleanly_after_it() ->
     """A SIGINT while a compiled function calls back into Python (numba's unpickler, as it
     returns an array) is delivered once it has returned: the call completes and the stop
     comes as :class:`Stopped`, not as "SystemError: ... returned a result with an exception
-    set" (seen once in ``simulate`` in CI)."""
+    set" (what ``simulate`` ended with when the signal was handled inside the callback)."""
     from skinhil.cli import signals
     from skinhil.model.neurons import raster_to_events
 

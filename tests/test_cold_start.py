@@ -3,9 +3,8 @@
 compile, for about how long, and where the kernels go; SIGTERM then stops them cleanly
 (status 143, no traceback).
 
-Most of those 2 s is importing the command (``listen`` 1.4-1.6 s on the idle 2-core Zen 4 VM,
-scikit-learn with scipy.stats and pandas 0.8 s of it; 1.5-1.9 s with one core busy, and
-2.08 s once in a CI run), so on a busy machine the bound is the command's own start-up, its
+Most of those 2 s is importing the command (``listen`` imports scikit-learn), which a busy
+machine slows down; so the bound is the larger of 2 s and the command's own start-up, its
 ``--help`` timed just before, plus :data:`AFTER_START_UP_S`: nothing slow (a compile, a model
 trained) may come before the notice."""
 
@@ -66,7 +65,7 @@ def test_cold_cache_announced_within_2_s(command: str, tmp_path: Path) -> None:
 
 def test_an_unknown_command_is_refused_without_importing_the_commands() -> None:
     """``skinhil NOSUCH`` says which commands there are and exits 2 without importing any
-    command's module (scikit-learn: it took 2.9 s)."""
+    command's module (scikit-learn's import among them)."""
     probe = ("import sys\nfrom skinhil.cli import main\ntry:\n    main(['nosuch'])\n"
              "except SystemExit as exc:\n    rc = exc.code\n"
              "print(rc, sorted(m for m in ('sklearn', 'skinhil.cli.listen', 'skinhil.cli.serve') "

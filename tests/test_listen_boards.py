@@ -5,7 +5,6 @@ counters are exact."""
 from __future__ import annotations
 
 import errno
-import json
 import math
 import signal
 import socket
@@ -19,6 +18,7 @@ from harness.lab import LOOPBACK_LSL_CFG
 from harness.serve import RUN_DIR, ServeProcess, serve_env
 
 from skinhil.decoding.model_file import save_decoder
+from skinhil.process_output import SUMMARY, last_record, records
 from skinhil.receiver.training import train_decoder
 
 
@@ -69,8 +69,8 @@ def _listen_to_two_boards(tmp_path: Path, *listen_args: str) -> tuple[dict, list
         if listen.poll() is None:
             listen.kill()
     assert listen.returncode == 130, err  # stopped cleanly by Ctrl-C, after its summary
-    summary = [json.loads(line) for line in out.splitlines()
-               if '"summary"' in line][-1]
+    summary = last_record(records(out), SUMMARY)
+    assert summary is not None, out
     return summary, [b.summary()["generated"] for b in boards], err
 
 

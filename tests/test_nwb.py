@@ -97,6 +97,7 @@ def test_listen_record_nwb_validates_and_holds_the_session(tmp_path: Path) -> No
     from harness.serve import RUN_DIR, ServeProcess, serve_env
 
     from skinhil.decoding.model_file import save_decoder
+    from skinhil.process_output import SUMMARY, last_record, records
     from skinhil.receiver.training import train_decoder
 
     if shutil.which("socat") is None:
@@ -119,9 +120,9 @@ def test_listen_record_nwb_validates_and_holds_the_session(tmp_path: Path) -> No
              str(model), "--json", "--record", str(session)],
             cwd=RUN_DIR, env=serve_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
             text=True)
-        assert listen.stderr is not None
-        ready = listen.stderr.readline()  # listen says so once its link is open
-        assert ready.startswith("skinhil listen: "), ready
+        assert listen.stdout is not None
+        ready = json.loads(listen.stdout.readline())  # its first line, once the link is open
+        assert ready["type"] == "ready" and ready["command"] == "listen", ready
         board = ServeProcess("--port", str(board_end), "--duration", "3", "--seed", "1",
                              "--snr-db", "10", "--json")
         assert board.wait(120) == 0, board.stderr
@@ -132,7 +133,8 @@ def test_listen_record_nwb_validates_and_holds_the_session(tmp_path: Path) -> No
             board.kill()
         socat.kill()
     generated = board.summary()["generated"]
-    info = [json.loads(line) for line in out.splitlines() if '"summary"' in line][-1]
+    info = last_record(records(out), SUMMARY)
+    assert info is not None, out
     assert info["link"]["events_decoded"] == generated > 0
     assert info["run_end"] == {"t_s": 3.0, "reason": "DURATION"}
     assert validate(path=str(session)) == []

@@ -21,6 +21,8 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from numbers import Integral
+from typing import ClassVar
 
 import numpy as np
 from tqdm.auto import tqdm
@@ -30,6 +32,7 @@ from skinhil.errors import ConfigError
 from skinhil.model.skin import SkinModel
 from skinhil.model.stimuli import direction_conditions
 from skinhil.model.trials import simulate_trials
+from skinhil.validation import Constraints, InstanceOf, Interval, positive, validate_params
 from skinhil.workers import process_map
 
 PAPER_SNRS_DB: tuple[float, ...] = (0.0, 5.0, 10.0, 15.0, 20.0, 30.0, math.inf)
@@ -51,7 +54,17 @@ class DecodingSetup:
     C: float = 1.0
     seed: int = 0
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "reps": Interval(Integral, 1, None, closed="left", unit="trials per condition"),
+        "folds": Interval(Integral, 2, None, closed="left", unit="folds"),
+        "repeats": Interval(Integral, 1, None, closed="left", unit="repeats"),
+        "spec": InstanceOf(FeatureSpec, "a skinhil.decoding.FeatureSpec"),
+        "C": positive("SVM penalty"),
+        "seed": Interval(Integral, 0, None, closed="left"),
+    }
+
     def __post_init__(self) -> None:
+        validate_params(self)
         if self.spec.channels is not None:
             raise ConfigError("DecodingSetup.spec must cover all sensors (channels=None); "
                               "choose sensors with a FeatureSet")

@@ -12,11 +12,21 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 
 from skinhil.errors import ConfigError
 from skinhil.model.stimuli import Stimulus
+from skinhil.validation import Constraints, Predicate, validate_params
+
+
+def _is_window(value: tuple[float, float]) -> bool:
+    lo, hi = value
+    return math.isfinite(lo) and math.isfinite(hi) and 0 <= lo < hi
+
+
+_WINDOW = Predicate(_is_window, "(start, stop) seconds with 0 <= start < stop, both finite")
 
 
 @dataclass(frozen=True)
@@ -26,12 +36,13 @@ class PhaseWindows:
     indentation_s: tuple[float, float] = (0.0, 0.25)
     post_s: tuple[float, float] = (0.25, 0.5)
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "indentation_s": _WINDOW,
+        "post_s": _WINDOW,
+    }
+
     def __post_init__(self) -> None:
-        for name in ("indentation_s", "post_s"):
-            lo, hi = getattr(self, name)
-            if not (math.isfinite(lo) and math.isfinite(hi) and 0 <= lo < hi):
-                raise ConfigError(f"PhaseWindows.{name} must be (start, stop) seconds with "
-                                  f"0 <= start < stop, got {(lo, hi)!r}")
+        validate_params(self)
 
     @classmethod
     def of(cls, stimuli: Sequence[Stimulus]) -> PhaseWindows:

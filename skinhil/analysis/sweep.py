@@ -38,6 +38,7 @@ import math
 import time
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field, replace
+from typing import ClassVar
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -50,6 +51,7 @@ from skinhil.errors import ConfigError
 from skinhil.model.skin import Mechanics, SkinModel, SkinParams
 from skinhil.model.stimuli import Stimulus, at_size, paper_stimuli
 from skinhil.model.strain import strain_summary
+from skinhil.validation import Constraints, InstanceOf, positive, validate_params
 from skinhil.workers import one_blas_thread, process_map, worker_count
 
 logger = logging.getLogger(__name__)
@@ -85,14 +87,18 @@ class SweepSpec:
     """(indentation_s, decay_tau_s) of the stimuli (s), or None for the built-in ones'; the
     phases follow the indentation (:meth:`PhaseWindows.of`)."""
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "dt_s": positive("s"),
+        "base": InstanceOf(SkinParams, "a skinhil.SkinParams"),
+    }
+
     def __post_init__(self) -> None:
         for name in ("stiffness_n_per_m", "damping_n_s_per_m", "tension_n"):
             values = tuple(float(v) for v in getattr(self, name))
             if not values:
                 raise ConfigError(f"SweepSpec.{name} needs at least one value")
             object.__setattr__(self, name, values)
-        if not (math.isfinite(self.dt_s) and self.dt_s > 0):
-            raise ConfigError(f"SweepSpec.dt_s must be a number of seconds > 0, got {self.dt_s}")
+        validate_params(self)
         for p in self.points():  # validates every value through SkinParams
             del p
 

@@ -32,18 +32,21 @@ import itertools
 import math
 import re
 from dataclasses import dataclass, field
+from numbers import Integral, Real
 from pathlib import Path
 
 from skinhil.campaign.criteria import Criterion, parse_criterion
 from skinhil.campaign.rig import RigBounds, rig_bounds_from_table
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import PAPER_SIZE, format_size, parse_size
+from skinhil.model.neurons import MAX_SNR_DB, MIN_SNR_DB
 from skinhil.model.schedule_file import (
     checked_table,
     parse_toml,
     read_schedule_text,
     table_list,
 )
+from skinhil.validation import Declaration, InstanceOf, Interval, Options, check_param
 from skinhil.world.scenario_file import load_scenario
 
 TOP_KEYS = ("name", "repetitions", "criteria", "parameters", "scenario", "rig")
@@ -60,17 +63,21 @@ MAX_CASES = 10_000
 """Most cases (scenarios × parameter combinations × repetitions) a campaign holds."""
 MAX_NAME_CHARS = 64
 
-PARAMETERS: dict[str, tuple[str, float, float]] = {
-    "snr_db": ("--snr-db", -20.0, 200.0),
-    "seed": ("--seed", 0, 2**63 - 1),
-    "duration_s": ("--duration", 0.0, 86400.0),
-    "response_window_s": ("--response-window", 0.0, 3600.0),
-    "rest_s": ("--rest", 0.0, 3600.0),
-    "size": ("--size", 0, 0),
+PARAMETERS: dict[str, tuple[str, Declaration]] = {
+    "snr_db": ("--snr-db", [Interval(Real, MIN_SNR_DB, MAX_SNR_DB, closed="both", unit="dB",
+                                     hint="as serve --snr-db"), Options([math.inf])]),
+    "seed": ("--seed", Interval(Integral, 0, 2**63 - 1, closed="both", hint="as serve --seed")),
+    "duration_s": ("--duration", Interval(Real, 0.0, 86400.0, closed="right", unit="s",
+                                          hint="as serve --duration")),
+    "response_window_s": ("--response-window",
+                          Interval(Real, 0.0, 3600.0, closed="right", unit="s",
+                                   hint="as serve --response-window")),
+    "rest_s": ("--rest", Interval(Real, 0.0, 3600.0, closed="both", unit="s",
+                                  hint="as serve --rest")),
+    "size": ("--size", InstanceOf(str, 'the skin size as a string such as "6x6"')),
 }
-"""Parameter name: (``serve`` option it sets, lowest, highest value). ``snr_db`` takes
-``inf`` too (no noise); ``size`` is a string such as ``"6x6"``; ``duration_s`` and
-``response_window_s`` are above 0."""
+"""Parameter name: (``serve`` option it sets, what it takes). ``snr_db`` takes ``inf`` too
+(no noise); ``size`` is a string such as ``"6x6"``."""
 DEFAULTS: dict[str, float | int | str] = {"duration_s": 10.0, "seed": 1}
 """Values of the parameters a campaign does not give that a case needs (others: serve's
 defaults)."""
@@ -154,26 +161,12 @@ def _criteria(value: object, where: str) -> tuple[Criterion, ...]:
 
 
 def _value(name: str, value: object, where: str) -> float | int | str:
-    option, lo, hi = PARAMETERS[name]
+    check_param(name, value, PARAMETERS[name][1], where=f"{where}: ")
     if name == "size":
-        if not isinstance(value, str):
-            raise ConfigError(f"{where}: size = {value!r} — give the skin size as a string "
-                              "such as \"6x6\"")
-        return format_size(parse_size(value))
+        return format_size(parse_size(str(value)))
     if name == "seed":
-        if not (isinstance(value, int) and not isinstance(value, bool) and lo <= value <= hi):
-            raise ConfigError(f"{where}: seed = {value!r} — give a whole number 0..2^63-1")
-        return value
-    ok = isinstance(value, int | float) and not isinstance(value, bool)
-    number = float(value) if ok else math.nan  # type: ignore[arg-type]
-    if name == "snr_db" and number == math.inf:
-        return number
-    open_low = name in ("duration_s", "response_window_s")
-    if not (ok and (lo < number if open_low else lo <= number) and number <= hi):
-        raise ConfigError(f"{where}: {name} = {value!r} — give a number "
-                          f"{'above ' if open_low else ''}{lo:g}..{hi:g}"
-                          f"{' or inf' if name == 'snr_db' else ''} (serve {option})")
-    return number
+        return int(value)  # type: ignore[call-overload]
+    return float(value)  # type: ignore[arg-type]
 
 
 def _parameters(table: object, where: str) -> dict[str, tuple[float | int | str, ...]]:

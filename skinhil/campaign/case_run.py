@@ -2,9 +2,11 @@
 the board's score file judged by the case's criteria and its health by the rig's bounds.
 
 On the bench's own link (:class:`~skinhil.campaign.relay.RelayLink`) the decoder is the
-reference receiver, ``skinhil listen --answer``, started first: the board starts once it
-listens, so its first stimulus does not wait in a queue. On a link the user gives (``--port``,
-``--udp``, ``--can``) the decoder under test is the user's, already running there.
+reference receiver, ``skinhil listen --answer --json``, started first: the board starts once
+its ready line says it listens, so its first stimulus does not wait in a queue. The board's
+health is read from the summary line of ``serve --json`` (:mod:`skinhil.process_output`).
+On a link the user gives (``--port``, ``--udp``, ``--can``) the decoder under test is the
+user's, already running there.
 
 A case's outcome is ``passed``, ``failed`` (a criterion does not hold: the decoder's
 failure) or ``error`` (the rig's: a fault past its bound, the board or decoder process
@@ -30,6 +32,7 @@ from skinhil.campaign.campaign_file import PARAMETERS, Case
 from skinhil.campaign.criteria import MissingKey
 from skinhil.campaign.relay import RelayLink
 from skinhil.campaign.rig import RigBounds, board_health, rig_faults
+from skinhil.process_output import READY, SUMMARY, last_record, records
 from skinhil.transports.faults import FaultParams
 
 log = logging.getLogger(__name__)
@@ -40,8 +43,6 @@ DECODER_READY_S = 120.0
 """Longest wait (s) for the reference receiver to listen (a cold kernel cache compiles)."""
 DECODER_END_S = 10.0
 """How long (s) the reference receiver may take to end after the board's RUN_END."""
-READY_LINE = "Ctrl-C stops"
-"""What ``skinhil listen`` says on stderr once it listens on its link."""
 
 
 @dataclass(frozen=True)
@@ -89,19 +90,15 @@ def _last_line(path: Path) -> str:
     return lines[-1] if lines else ""
 
 
-def _summary_line(path: Path) -> dict[str, Any] | None:
-    """``serve --json``'s final summary object in ``path``, or None."""
+def _record(path: Path, kind: str) -> dict[str, Any] | None:
+    """The last line of type ``kind`` (:data:`~skinhil.process_output.READY`,
+    :data:`~skinhil.process_output.SUMMARY`) of the ``--json`` output in ``path``, or
+    None."""
     try:
         text = path.read_text(encoding="utf-8", errors="replace")
     except OSError:
         return None
-    for line in reversed(text.splitlines()):
-        if line.startswith("{") and '"type": "summary"' in line:
-            try:
-                return json.loads(line)
-            except ValueError:
-                return None
-    return None
+    return last_record(records(text), kind)
 
 
 class _Process:
@@ -133,7 +130,7 @@ def _wait_ready(decoder: _Process, stop: threading.Event, deadline: float) -> st
     while time.monotonic() < deadline:
         if stop.is_set():
             raise Stopped
-        if READY_LINE in decoder.err_path.read_text(encoding="utf-8", errors="replace"):
+        if _record(decoder.out_path, READY) is not None:
             return None
         if decoder.popen.poll() is not None:
             return (f"the decoder process ended with status {decoder.popen.returncode} "
@@ -155,7 +152,8 @@ def _play(case: Case, folder: Path, link: BenchLink, relay: RelayLink | None, ri
             size = case.parameters.get("size")
             decoder = _Process(_python_skinhil(
                 "listen", "--port", relay.decoder_path, "--baud", str(link.baud), "--model",
-                str(link.model), "--answer", *(["--size", str(size)] if size else [])),
+                str(link.model), "--answer", "--json",
+                *(["--size", str(size)] if size else [])),
                 folder, "decoder")
             t0 = time.monotonic()
             why = _wait_ready(decoder, stop, t0 + DECODER_READY_S)
@@ -213,7 +211,7 @@ def run_case(case: Case, folder: Path, link: BenchLink, rig: RigBounds,
     finally:
         if relay is not None:
             relay.stop()
-    summary = _summary_line(folder / "board.out")
+    summary = _record(folder / "board.out", SUMMARY)
     health = board_health(summary) if summary is not None else None
     tap = relay.counters() if relay is not None else None
     if summary is None and not errors:

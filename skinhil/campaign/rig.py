@@ -13,16 +13,19 @@ decoder's criteria are not held against it.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass
-from typing import Any
+from numbers import Integral
+from typing import Any, ClassVar
 
-from skinhil.errors import ConfigError
 from skinhil.model.schedule_file import checked_table
+from skinhil.validation import Constraints, Interval, check_param, positive, validate_params
 
 RIG_KEYS = ("max_lateness_ms", "max_deadline_misses", "max_fifo_drops", "max_link_losses",
             "max_link_errors", "timeout_s")
+
+
+_COUNT = Interval(Integral, 0, None, closed="left", unit="count")
 
 
 @dataclass(frozen=True)
@@ -43,6 +46,18 @@ class RigBounds:
     timeout_s: float = 120.0
     """Wall time (s) a case may take beyond its board time (start-up, compile, drain)."""
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "max_lateness_ms": positive("ms"),
+        "max_deadline_misses": [_COUNT, None],
+        "max_fifo_drops": _COUNT,
+        "max_link_losses": _COUNT,
+        "max_link_errors": _COUNT,
+        "timeout_s": positive("s"),
+    }
+
+    def __post_init__(self) -> None:
+        validate_params(self)
+
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
 
@@ -50,17 +65,12 @@ class RigBounds:
 def rig_bounds_from_table(table: object, where: str) -> RigBounds:
     """The ``[rig]`` table as :class:`RigBounds`, else a one-line :class:`ConfigError`."""
     t = checked_table(table, RIG_KEYS, where)
+    default = RigBounds()
     values: dict[str, Any] = {}
     for key, raw in t.items():
-        number = raw if isinstance(raw, int | float) and not isinstance(raw, bool) else None
-        if key in ("max_lateness_ms", "timeout_s"):
-            if number is None or not 0 < number < math.inf:
-                raise ConfigError(f"{where}: {key} = {raw!r} — give a number above 0")
-            values[key] = float(number)
-        else:
-            if not isinstance(number, int) or number < 0:
-                raise ConfigError(f"{where}: {key} = {raw!r} — give a whole number >= 0")
-            values[key] = number
+        check_param(key, raw, RigBounds._parameter_constraints[key], where=f"{where}: ")
+        number: Any = raw
+        values[key] = float(number) if isinstance(getattr(default, key), float) else number
     return RigBounds(**values)
 
 

@@ -17,8 +17,8 @@ from __future__ import annotations
 import sys
 
 COLD_COMPILE_S = (15, 30)
-"""Seconds a cold compile of the board's kernels takes on a 2-core VM (16 s measured for
-``serve`` at load 0.8; up to ~30 s on a loaded machine)."""
+"""Seconds (fastest, slowest) a cold compile of the board's kernels is announced to take: what
+``skinhil compile`` takes on an empty cache on the 2-core machines the project targets."""
 
 
 KERNEL_ROOMS: dict[str, tuple[str, ...]] = {

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from protocols.constants import KNOWN_VERSIONS
 from skinhil.cli import signals
 from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.lab_outputs import (
@@ -26,13 +27,15 @@ from skinhil.cli.lab_outputs import (
 )
 from skinhil.cli.nwb_options import add_nwb_args, nwb_metadata
 from skinhil.cli.options import add_size_option
+from skinhil.cli.ready_option import add_ready_option, announce_ready, check_ready
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.cli.values import MAX_DURATION_S, integer, real, udp_allow_value
 from skinhil.errors import ConfigError
-from skinhil.model.geometry import build_mesh, spring_count
+from skinhil.model.geometry import build_mesh, format_size, spring_count
 from skinhil.model.skin import SkinParams
 from skinhil.nwb import require_pynwb, write_session
 from skinhil.output_files import check_output_path
+from skinhil.process_output import SUMMARY, ready_record
 from skinhil.receiver import (
     BusReceiver,
     DecisionAnswerer,
@@ -67,7 +70,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    type=real(0, MAX_DURATION_S, "seconds", lo_open=True), metavar="SECONDS",
                    help="stop after this many seconds (default: until Ctrl-C)")
     p.add_argument("--json", action="store_true",
-                   help="one JSON object per line: decisions, link counters, summary")
+                   help="one JSON object per line: the ready line first, decisions, link "
+                        "counters, the summary line last (docs/process-output.md)")
+    add_ready_option(p)
     p.add_argument("--record", type=Path, metavar="FILE",
                    help="save events (tonic-compatible), markers and decisions to this .npz, "
                         "or to NWB if it ends in .nwb (pip install \"skinhil[nwb]\")")
@@ -165,7 +170,7 @@ def summary(receiver: Receiver, wall_s: float) -> dict[str, Any]:
     def pct(a: np.ndarray, q: float) -> float | None:
         return None if a.size == 0 else round(1e3 * float(np.percentile(a, q)), 3)
 
-    return {"type": "summary", "wall_s": round(wall_s, 3),
+    return {"type": SUMMARY, "wall_s": round(wall_s, 3),
             "board_time_s": receiver.classifier.board_time_us * 1e-6,
             "stimuli_scored": sb.scored, "correct": sb.correct, "misses": sb.misses,
             "false_alarms": sb.false_alarms,
@@ -219,7 +224,7 @@ def print_link(link: dict[str, Any]) -> None:
 
 def bus_summary(bus: BusReceiver, wall_s: float) -> dict[str, Any]:
     """Final figures of every board on the link and the combined link counters."""
-    return {"type": "summary", "wall_s": round(wall_s, 3),
+    return {"type": SUMMARY, "wall_s": round(wall_s, 3),
             "boards": {str(k): summary(rx, wall_s) for k, rx in bus.boards.items()},
             "foreign_frames": bus.foreign_frames, "refused_datagrams": bus.refused_datagrams,
             "link": bus.combined_report().as_dict(),
@@ -270,12 +275,24 @@ def listen_until_stopped(args: argparse.Namespace, rx: Receiver | BusReceiver,
         rx.transport.shutdown()
 
 
+def say_ready(args: argparse.Namespace, boards: list[int] | None) -> None:
+    """The ready line (:func:`announce_ready`) and, without ``--json``, the banner on
+    stderr: the link is open and decoding starts; ``boards``: the board ids decoded (None:
+    every board that sends)."""
+    announce_ready(args, ready_record(
+        "listen", describe_transport(args), True, KNOWN_VERSIONS, boards=boards,
+        model=str(args.model), size=format_size(args.size),
+        answer=args.answer_with if args.answer else None))
+    if not args.json:
+        which = (", boards as they send" if boards is None else "" if len(boards) == 1
+                 else f", boards {', '.join(map(str, boards))}")
+        print(f"skinhil listen: {describe_transport(args)}{which}, model {args.model}; "
+              "Ctrl-C stops", file=sys.stderr, flush=True)
+
+
 def run_bus(args: argparse.Namespace, bus: BusReceiver, names: dict[int, str]) -> int:
     """``listen`` over several boards: per-board decisions and summaries, a combined view."""
-    # on stderr, with --json too: the link is open, a program starting the board may go on
-    print(f"skinhil listen: {describe_transport(args)}, boards "
-          f"{', '.join(map(str, bus.boards)) or 'as they send'}, model {args.model}; "
-          "Ctrl-C stops", file=sys.stderr, flush=True)
+    say_ready(args, list(args.board_ids) if args.can else None)
     t0 = time.monotonic()
     listen_until_stopped(args, bus, lambda: {
         "boards": {str(k): r.as_dict() for k, r in bus.link_reports().items()},
@@ -294,6 +311,7 @@ def run_bus(args: argparse.Namespace, bus: BusReceiver, names: dict[int, str]) -
 
 
 def run(args: argparse.Namespace) -> int:
+    check_ready(args)
     if args.udp is None and (args.udp_allow is not None or args.udp_max_sources is not None):
         raise ConfigError("--udp-allow and --udp-max-sources choose the senders of a UDP "
                           "link: use them with --udp")
@@ -371,13 +389,11 @@ def listen_one(args: argparse.Namespace, receiver: Receiver, names: dict[int, st
                tasks: TaskAnswerer | None = None) -> dict[str, Any]:
     """Receive until Ctrl-C or --duration; the summary (with ``answerer``'s DECISION counts
     when the receiver answers the board)."""
-    # on stderr, with --json too: the link is open, a program starting the board may go on
-    print(f"skinhil listen: {describe_transport(args)}, model {args.model}; Ctrl-C stops",
-          file=sys.stderr, flush=True)
     t0 = time.monotonic()
     with lab_outputs(args, receiver, names, args.size, "listen",
                      answerer.as_dict if answerer is not None else None,
                      provenance(describe_transport(args), args.model)):
+        say_ready(args, [args.board_ids[0]])
         listen_until_stopped(args, receiver, lambda: receiver.link_report().as_dict(),
                              lambda: receiver.run_end is not None)  # the board finished
     info = summary(receiver, time.monotonic() - t0)

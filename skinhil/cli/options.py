@@ -32,7 +32,7 @@ DECODE_SNR_DB = 10.0
 point (Figure 4)."""
 
 
-def add_size_option(parser: argparse.ArgumentParser) -> None:
+def add_size_option(parser: argparse.ArgumentParser | argparse._ArgumentGroup) -> None:
     """Add --size ROWSxCOLS (the skin's top layer; default the paper's 6x6) to ``parser``."""
     parser.add_argument("--size", type=size_value, default=PAPER_SIZE, metavar="ROWSxCOLS",
                         help="top layer of the skin in masses, e.g. 16x16; the layers below "
@@ -40,7 +40,8 @@ def add_size_option(parser: argparse.ArgumentParser) -> None:
                              "relative to the centre (default: 6x6, the paper's 338 sensors)")
 
 
-def add_model_options(parser: argparse.ArgumentParser, snr_default: float = math.inf) -> None:
+def add_model_options(parser: argparse.ArgumentParser | argparse._ArgumentGroup,
+                      snr_default: float = math.inf) -> None:
     """Add --size, --mechanics, --readout, --amplitude, --dt, --snr-db, --noise, --seed,
     --threads to ``parser``."""
     add_size_option(parser)

@@ -45,7 +45,8 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """The top-level parser with every available subcommand registered, or only ``only``
     when it names one (each subcommand module imports what it runs on: a board start need
     not pay for scikit-learn's import); a word ``only`` that names none is refused by
-    argparse from the subcommands' names alone, no module imported (it took 2.9 s)."""
+    argparse from the subcommands' names alone, no module imported
+    (tests/test_cold_start.py checks it)."""
     parser = ArgumentParser(
         prog="skinhil",
         description="Real-time neuromorphic hardware-in-the-loop emulator of touch.")

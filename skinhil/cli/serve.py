@@ -1,4 +1,5 @@
-"""``skinhil serve``: run the emulated sensor board in real time over a serial port or CAN."""
+"""``skinhil serve``: run the emulated sensor board in real time over a serial port, CAN or
+UDP; its ready and summary lines are docs/process-output.md's."""
 
 from __future__ import annotations
 
@@ -28,6 +29,7 @@ from skinhil.cli.options import (
     noise_from_args,
     read_scenario,
 )
+from skinhil.cli.ready_option import add_ready_option, announce_ready, check_ready
 from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
 from skinhil.cli.values import MAX_DURATION_S, MAX_REST_S, cores_value, integer, real
 from skinhil.errors import ConfigError
@@ -37,6 +39,7 @@ from skinhil.output_files import atomic_path, check_output_path
 from skinhil.plant import GraspParams, lift_scene
 from skinhil.plant.report import grasp_text, plant_scores
 from skinhil.plant.truth_file import HeldTruthWriter
+from skinhil.process_output import SUMMARY, line, ready_record
 from skinhil.recording import (
     CAPTURE_SUFFIX,
     RecordingTransport,
@@ -66,14 +69,20 @@ STATUS_PERIOD_RANGE_S = (1e-3, 60.0)
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    """``serve``'s parser: its options in sections (link, what the board plays, board,
+    model, scoring, recording and truth, real time, output), so ``serve --help`` reads by
+    mode."""
     p = subparsers.add_parser(
         "serve", help="run the emulated sensor board in real time over serial, CAN or UDP",
         description="Run the emulated e-skin board in real time: the skin, its neurons (338 "
                     "at 6x6) and the AER link, paced to the baud rate or CAN bitrate. By default "
                     "it plays a seeded random sequence of the 9 direction conditions with rests, "
-                    "each announced by a ground-truth marker. Ctrl-C stops it cleanly.")
+                    "each announced by a ground-truth marker. Ctrl-C stops it cleanly. A "
+                    "program driving it reads its ready line and summary line "
+                    "(--json, --ready-fd; docs/process-output.md).")
     add_transport_args(p)
-    src = p.add_mutually_exclusive_group()
+    plays = p.add_argument_group("what the board plays (schedule, scenario, grasp or replay)")
+    src = plays.add_mutually_exclusive_group()
     src.add_argument("--schedule", type=Path, metavar="TOML",
                      help=f"play this {SCHEDULE_HELP}")
     src.add_argument("--host-driven", action="store_true",
@@ -94,76 +103,90 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                           "DECISIONs are scored against the recorded markers; the emulated "
                           "board's options (--size, --snr-db, --stopped, --duration, ...) "
                           "are refused with it")
-    p.add_argument("--speed", type=speed_value, default=1.0, metavar="X",
-                   help="--replay at X times the recorded pace (default: 1; inf: as fast "
-                        "as the link takes)")
-    p.add_argument("--record", type=Path, metavar="FILE",
-                   help="record what the board puts on the link, as it goes: CAN to a "
-                        f"python-can log chosen by the extension (.blf, .asc, .log, .csv, "
-                        f".trc, ...), serial and UDP to a {CAPTURE_SUFFIX} capture (SPEC.md "
-                        "\"Capture files\")")
-    p.add_argument("--rest", dest="rest_s", type=real(0, MAX_REST_S, "seconds"), default=0.25,
-                   metavar="SECONDS", help="rest after each stimulus of the random schedule, "
-                                           f"0..{MAX_REST_S:g} (default: 0.25)")
-    p.add_argument("--duration", dest="duration_s", type=real(0, MAX_DURATION_S, "seconds",
-                                                               lo_open=True),
-                   metavar="SECONDS",
-                   help="stop after this much board time (default: run until Ctrl-C)")
-    p.add_argument("--board-id", type=integer(0, MAX_BOARD_ID, "board id"), default=0,
-                   metavar="N",
-                   help=f"board id on the CAN bus, 0..{MAX_BOARD_ID} (default: 0)")
-    p.add_argument("--tick", dest="tick_s", type=real(0, MAX_TICK_S, "seconds", lo_open=True),
-                   default=1e-3, metavar="SECONDS",
-                   help="publish tick, a whole number of steps (default: 0.001)")
-    p.add_argument("--fifo", dest="fifo_events", type=integer(1, MAX_FIFO_EVENTS, "capacity"),
-                   default=16384, metavar="EVENTS",
-                   help=f"event FIFO capacity, 1..{MAX_FIFO_EVENTS} (default: 16384)")
-    p.add_argument("--status-period", dest="status_period_s",
-                   type=real(*STATUS_PERIOD_RANGE_S, "seconds"), default=0.1,
-                   metavar="SECONDS", help="status/heartbeat period, "
-                                           f"{STATUS_PERIOD_RANGE_S[0]:g}.."
-                                           f"{STATUS_PERIOD_RANGE_S[1]:g} (default: 0.1)")
-    p.add_argument("--stopped", action="store_true",
-                   help="start stopped: stream only after a START command")
-    p.add_argument("--reconnect", action="store_true",
-                   help="when the link goes away, keep running and reopen it when it returns")
-    p.add_argument("--realtime", action="store_true",
-                   help="run with real-time (FIFO) scheduling so other programs cannot delay "
-                        "ticks (or replayed units), and spin the last 0.3 ms before each tick "
-                        "instead of sleeping (needs root or CAP_SYS_NICE)")
-    p.add_argument("--cpu", type=cores_value, metavar="N[,N...]",
-                   help="run the board on these CPU cores only (as firmware has its core to "
-                        "itself): with the receiver or the decoder under test on another "
-                        "core, no other program takes turns on the board's; as many cores "
-                        "as --threads")
-    p.add_argument("--response-window", dest="response_window_s",
-                   type=real(0, MAX_RESPONSE_WINDOW_S, "seconds", lo_open=True),
-                   default=DEFAULT_RESPONSE_WINDOW_S, metavar="SECONDS",
-                   help="score the decoder under test: a DECISION answers the latest stimulus "
-                        "onset before it if it arrives within this time after it, "
-                        f"0..{MAX_RESPONSE_WINDOW_S:g} (default: "
-                        f"{DEFAULT_RESPONSE_WINDOW_S:g}; protocols/SPEC.md §3.5.2)")
-    p.add_argument("--score", type=Path, metavar="FILE",
-                   help="score the decoder under test on a blind link (no MARKER on it: "
-                        "the truth stays on the board, see --truth) and write its scoreboard "
-                        "here at the end (JSON, with every decision; its ANSWERs per task "
-                        "under \"tasks\")")
-    p.add_argument("--markers", action="store_true",
-                   help="with --score: send the ground-truth MARKERs on the link all the same "
-                        "(a decoder that calibrates on them, the reference receiver scoring "
-                        "itself)")
-    p.add_argument("--truth", type=Path, metavar="FILE",
-                   help="write the ground truth here at the end, for the operator: every "
-                        "stimulus marker and every trial of the contact tasks (JSON lines)")
-    p.add_argument("--grasp-truth", type=Path, metavar="FILE",
-                   help="with --grasp: append the held object's truth to FILE as the run goes "
-                        "(one record a tick, skinhil.plant.HELD_DTYPE, written every 50 ms; "
-                        "never on the link): what demo --task grasp --view plots")
-    out = p.add_mutually_exclusive_group()
+    plays.add_argument("--speed", type=speed_value, default=1.0, metavar="X",
+                       help="--replay at X times the recorded pace (default: 1; inf: as fast "
+                            "as the link takes)")
+    plays.add_argument("--rest", dest="rest_s", type=real(0, MAX_REST_S, "seconds"),
+                       default=0.25, metavar="SECONDS",
+                       help="rest after each stimulus of the random schedule, "
+                            f"0..{MAX_REST_S:g} (default: 0.25)")
+    plays.add_argument("--duration", dest="duration_s",
+                       type=real(0, MAX_DURATION_S, "seconds", lo_open=True),
+                       metavar="SECONDS",
+                       help="stop after this much board time (default: run until Ctrl-C)")
+    plays.add_argument("--stopped", action="store_true",
+                       help="start stopped: stream only after a START command")
+    board = p.add_argument_group("board")
+    board.add_argument("--board-id", type=integer(0, MAX_BOARD_ID, "board id"), default=0,
+                       metavar="N",
+                       help=f"board id on the CAN bus, 0..{MAX_BOARD_ID} (default: 0)")
+    board.add_argument("--tick", dest="tick_s",
+                       type=real(0, MAX_TICK_S, "seconds", lo_open=True),
+                       default=1e-3, metavar="SECONDS",
+                       help="publish tick, a whole number of steps (default: 0.001)")
+    board.add_argument("--fifo", dest="fifo_events",
+                       type=integer(1, MAX_FIFO_EVENTS, "capacity"), default=16384,
+                       metavar="EVENTS",
+                       help=f"event FIFO capacity, 1..{MAX_FIFO_EVENTS} (default: 16384)")
+    board.add_argument("--status-period", dest="status_period_s",
+                       type=real(*STATUS_PERIOD_RANGE_S, "seconds"), default=0.1,
+                       metavar="SECONDS", help="status/heartbeat period, "
+                                               f"{STATUS_PERIOD_RANGE_S[0]:g}.."
+                                               f"{STATUS_PERIOD_RANGE_S[1]:g} (default: 0.1)")
+    board.add_argument("--reconnect", action="store_true",
+                       help="when the link goes away, keep running and reopen it when it "
+                            "returns")
+    add_model_options(p.add_argument_group("model (skin, neurons, noise)"),
+                      snr_default=DECODE_SNR_DB)  # the paper's 10 dB, as train and demo
+    scoring = p.add_argument_group("scoring the decoder under test")
+    scoring.add_argument("--response-window", dest="response_window_s",
+                         type=real(0, MAX_RESPONSE_WINDOW_S, "seconds", lo_open=True),
+                         default=DEFAULT_RESPONSE_WINDOW_S, metavar="SECONDS",
+                         help="score the decoder under test: a DECISION answers the latest "
+                              "stimulus onset before it if it arrives within this time after "
+                              f"it, 0..{MAX_RESPONSE_WINDOW_S:g} (default: "
+                              f"{DEFAULT_RESPONSE_WINDOW_S:g}; protocols/SPEC.md §3.5.2)")
+    scoring.add_argument("--score", type=Path, metavar="FILE",
+                         help="score the decoder under test on a blind link (no MARKER on "
+                              "it: the truth stays on the board, see --truth) and write its "
+                              "scoreboard here at the end (JSON, with every decision; its "
+                              "ANSWERs per task under \"tasks\")")
+    scoring.add_argument("--markers", action="store_true",
+                         help="with --score: send the ground-truth MARKERs on the link all "
+                              "the same (a decoder that calibrates on them, the reference "
+                              "receiver scoring itself)")
+    files = p.add_argument_group("recording and truth files")
+    files.add_argument("--record", type=Path, metavar="FILE",
+                       help="record what the board puts on the link, as it goes: CAN to a "
+                            f"python-can log chosen by the extension (.blf, .asc, .log, .csv, "
+                            f".trc, ...), serial and UDP to a {CAPTURE_SUFFIX} capture "
+                            "(SPEC.md \"Capture files\")")
+    files.add_argument("--truth", type=Path, metavar="FILE",
+                       help="write the ground truth here at the end, for the operator: every "
+                            "stimulus marker and every trial of the contact tasks (JSON "
+                            "lines)")
+    files.add_argument("--grasp-truth", type=Path, metavar="FILE",
+                       help="with --grasp: append the held object's truth to FILE as the run "
+                            "goes (one record a tick, skinhil.plant.HELD_DTYPE, written every "
+                            "50 ms; never on the link): what demo --task grasp --view plots")
+    realtime = p.add_argument_group("real time")
+    realtime.add_argument("--realtime", action="store_true",
+                          help="run with real-time (FIFO) scheduling so other programs cannot "
+                               "delay ticks (or replayed units), and spin the last 0.3 ms "
+                               "before each tick instead of sleeping (needs root or "
+                               "CAP_SYS_NICE)")
+    realtime.add_argument("--cpu", type=cores_value, metavar="N[,N...]",
+                          help="run the board on these CPU cores only (as firmware has its "
+                               "core to itself): with the receiver or the decoder under test "
+                               "on another core, no other program takes turns on the "
+                               "board's; as many cores as --threads")
+    output = p.add_argument_group("output (docs/process-output.md)")
+    out = output.add_mutually_exclusive_group()
     out.add_argument("--quiet", action="store_true", help="print nothing but errors")
     out.add_argument("--json", action="store_true",
-                     help="machine-readable output: one JSON object per line on stdout")
-    add_model_options(p, snr_default=DECODE_SNR_DB)  # the paper's 10 dB, as train and demo
+                     help="machine-readable output: one JSON object per line on stdout, "
+                          "the ready line first and the summary line last")
+    add_ready_option(output)
 
 
 def _config(args: argparse.Namespace) -> BoardConfig:
@@ -350,6 +373,10 @@ def run_replay(args: argparse.Namespace) -> int:
     _claim_cpu(args)
     with open_transport(args) as transport:
         replayer = Replayer(recording, transport, args.speed, scoreboard)
+        announce_ready(args, ready_record(
+            "serve", describe_transport(args), True,
+            () if recording.wire_version is None else (recording.wire_version,),
+            replay=str(args.replay), speed=args.speed))
         if not args.quiet and not args.json:
             print(f"skinhil serve: replaying {args.replay} ({recording.units} units, "
                   f"{recording.duration_s:.3f} s) onto {describe_transport(args)} at speed "
@@ -397,6 +424,7 @@ def _snr_text(snr_db: float) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_ready(args)
     if args.replay is not None:
         return run_replay(args)
     if args.speed != 1.0:
@@ -477,8 +505,12 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
                 f"{'' if info['link_up'] else '  LINK DOWN'}\x1b[K")
             sys.stderr.flush()
 
+    model = board.sensor.model
+    announce_ready(args, ready_record(
+        "serve", where, board.link is not None, (wire_version(model.n_springs),),
+        board_id=args.board_id, size=format_size(model.size), channels=model.n_springs,
+        dt_s=args.dt_s, tick_s=args.tick_s, duration_s=args.duration_s))
     if not args.quiet and not args.json:
-        model = board.sensor.model
         print(f"skinhil serve: board {args.board_id} on {where}; skin {format_size(model.size)}"
               f" ({model.n_springs} channels), model on {board.config.threads} thread"
               f"{'s' if board.config.threads > 1 else ''}; mechanics "
@@ -504,7 +536,7 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
     if truth_path is not None:
         write_truth(truth_path, board)
     if args.json:
-        print(json.dumps({"type": "summary", **summary.as_dict(), **extra}), flush=True)
+        print(line({"type": SUMMARY, **summary.as_dict(), **extra}), flush=True)
     elif not args.quiet:
         print(_summary_text(summary), flush=True)
         print(scoreboard_text(summary.scoreboard), flush=True)

@@ -24,15 +24,16 @@ the same numbers, so a decoder trained offline sees the same features online.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass
-from typing import Any
+from numbers import Integral
+from typing import Any, ClassVar
 
 import numpy as np
 
 from skinhil.errors import ConfigError
 from skinhil.model.psp import PSPFilterBank, PSPParams
+from skinhil.validation import Constraints, InstanceOf, Interval, positive, validate_params
 
 DEFAULT_N_CHANNELS = 338
 """Sensor count of the paper's skin (one per spring)."""
@@ -63,15 +64,16 @@ class FeatureSpec:
     n_channels: int = DEFAULT_N_CHANNELS
     psp: PSPParams = PSPParams()
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "dt_s": positive("s"),
+        "window_s": positive("s"),
+        "bin_s": positive("s"),
+        "n_channels": Interval(Integral, 1, None, closed="left", unit="channels"),
+        "psp": InstanceOf(PSPParams, "a skinhil.PSPParams"),
+    }
+
     def __post_init__(self) -> None:
-        for name in ("dt_s", "window_s", "bin_s"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-                raise ConfigError(f"FeatureSpec.{name} must be a finite number of seconds > 0, "
-                                  f"got {value!r}")
-        if not (isinstance(self.n_channels, int | np.integer) and self.n_channels > 0):
-            raise ConfigError(f"FeatureSpec.n_channels must be a positive integer, "
-                              f"got {self.n_channels!r}")
+        validate_params(self)
         n_steps = _steps(self.window_s, self.dt_s, "window_s")
         bin_steps = _steps(self.bin_s, self.dt_s, "bin_s")
         if n_steps % bin_steps:
@@ -84,8 +86,6 @@ class FeatureSpec:
                 raise ConfigError(f"FeatureSpec.channels must be sorted distinct indices in "
                                   f"0..{self.n_channels - 1}, got {self.channels!r}")
             object.__setattr__(self, "channels", chans)
-        if not isinstance(self.psp, PSPParams):
-            raise ConfigError("FeatureSpec.psp must be a skinhil.PSPParams")
 
     @property
     def n_steps(self) -> int:

@@ -53,7 +53,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
-from typing import Literal
+from typing import ClassVar, Literal
 
 import numba
 import numpy as np
@@ -67,6 +67,14 @@ from skinhil.model.rng import (
     normal_pair,
     seed_keys,
     step_hash,
+)
+from skinhil.validation import (
+    Constraints,
+    StrOptions,
+    check_param,
+    finite,
+    positive,
+    validate_params,
 )
 
 KernelOperands = tuple[np.ndarray, np.ndarray, float, float, float, float, float, float, bool,
@@ -98,15 +106,14 @@ class NoiseParams:
     ref_step_ms: float = 1.0
     """Step (ms) at which σ is the whole per-step noise: the Izhikevich model's 1 ms step."""
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "definition": StrOptions(("diffusion", "measured")),
+        "ref_power_mv2": positive("mV²"),
+        "ref_step_ms": positive("ms"),
+    }
+
     def __post_init__(self) -> None:
-        if self.definition not in ("diffusion", "measured"):
-            raise ConfigError(f"NoiseParams.definition must be 'diffusion' or 'measured', got "
-                              f"{self.definition!r}")
-        for name in ("ref_power_mv2", "ref_step_ms"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-                raise ConfigError(f"NoiseParams.{name} must be a finite number > 0, got "
-                                  f"{value!r}")
+        validate_params(self)
 
     def variance(self, snr_db: float) -> float:
         """What the kernel scales its normals by at ``snr_db`` (0 for inf): σ² (mV² per
@@ -133,11 +140,17 @@ class IzhikevichParams:
     gain: float = 500.0
     v_peak_mv: float = 30.0
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "a": finite("1/ms"),
+        "b": finite(),
+        "c_mv": finite("mV"),
+        "d": finite("mV"),
+        "gain": finite("mV/ms per N"),
+        "v_peak_mv": finite("mV"),
+    }
+
     def __post_init__(self) -> None:
-        for name in ("a", "b", "c_mv", "d", "gain", "v_peak_mv"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value)):
-                raise ConfigError(f"IzhikevichParams.{name} must be a finite number, got {value!r}")
+        validate_params(self)
         if self.c_mv >= self.v_peak_mv:
             raise ConfigError("IzhikevichParams: reset c_mv must lie below the spike peak "
                               f"v_peak_mv ({self.c_mv} >= {self.v_peak_mv})")
@@ -422,8 +435,7 @@ class NeuronPopulation:
         single (read as it is, as the fused kernels read the leapfrog's forces) or double
         precision; returns bool spikes (n_steps, n) without a batch, else (n_steps, batch, n).
         """
-        if not (math.isfinite(dt_s) and dt_s > 0):
-            raise ConfigError(f"dt_s must be a finite number of seconds > 0, got {dt_s!r}")
+        check_param("dt_s", dt_s, positive("s"))
         cur = np.asarray(current_n)
         if cur.dtype != np.float32:  # single precision (the leapfrog's forces) as it is
             cur = cur.astype(np.float64, copy=False)

@@ -22,11 +22,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from numbers import Integral
+from typing import ClassVar
 
 import numba
 import numpy as np
 
 from skinhil.errors import ConfigError
+from skinhil.validation import Constraints, Interval, check_param, positive, validate_params
 
 
 @dataclass(frozen=True)
@@ -37,11 +40,14 @@ class PSPParams:
     tau_r_ms: float = 12.5
     tau_m_ms: float = 21.3
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "tau_d_ms": positive("ms"),
+        "tau_r_ms": positive("ms"),
+        "tau_m_ms": positive("ms"),
+    }
+
     def __post_init__(self) -> None:
-        for name in ("tau_d_ms", "tau_r_ms", "tau_m_ms"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-                raise ConfigError(f"PSPParams.{name} must be a finite number > 0, got {value!r}")
+        validate_params(self)
         if self.tau_d_ms == self.tau_r_ms:
             raise ConfigError("PSPParams: tau_d_ms and tau_r_ms must differ (eq. 12 divides "
                               "by their difference)")
@@ -110,10 +116,8 @@ class PSPFilterBank:
     """Eq. 12 filter for ``n_channels`` channels at step ``dt_s`` (s); online and offline."""
 
     def __init__(self, n_channels: int, dt_s: float, params: PSPParams | None = None) -> None:
-        if not (isinstance(dt_s, int | float) and math.isfinite(dt_s) and dt_s > 0):
-            raise ConfigError(f"dt_s must be a finite number of seconds > 0, got {dt_s!r}")
-        if not (isinstance(n_channels, int | np.integer) and n_channels > 0):
-            raise ConfigError(f"n_channels must be a positive integer, got {n_channels!r}")
+        check_param("dt_s", dt_s, positive("s"))
+        check_param("n_channels", n_channels, Interval(Integral, 1, None, closed="left"))
         self.params = params or PSPParams()
         self.n_channels = int(n_channels)
         self.dt_s = float(dt_s)

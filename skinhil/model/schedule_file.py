@@ -27,6 +27,7 @@ import stat
 import time
 import tomllib
 from collections.abc import Mapping
+from numbers import Real
 from pathlib import Path
 
 from skinhil.errors import ConfigError
@@ -40,6 +41,7 @@ from skinhil.model.stimuli import (
     builtin_catalog,
     check_total_force,
 )
+from skinhil.validation import Interval, check_param
 
 MAX_FILE_BYTES = 4 * 1024 * 1024
 """Largest schedule file (4 MiB: about 60,000 events)."""
@@ -57,26 +59,20 @@ MAX_TIME_S = 1e6
 
 STIMULUS_KEYS = ("name", "forces", "onset_s", "indentation_s", "decay_tau_s")
 EVENT_KEYS = ("start_s", "stimulus")
-LIMITS: dict[str, tuple[float, float]] = {
-    "start_s": (0.0, MAX_TIME_S),
-    "onset_s": (0.0, MAX_TIME_S),
-    "indentation_s": (0.0, MAX_TIME_S),
-    "decay_tau_s": (0.0, math.inf),
+_TIME = Interval(Real, 0.0, MAX_TIME_S, closed="both", unit="s", hint="no quotes")
+LIMITS: dict[str, Interval] = {
+    "start_s": _TIME,
+    "onset_s": _TIME,
+    "indentation_s": _TIME,
+    "decay_tau_s": Interval(Real, 0.0, math.inf, closed="right", unit="s",
+                            hint="inf: a constant force; no quotes"),
 }
-"""Range of each number key (inclusive; ``decay_tau_s`` > 0, ``inf`` for a constant force)."""
+"""What each number key takes."""
 
 
 def _number(value: object, where: str, key: str) -> float:
-    lo, hi = LIMITS[key]
-    ok = isinstance(value, int | float) and not isinstance(value, bool)
-    x = float(value) if ok else math.nan  # type: ignore[arg-type]
-    in_range = (lo < x <= hi) if key == "decay_tau_s" else (lo <= x <= hi)
-    if not (ok and (math.isfinite(x) or (key == "decay_tau_s" and x == math.inf))
-            and in_range):
-        span = "a number > 0 (inf: constant)" if key == "decay_tau_s" else \
-            f"a number in {lo:g}..{hi:g}"
-        raise ConfigError(f"{where}: {key} = {value!r} — give {span} (seconds, no quotes)")
-    return x
+    check_param(key, value, LIMITS[key], where=f"{where}: ")
+    return float(value)  # type: ignore[arg-type]
 
 
 def _force(value: object, where: str, mass: str) -> tuple[float, float, float]:

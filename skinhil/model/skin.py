@@ -74,7 +74,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import Literal, Protocol
+from typing import ClassVar, Literal, Protocol
 
 import numpy as np
 
@@ -92,6 +92,14 @@ from skinhil.model.mechanics.leapfrog import LeapfrogMechanics
 from skinhil.model.mechanics.linear import LinearMechanics
 from skinhil.model.mechanics.readout import READOUTS, Readout
 from skinhil.model.stimuli import Schedule, Stimulus
+from skinhil.validation import (
+    Constraints,
+    StrOptions,
+    check_param,
+    non_negative,
+    positive,
+    validate_params,
+)
 
 Mechanics = Literal["auto", "linear", "geometric"]
 Dynamics = Literal["linear", "geometric"]
@@ -147,26 +155,21 @@ class SkinParams:
     L0)`` (N), or ``"axial"``, its small-displacement limit ``k·eᵀ(q_j − q_i)``
     (:mod:`skinhil.model.mechanics.readout`)."""
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "mass_kg": positive("kg"),
+        "stiffness_n_per_m": positive("N/m"),
+        "damping_n_s_per_m": non_negative("N·s/m"),
+        "tension_n": non_negative("N"),
+        "spacing_m": positive("m"),
+        "layer_gap_m": positive("m"),
+        "mechanics": StrOptions(("auto", "linear", "geometric")),
+        "linear_stepper": StrOptions(("auto", "exact", "leapfrog")),
+        "readout": StrOptions(READOUTS),
+    }
+
     def __post_init__(self) -> None:
         object.__setattr__(self, "size", check_size(self.size))
-        if self.linear_stepper not in ("auto", "exact", "leapfrog"):
-            raise ConfigError(f"SkinParams.linear_stepper must be 'auto', 'exact' or "
-                              f"'leapfrog', got {self.linear_stepper!r}")
-        positive = ("mass_kg", "stiffness_n_per_m", "spacing_m", "layer_gap_m")
-        for name in positive:
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-                raise ConfigError(f"SkinParams.{name} must be a finite number > 0, got {value!r}")
-        for name in ("damping_n_s_per_m", "tension_n"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
-                raise ConfigError(f"SkinParams.{name} must be a finite number >= 0, got {value!r}")
-        if self.readout not in READOUTS:
-            raise ConfigError(f"SkinParams.readout must be 'length' or 'axial', "
-                              f"got {self.readout!r}")
-        if self.mechanics not in ("auto", "linear", "geometric"):
-            raise ConfigError(f"SkinParams.mechanics must be 'auto', 'linear' or "
-                              f"'geometric', got {self.mechanics!r}")
+        validate_params(self)
 
     def scaled(self, factor: float) -> SkinParams:
         """These parameters with mass, stiffness and damping multiplied by ``factor``: the same
@@ -275,8 +278,7 @@ class SkinModel:
         """A fresh fixed-step stepper at rest for real-time block stepping at ``dt_s`` (s);
         ``state_forces``: one that can carry a force depending on the state (a contact's):
         the geometric mechanics or the leapfrog (:meth:`regime_for`)."""
-        if not (isinstance(dt_s, int | float) and math.isfinite(dt_s) and dt_s > 0):
-            raise ConfigError(f"dt_s must be a finite number of seconds > 0, got {dt_s!r}")
+        check_param("dt_s", dt_s, positive("s"))
         limit = self.max_dt_s()
         if dt_s > limit:
             raise ConfigError(
@@ -318,10 +320,7 @@ class SkinModel:
         ``n_steps = round(duration_s / dt_s)``; row ``k`` is the force at ``t = k·dt_s``; the
         stimulus is sampled at the start of each step and held over it (zero-order hold).
         """
-        if not (isinstance(duration_s, int | float) and math.isfinite(duration_s)
-                and duration_s > 0):
-            raise ConfigError(f"duration_s must be a finite number of seconds > 0, "
-                              f"got {duration_s!r}")
+        check_param("duration_s", duration_s, positive("s"))
         stepper = self.stepper(dt_s)
         n_steps = max(1, int(round(duration_s / dt_s)))
         t = np.arange(n_steps) * dt_s

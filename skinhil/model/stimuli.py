@@ -55,7 +55,9 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from numbers import Real
 from types import MappingProxyType
+from typing import ClassVar
 
 import numba
 import numpy as np
@@ -70,6 +72,13 @@ from skinhil.model.geometry import (
     mass_count,
     mass_index,
     mass_position,
+)
+from skinhil.validation import (
+    Constraints,
+    Interval,
+    check_param,
+    non_negative,
+    validate_params,
 )
 
 DIRECTION_ANGLES_DEG: tuple[float, ...] = (0.0, 120.0, 240.0)
@@ -100,6 +109,13 @@ class Stimulus:
     _peak: np.ndarray = field(init=False, repr=False, compare=False)
     _pushed: np.ndarray = field(init=False, repr=False, compare=False)
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "onset_s": non_negative("s"),
+        "indentation_s": non_negative("s"),
+        "decay_tau_s": Interval(Real, 0, math.inf, closed="right", unit="s",
+                                hint="inf: a constant force"),
+    }
+
     def __post_init__(self) -> None:
         size = check_size(self.size)
         n_masses = mass_count(size)
@@ -122,14 +138,7 @@ class Stimulus:
             if number in clean:
                 arr = arr + np.asarray(clean[number])
             clean[number] = (float(arr[0]), float(arr[1]), float(arr[2]))
-        for label, value, minimum in (("onset_s", self.onset_s, 0.0),
-                                      ("indentation_s", self.indentation_s, 0.0)):
-            if not (math.isfinite(value) and value >= minimum):
-                raise ConfigError(f"stimulus {self.name!r}: {label} must be a finite number "
-                                  f">= {minimum}, got {value!r}")
-        if not (self.decay_tau_s > 0):
-            raise ConfigError(f"stimulus {self.name!r}: decay_tau_s must be > 0 "
-                              f"(use inf for a constant force), got {self.decay_tau_s!r}")
+        validate_params(self, where=f"stimulus {self.name!r}: ")
         pushed = sorted(m for m, vec in clean.items() if any(x != 0.0 for x in vec))
         object.__setattr__(self, "size", size)
         object.__setattr__(self, "forces", MappingProxyType(clean))
@@ -352,9 +361,8 @@ class Schedule:
     def __post_init__(self) -> None:
         ordered = tuple(sorted(self.entries, key=lambda e: e.start_s))
         for e in ordered:
-            if not (math.isfinite(e.start_s) and e.start_s >= 0):
-                raise ConfigError(f"schedule: start_s must be a finite number >= 0, "
-                                  f"got {e.start_s!r} for {e.stimulus.name!r}")
+            check_param("start_s", e.start_s, non_negative("s"),
+                        where=f"schedule: stimulus {e.stimulus.name!r}: ")
         sizes = {e.stimulus.size for e in ordered}
         if len(sizes) > 1:
             raise ConfigError(f"schedule mixes stimuli of skins of sizes "

@@ -23,10 +23,13 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from numbers import Real
+from typing import ClassVar
 
 import numpy as np
 
 from skinhil.errors import ConfigError
+from skinhil.validation import Constraints, Interval, non_negative, positive, validate_params
 from skinhil.world import Contact, Indenter, Scene, Trajectory
 from skinhil.world.scene import MAX_CONTACTS
 
@@ -65,17 +68,40 @@ class GraspParams:
     settle_s: float = 0.05
     gap_s: float = 0.1
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "mass_kg": non_negative("kg"),
+        "pull_n": non_negative("N"),
+        "pad_radius_m": non_negative("m"),
+        "mu_static": positive("friction coefficient"),
+        "mu_kinetic": positive("friction coefficient"),
+        "initial_grip_n": positive("N"),
+        "max_grip_n": non_negative("N"),
+        "max_rate_n_per_s": non_negative("N/s"),
+        "drop_distance_m": non_negative("m"),
+        "grasp_s": non_negative("s"),
+        "rise_s": non_negative("s"),
+        "hold_s": non_negative("s"),
+        "pull_s": non_negative("s"),
+        "ramp_s": non_negative("s"),
+        "lower_s": non_negative("s"),
+        "settle_s": non_negative("s"),
+        "gap_s": non_negative("s"),
+    }
+
     def __post_init__(self) -> None:
-        for name, value in vars(self).items():
-            if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
-                raise ConfigError(f"GraspParams.{name} must be a finite number >= 0, "
-                                  f"got {value!r}")
-        if not 0 < self.mu_kinetic <= self.mu_static:
-            raise ConfigError("GraspParams: friction needs 0 < mu_kinetic <= mu_static")
-        if not self.hold_s >= self.pull_s + 2 * self.ramp_s:
-            raise ConfigError("GraspParams: the hold must be long enough for the pull")
-        if not 0 < self.initial_grip_n <= self.max_grip_n:
-            raise ConfigError("GraspParams: 0 < initial_grip_n <= max_grip_n")
+        validate_params(self)
+        if self.mu_kinetic > self.mu_static:
+            raise ConfigError(f"GraspParams: friction needs mu_kinetic <= mu_static, got "
+                              f"{self.mu_kinetic!r} > {self.mu_static!r}: lower mu_kinetic "
+                              "or raise mu_static")
+        if self.hold_s < self.pull_s + 2 * self.ramp_s:
+            raise ConfigError(f"GraspParams: hold_s = {self.hold_s!r} is shorter than the pull "
+                              f"and its ramps (pull_s + 2 ramp_s = "
+                              f"{self.pull_s + 2 * self.ramp_s:g} s): lengthen the hold")
+        if self.initial_grip_n > self.max_grip_n:
+            raise ConfigError(f"GraspParams: initial_grip_n = {self.initial_grip_n!r} N is "
+                              f"above max_grip_n = {self.max_grip_n!r} N: lower it or raise "
+                              "max_grip_n")
 
     @property
     def weight_n(self) -> float:
@@ -146,12 +172,21 @@ class Lift:
     pull_n: float = 0.15
     pull_at_s: float = 0.155
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "start_s": non_negative("s"),
+        "mass_kg": positive("kg"),
+        "break_n": Interval(Real, 0, math.inf, closed="right", unit="N"),
+        "grasp_s": non_negative("s"),
+        "pull_n": non_negative("N"),
+        "pull_at_s": non_negative("s"),
+    }
+
+    def __post_init__(self) -> None:
+        validate_params(self)
+
     def check(self, params: GraspParams) -> Lift:
-        """Itself, refused unless every value is in range and its pull fits in the hold."""
-        values = (self.start_s, self.mass_kg, self.grasp_s, self.pull_n, self.pull_at_s)
-        if not all(math.isfinite(v) and v >= 0 for v in values) or self.mass_kg <= 0:
-            raise ConfigError(f"lift {self!r}: times, mass and pull must be finite, >= 0 "
-                              "(mass > 0)")
+        """Itself, refused unless it breaks above the hand's initial grip and its pull fits
+        in the hold of ``params``."""
         if not self.break_n > params.initial_grip_n:
             raise ConfigError(f"lift at {self.start_s:g} s: break_n {self.break_n!r} must be "
                               f"above the initial grip {params.initial_grip_n:g} N")

@@ -24,7 +24,7 @@ import math
 from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -32,6 +32,7 @@ import protocols
 from skinhil.errors import ConfigError
 from skinhil.receiver.answer import CommandSender
 from skinhil.transports import Transport
+from skinhil.validation import Constraints, positive, validate_params
 
 log = logging.getLogger(__name__)
 
@@ -56,11 +57,23 @@ class ReflexParams:
     max_rate_n_per_s: float = 100.0
     """The board's rate bound (SPEC.md §3.5.6): no GRIP asks more."""
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "low_grip_n": positive("N"),
+        "max_grip_n": positive("N"),
+        "ratio": positive("N of grip per N of load"),
+        "bin_s": positive("s"),
+        "tau_s": positive("s"),
+        "reflex_n": positive("N"),
+        "reflex_s": positive("s"),
+        "reflex_step_n": positive("N"),
+        "hold_s": positive("s"),
+        "deadband_n": positive("N"),
+        "release_n_per_s": positive("N/s"),
+        "max_rate_n_per_s": positive("N/s"),
+    }
+
     def __post_init__(self) -> None:
-        for name, value in vars(self).items():
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-                raise ConfigError(f"ReflexParams.{name} must be a finite number > 0, "
-                                  f"got {value!r}")
+        validate_params(self)
 
 
 class ChannelRates:

@@ -2,17 +2,10 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
-from skinhil.errors import ConfigError
-
-
-def _positive(obj: object, name: str) -> None:
-    value = getattr(obj, name)
-    if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-        raise ConfigError(f"{type(obj).__name__}.{name} must be a finite number > 0, "
-                          f"got {value!r}")
+from skinhil.validation import Constraints, InstanceOf, non_negative, positive, validate_params
 
 
 @dataclass(frozen=True)
@@ -37,14 +30,18 @@ class OnsetParams:
     refractory_s: float = 0.2
     lookback_s: float = 0.003
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "window_s": positive("s"),
+        "z": non_negative("baseline standard deviations"),
+        "min_excess_spikes": non_negative("spikes"),
+        "baseline_tau_s": positive("s"),
+        "warmup_s": non_negative("s"),
+        "refractory_s": positive("s"),
+        "lookback_s": non_negative("s"),
+    }
+
     def __post_init__(self) -> None:
-        for name in ("window_s", "baseline_tau_s", "refractory_s"):
-            _positive(self, name)
-        for name in ("z", "min_excess_spikes", "warmup_s", "lookback_s"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
-                raise ConfigError(f"OnsetParams.{name} must be a finite number >= 0, "
-                                  f"got {value!r}")
+        validate_params(self)
 
 
 @dataclass(frozen=True)
@@ -75,8 +72,13 @@ class ReceiverParams:
     match_window_s: float = 0.1
     silence_s: float = 1.0
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "onset": InstanceOf(OnsetParams, "an OnsetParams"),
+        "guard_s": positive("s"),
+        "silence_s": positive("s"),
+        "max_guard_s": positive("s"),
+        "match_window_s": positive("s"),
+    }
+
     def __post_init__(self) -> None:
-        _positive(self, "guard_s")
-        _positive(self, "silence_s")
-        _positive(self, "max_guard_s")
-        _positive(self, "match_window_s")
+        validate_params(self)

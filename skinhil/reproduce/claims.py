@@ -18,8 +18,8 @@ as stated: the nPC ratio's at lower K (higher compliance) than the SIR ratio's, 
 :func:`optimum_location`, a set of points, not one index). Before the check, the run
 extends the damping grid past any end the profile peaks at (:func:`edge_of_optimum`,
 :mod:`skinhil.reproduce.compute`), so a grid is as wide as the measure needs to turn over
-(within the extensions allowed). The earlier tercile reading (:func:`damping_optimum`, the
-peak's K tercile) is kept for the figures only.
+(within the extensions allowed). The tercile reading (:func:`damping_optimum`, the peak's K
+tercile) is for the figures only.
 
 3F is judged on the per-sensor mean correlation, as the paper computes it
 (:func:`skinhil.analysis.correlation.similarity_matrix_per_sensor`); the pooled index is
@@ -40,7 +40,6 @@ from skinhil.analysis.information import InformationMeasures
 from skinhil.analysis.sweep import SweepResult
 from skinhil.decoding import CVResult
 
-TERCILES: tuple[str, str, str] = ("low", "mid", "high")
 EXTREME_FRACTION = 0.2
 """2A: 'extremely low damping' is the lowest 20 % of the damping grid values (at least
 one), 'extremely high stiffness' the highest 20 % of the stiffness values."""
@@ -107,11 +106,6 @@ def information_phases(m: InformationMeasures,
 def tercile_groups(n: int) -> list[np.ndarray]:
     """Grid indices 0..n-1 split into the low, mid and high terciles (empty if n < 3)."""
     return [np.asarray(g, dtype=np.int64) for g in np.array_split(np.arange(n), 3)]
-
-
-def tercile_of(index: int, n: int) -> str:
-    """The tercile ("low", "mid", "high") of grid index ``index`` of ``n`` values."""
-    return next((TERCILES[t] for t, g in enumerate(tercile_groups(n)) if index in g), "?")
 
 
 def tercile_means(values: np.ndarray) -> np.ndarray:

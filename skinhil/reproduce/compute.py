@@ -92,7 +92,7 @@ class ReproduceConfig:
     extremes exactly 3 values), 5 values per tension slice (the default in the middle), 50
     trials per condition and 5 repeats of 5-fold CV (at 10 dB the split standard error is
     about a tenth of the finite trials' error, which more repeats cannot reduce; REPORT.md
-    prints both). ``--grid 15 --repeats 10`` gives the earlier sizes."""
+    prints both). Larger grids and more repeats are options (``--grid``, ``--repeats``)."""
 
     sweep_linear: tuple[int, int] = (11, 11)
     sweep_geometric: tuple[int, int] = (11, 11)

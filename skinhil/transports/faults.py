@@ -26,16 +26,23 @@ stream (as on a real link); they only add latency.
 
 from __future__ import annotations
 
-import math
 import time
 from collections import deque
 from dataclasses import dataclass, field, replace
-from typing import Any
+from numbers import Integral
+from typing import Any, ClassVar
 
 import numpy as np
 
-from skinhil.errors import ConfigError
 from skinhil.transports.base import Transport, WrappedTransport
+from skinhil.validation import (
+    PROBABILITY,
+    Constraints,
+    Interval,
+    StrOptions,
+    non_negative,
+    validate_params,
+)
 
 
 @dataclass(frozen=True)
@@ -51,16 +58,18 @@ class FaultParams:
     serial_unit: str = "packet"
     """Serial links: ``"packet"`` (zero-delimited frames) or ``"chunk"`` (reads)."""
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "drop_p": PROBABILITY,
+        "corrupt_byte_p": PROBABILITY,
+        "duplicate_p": PROBABILITY,
+        "delay_p": PROBABILITY,
+        "delay_s": non_negative("s"),
+        "seed": Interval(Integral, 0, None, closed="left"),
+        "serial_unit": StrOptions(("packet", "chunk")),
+    }
+
     def __post_init__(self) -> None:
-        if self.serial_unit not in ("packet", "chunk"):
-            raise ConfigError(f"FaultParams.serial_unit must be 'packet' or 'chunk', "
-                              f"got {self.serial_unit!r}")
-        for name in ("drop_p", "corrupt_byte_p", "duplicate_p", "delay_p"):
-            v = getattr(self, name)
-            if not (isinstance(v, int | float) and 0.0 <= v <= 1.0):
-                raise ConfigError(f"FaultParams.{name} must be a probability 0..1, got {v!r}")
-        if not (math.isfinite(self.delay_s) and self.delay_s >= 0):
-            raise ConfigError(f"FaultParams.delay_s must be >= 0 seconds, got {self.delay_s!r}")
+        validate_params(self)
 
 
 @dataclass

@@ -37,11 +37,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numba
 import numpy as np
 
 from skinhil.errors import ConfigError
+from skinhil.validation import Constraints, positive, validate_params
 from skinhil.world.indenters import surface_height
 from skinhil.world.truth import (
     T_ACTIVE,
@@ -86,11 +88,18 @@ class ContactParams:
     margin_m: float = 2e-3
     """Masses whose rest position is within reach + margin of the axis are tested."""
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "normal_stiffness_n_per_m": positive("N/m"),
+        "normal_damping_n_s_per_m": positive("N·s/m"),
+        "tangential_stiffness_n_per_m": positive("N/m"),
+        "tangential_damping_n_s_per_m": positive("N·s/m"),
+        "admittance_m_per_n_s": positive("m/(N·s)"),
+        "tangential_admittance_m_per_n_s": positive("m/(N·s)"),
+        "margin_m": positive("m"),
+    }
+
     def __post_init__(self) -> None:
-        for name, value in vars(self).items():
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-                raise ConfigError(f"ContactParams.{name} must be a finite number > 0, "
-                                  f"got {value!r}")
+        validate_params(self)
 
     @classmethod
     def for_skin(cls, stiffness_n_per_m: float, reference_n_per_m: float) -> ContactParams:

@@ -20,12 +20,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from numbers import Real
+from typing import ClassVar, Literal
 
 import numba
 import numpy as np
 
 from skinhil.errors import ConfigError
+from skinhil.validation import Constraints, Interval, StrOptions, finite, validate_params
 
 Shape = Literal["sphere", "flat", "edge", "pins"]
 SHAPES: tuple[Shape, ...] = ("sphere", "flat", "edge", "pins")
@@ -36,6 +38,7 @@ GEOMETRY_FIELDS = 6
 radius (m)."""
 MAX_SIZE_M = 0.1
 """Largest radius, width, pitch (10 cm: a whole hand is 3.3 cm across)."""
+_LENGTH = Interval(Real, 0, MAX_SIZE_M, closed="right", unit="m")
 
 
 @dataclass(frozen=True)
@@ -54,17 +57,17 @@ class Indenter:
     pin_radius_m: float = 0.4e-3
     """Each pin's radius."""
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "shape": StrOptions(SHAPES),
+        "radius_m": _LENGTH,
+        "width_m": _LENGTH,
+        "pitch_m": _LENGTH,
+        "pin_radius_m": _LENGTH,
+        "angle_deg": finite("degrees"),
+    }
+
     def __post_init__(self) -> None:
-        if self.shape not in SHAPES:
-            raise ConfigError(f"indenter shape {self.shape!r} — give one of "
-                              f"{', '.join(SHAPES)}")
-        for name in ("radius_m", "width_m", "pitch_m", "pin_radius_m"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and 0 < value <= MAX_SIZE_M):
-                raise ConfigError(f"indenter {name} = {value!r} — give a length in "
-                                  f"(0, {MAX_SIZE_M:g}] m")
-        if not (isinstance(self.angle_deg, int | float) and math.isfinite(self.angle_deg)):
-            raise ConfigError(f"indenter angle_deg = {self.angle_deg!r} — give degrees")
+        validate_params(self, where="indenter ")
         if self.shape == "pins" and self.pin_radius_m * 2 >= self.pitch_m:
             raise ConfigError("indenter pins: pin_radius_m must be less than half the "
                               "pitch_m (pins that touch are a flat)")

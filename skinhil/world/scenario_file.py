@@ -27,6 +27,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
+from numbers import Real
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +42,7 @@ from skinhil.model.schedule_file import (
     table_list,
 )
 from skinhil.model.stimuli import Schedule
+from skinhil.validation import Interval, check_param
 from skinhil.world.indenters import SHAPES, Indenter
 from skinhil.world.scene import MAX_CONTACTS, Contact, Scene
 from skinhil.world.trajectory import AXES, MAX_KEYFRAMES, Trajectory
@@ -102,10 +104,8 @@ def _number(t: Mapping[str, object], key: str, where: str,
         return default
     value = t[key]
     lo, hi = limits[key]
-    ok = isinstance(value, int | float) and not isinstance(value, bool)
-    if not (ok and math.isfinite(float(value)) and lo <= float(value) <= hi):  # type: ignore[arg-type]
-        raise ConfigError(f"{where}: {key} = {value!r} — give a number in {lo:g}..{hi:g} "
-                          "(no quotes)")
+    check_param(key, value, Interval(Real, lo, hi, closed="both", hint="no quotes"),
+                where=f"{where}: ")
     return float(value)  # type: ignore[arg-type]
 
 

@@ -3,12 +3,14 @@ time, and the world's packed operands and state that the compiled step reads and
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
+from numbers import Real
+from typing import ClassVar
 
 import numpy as np
 
 from skinhil.errors import ConfigError
+from skinhil.validation import Constraints, Interval, check_param, non_negative, validate_params
 from skinhil.world.contact import ContactParams
 from skinhil.world.indenters import Indenter
 from skinhil.world.trajectory import AXES, Trajectory
@@ -17,6 +19,7 @@ MAX_CONTACTS = 64
 """Most contacts in one scene."""
 MAX_MU = 5.0
 """Largest friction coefficient."""
+_MU = Interval(Real, 0, MAX_MU, closed="both", unit="friction coefficient")
 
 
 @dataclass(frozen=True)
@@ -31,13 +34,18 @@ class Contact:
     mu_kinetic: float = 0.6
     name: str = "contact"
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "start_s": non_negative("s"),
+        "mu_static": _MU,
+        "mu_kinetic": _MU,
+    }
+
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.start_s) and self.start_s >= 0):
-            raise ConfigError(f"contact {self.name!r}: start_s must be >= 0 s")
-        if not (0 <= self.mu_kinetic <= self.mu_static <= MAX_MU):
-            raise ConfigError(f"contact {self.name!r}: friction needs 0 <= mu_kinetic <= "
-                              f"mu_static <= {MAX_MU:g}, got {self.mu_kinetic!r}, "
-                              f"{self.mu_static!r}")
+        validate_params(self, where=f"contact {self.name!r}: ")
+        if self.mu_kinetic > self.mu_static:
+            raise ConfigError(f"contact {self.name!r}: friction needs mu_kinetic <= "
+                              f"mu_static, got {self.mu_kinetic!r} > {self.mu_static!r}: "
+                              "lower mu_kinetic or raise mu_static")
 
     @property
     def end_s(self) -> float:
@@ -116,6 +124,6 @@ class World:
                               f"{len(self.scene.contacts)}")
         if self.scene.contacts[contact].trajectory.normal != "force":
             raise ConfigError(f"contact {contact} is position-controlled: no load to set")
-        if load_n is not None and not (math.isfinite(load_n) and load_n >= 0):
-            raise ConfigError(f"a load must be a finite number of newtons >= 0, got {load_n!r}")
+        if load_n is not None:
+            check_param("load_n", load_n, non_negative("N"))
         self.state[4][contact] = np.nan if load_n is None else float(load_n)

@@ -22,13 +22,22 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import ClassVar, Literal
 
 import numpy as np
 
 from skinhil.errors import ConfigError
+from skinhil.validation import (
+    Constraints,
+    StrOptions,
+    check_param,
+    non_negative,
+    positive,
+    validate_params,
+)
 
 Control = Literal["position", "force"]
+CONTROLS: tuple[Control, ...] = ("position", "force")
 AXES = ("x", "y", "z")
 MAX_KEYFRAMES = 10_000
 """Most keyframes of one trajectory."""
@@ -48,6 +57,14 @@ class Trajectory:
     origin_m: tuple[float, float] = (0.0, 0.0)
     """Start of the axis under a tangential load (``tangential = "force"``)."""
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "normal": StrOptions(CONTROLS),
+        "tangential": StrOptions(CONTROLS),
+        "vibration_amplitude_m": non_negative("m"),
+        "vibration_frequency_hz": non_negative("Hz"),
+        "vibration_axis": StrOptions(AXES),
+    }
+
     def __post_init__(self) -> None:
         k = np.array(self.keyframes, dtype=np.float64)
         if k.ndim != 2 or k.shape[1] != 4 or not 1 <= k.shape[0] <= MAX_KEYFRAMES:
@@ -56,17 +73,9 @@ class Trajectory:
         if not np.isfinite(k).all() or k[0, 0] < 0 or np.any(np.diff(k[:, 0]) < 0):
             raise ConfigError("trajectory keyframes must be finite with times >= 0 in "
                               "increasing order")
-        if self.normal not in ("position", "force") or self.tangential not in (
-                "position", "force"):
-            raise ConfigError("trajectory control must be 'position' or 'force'")
+        validate_params(self, where="trajectory ")
         if self.normal == "force" and np.any(k[:, 3] < 0):
             raise ConfigError("a normal load must be >= 0 N")
-        if self.vibration_axis not in AXES:
-            raise ConfigError(f"vibration axis {self.vibration_axis!r} — give x, y or z")
-        if not (math.isfinite(self.vibration_amplitude_m) and self.vibration_amplitude_m >= 0
-                and math.isfinite(self.vibration_frequency_hz)
-                and self.vibration_frequency_hz >= 0):
-            raise ConfigError("vibration amplitude and frequency must be finite and >= 0")
         vib_on = self.vibration_amplitude_m > 0
         if vib_on and ((self.vibration_axis == "z" and self.normal == "force")
                        or (self.vibration_axis != "z" and self.tangential == "force")):
@@ -102,8 +111,7 @@ class Trajectory:
               load: bool = False) -> Trajectory:
         """Press at ``start_m`` (x, y) over ``ramp_s``, dwell ``dwell_s``, slide in a straight
         line to ``end_m`` at ``speed_m_per_s``, dwell, lift over ``ramp_s``."""
-        if not (math.isfinite(speed_m_per_s) and speed_m_per_s > 0):
-            raise ConfigError(f"slide speed must be > 0 m/s, got {speed_m_per_s!r}")
+        check_param("speed_m_per_s", speed_m_per_s, positive("m/s"))
         (x0, y0), (x1, y1) = start_m, end_m
         travel = math.hypot(x1 - x0, y1 - y0) / speed_m_per_s
         t1 = ramp_s + dwell_s

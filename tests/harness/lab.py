@@ -88,14 +88,16 @@ def stop(listen: ServeProcess, own_end_s: float = 10.0) -> None:
 @contextmanager
 def listening(tmp_path: Path, *listen_args: str, ready: str) -> Iterator[
         tuple[ServeProcess, Path]]:
-    """``skinhil listen --json`` on a pty with ``listen_args``, once its stderr says
-    ``ready``: (the listener, the board's end of the pty). The listener is interrupted (and
-    its summary collected) when the body ends, unless the body stopped it."""
+    """``skinhil listen --json`` on a pty with ``listen_args``, once its ready line has come
+    and its stderr says ``ready`` (what a lab output announces): (the listener, the board's
+    end of the pty). The listener is interrupted (and its summary collected) when the body
+    ends, unless the body stopped it."""
     model = quick_model(tmp_path)
     with linked_ptys(tmp_path) as (board_end, host_end):
         listen = ServeProcess("--port", str(host_end), "--model", str(model), "--json",
                               *listen_args, command="listen")
         try:
+            listen.wait_ready()
             wait_for_stderr(listen, ready)
             yield listen, board_end
             stop(listen)

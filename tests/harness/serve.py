@@ -1,4 +1,5 @@
-"""Run ``skinhil serve`` as a subprocess, as a user would, and collect its output."""
+"""Run ``skinhil serve`` as a subprocess, as a user would, and collect its output: its
+ready line and summary line (docs/process-output.md) are read by ``type``, never by text."""
 
 from __future__ import annotations
 
@@ -12,6 +13,8 @@ import threading
 import time
 from pathlib import Path
 from typing import Any
+
+from skinhil.process_output import READY, SUMMARY, last_record
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -106,9 +109,22 @@ class ServeProcess:
         return "".join(self.stderr_lines)
 
     def summary(self) -> dict[str, Any]:
-        found = [x for x in self.lines if x.get("type") == "summary"]
-        assert found, f"no summary; stderr:\n{self.stderr}"
-        return found[-1]
+        """The summary line (the last of its type)."""
+        found = last_record(list(self.lines), SUMMARY)
+        assert found is not None, f"no summary; stderr:\n{self.stderr}"
+        return found
+
+    def wait_ready(self, timeout_s: float = 120.0) -> dict[str, Any]:
+        """The ready line, once it has come (``--json``): the link is open and the run
+        starts. Fails if the process ends first or ``timeout_s`` passes."""
+        end = time.monotonic() + timeout_s
+        while time.monotonic() < end:
+            found = last_record(list(self.lines), READY)
+            if found is not None:
+                return found
+            assert not self.exited, f"ended with no ready line; stderr:\n{self.stderr}"
+            time.sleep(0.05)
+        raise AssertionError(f"no ready line within {timeout_s:g} s; stderr:\n{self.stderr}")
 
     def start_wall_s(self) -> float:
         """When the board started on the wall clock (s since the epoch), from its status
