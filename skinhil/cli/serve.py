@@ -212,7 +212,7 @@ def _drain_notice(board: Board) -> str | None:
     if wait_s <= DRAIN_NOTICE_S:
         return None
     return (f"stopping: sending what is queued ({len(board.fifo)} events, "
-            f"{link.queued_units()} {'frames' if link.is_can else 'bytes'}) takes up to "
+            f"{link.queued_units()} {link.transport.unit}) takes up to "
             f"{wait_s:.0f} s on this link; Ctrl-C again stops at once")
 
 
@@ -220,7 +220,7 @@ def _undrained(board: Board) -> str:
     """What a second Ctrl-C leaves unsent."""
     link = board.link
     queued = 0 if link is None else link.queued_units()
-    unit = "frames" if link is not None and link.is_can else "bytes"
+    unit = "bytes" if link is None else link.transport.unit
     return (f"stopped at once: {len(board.fifo)} events in the FIFO and {queued} {unit} "
             "queued for the link were not sent")
 
