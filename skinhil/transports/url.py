@@ -56,8 +56,8 @@ class LinkUrl:
         for key in self.options:
             if key not in known:
                 allowed = ", ".join(known) if known else "none"
-                raise TransportError(f"link URL {self} has unknown option {key!r}: a "
-                                     f"{self.scheme}: link takes {allowed}")
+                raise TransportError(f"link URL {self} has unknown option {key!r}: give "
+                                     f"only what a {self.scheme}: link takes ({allowed})")
 
     def int_option(self, key: str, default: int | None) -> int | None:
         """Option ``key`` as an integer (``default`` when absent)."""
