@@ -312,7 +312,6 @@ class Board:
     # -- link ---------------------------------------------------------------------------
     def _make_link(self, transport: Transport[Any]) -> BoardLink:
         link = BoardLink(transport, self.config.board_id,
-                         fd=bool(getattr(transport, "fd", False)),
                          allowance_s=self.config.tick_s, step_us=self._dt_us,
                          n_channels=self.sensor.model.n_springs)
         self._budget = CommandBudget(self.config.tick_s, link.answer_wire_s)

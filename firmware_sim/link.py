@@ -1,7 +1,7 @@
 """The board's side of the link: encode records and events, pace them, read host commands.
 
 One :class:`BoardLink` owns a transport, the protocol encoder and decoder that fit it
-(serial framing for a serial port, the CAN layout for a CAN bus), and a small transmit queue
+(the link's :meth:`~skinhil.transports.Transport.codec_pair`), and a small transmit queue
 of encoded data; events are encoded in filled frames (:meth:`BoardLink.queue_events`).
 :meth:`BoardLink.pump` hands the queue to the transport no faster than the wire allows
 (:class:`firmware_sim.pacing.WirePacer`), without ever blocking: what the OS does not take
@@ -31,29 +31,28 @@ class BoardLink:
     """Encoder + transmit queue + pacer + command decoder over one transport.
 
     ``allowance_s`` is the transmit buffer in seconds of wire time (see
-    :class:`~firmware_sim.pacing.WirePacer`); ``board_id`` and ``fd`` select the CAN layout;
-    ``step_us`` is the timestamp resolution (µs); ``n_channels`` the board's channel count
-    (it selects the narrow or the wide format, SPEC.md §9). On a datagram link (UDP) every
-    send holds whole packets only (SPEC.md §10).
+    :class:`~firmware_sim.pacing.WirePacer`); ``board_id`` selects the CAN layout (the link
+    says whether it is CAN FD); ``step_us`` is the timestamp resolution (µs); ``n_channels``
+    the board's channel count (it selects the narrow or the wide format, SPEC.md §9). On a
+    link of whole datagrams (UDP) every send holds whole packets only (SPEC.md §10).
     """
 
-    def __init__(self, transport: Transport[Any], board_id: int = 0, fd: bool = False,
+    def __init__(self, transport: Transport[Any], board_id: int = 0,
                  allowance_s: float = 1e-3, step_us: int = 100,
                  n_channels: int = protocols.N_CHANNELS) -> None:
         self.transport = transport
-        self.is_can = transport.kind == "can"
-        self.whole_packets = transport.kind == "udp"
-        self._codec_args: dict[str, Any] = {"step_us": step_us, "n_channels": n_channels}
-        if self.is_can:
-            self._codec_args.update(board_id=board_id, fd=fd)
-            self.encoder: Any = protocols.CanEncoder(**self._codec_args)
-            self.decoder: Any = protocols.CanDecoder(board_id=board_id, fd=fd)
+        self.frames = transport.carries_frames
+        """True when the link carries frames (a frame queue), False for bytes."""
+        self.whole_packets = transport.whole_datagrams
+        self._codec_args: dict[str, Any] = {"board_id": board_id, "step_us": step_us,
+                                            "n_channels": n_channels}
+        self.encoder, self.decoder = transport.codec_pair(**self._codec_args)
+        if self.frames:
             self._frames: collections.deque[Any] = collections.deque()
             self._frame_s: collections.deque[float] = collections.deque()
-            self.frame_s = transport.wire_seconds([protocols.full_events_frame(board_id, fd)])
+            self.frame_s = transport.wire_seconds(
+                [protocols.full_events_frame(board_id, transport.can_fd)])
         else:
-            self.encoder = protocols.SerialEncoder(**self._codec_args)
-            self.decoder = protocols.SerialDecoder()
             self._bytes = bytearray()
             self._byte_s = transport.wire_seconds(b"x")
             self.frame_s = protocols.MAX_PACKET_BYTES * self._byte_s
@@ -73,26 +72,24 @@ class BoardLink:
         self._rx_reported = 0
         self._rx_taken = 0
         self._rx_units = 0
-        sample = type(self.encoder)(**self._codec_args).ack(
+        sample = transport.codec_pair(**self._codec_args)[0].ack(
             protocols.Ack(token=0xFFFF, opcode=0xFF, ok=False, reason=0xFF))
-        self.answer_wire_s: float = (transport.wire_seconds(sample) if self.is_can
+        self.answer_wire_s: float = (transport.wire_seconds(sample) if self.frames
                                      else len(sample) * self._byte_s)
         """Wire time (s) of one ACK on this link (:mod:`firmware_sim.command_budget`)."""
 
     def warm_up(self, status: Any) -> None:
         """Run every encode and decode path once on throwaway codecs, off the clock
         (:func:`exercise_codecs`); the link's own encoder, decoder and queue are untouched."""
-        encoder = type(self.encoder)(**self._codec_args)
-        decoder = type(self.decoder)(**{k: v for k, v in self._codec_args.items()
-                                        if k not in ("step_us", "n_channels")})
+        encoder, decoder = self.transport.codec_pair(**self._codec_args)
         for payload in exercise_codecs(encoder, decoder, self._codec_args["step_us"], status):
-            if self.is_can:
+            if self.frames:
                 for frame in payload:
                     self.transport.wire_seconds([frame])
 
     # -- transmit queue ---------------------------------------------------------------
     def _queue(self, payload: Any) -> None:
-        if self.is_can:
+        if self.frames:
             for frame in payload:
                 s = self.transport.wire_seconds([frame])
                 self._frames.append(frame)
@@ -108,7 +105,7 @@ class BoardLink:
 
     def queued_units(self) -> int:
         """Bytes or frames still queued."""
-        return len(self._frames) if self.is_can else len(self._bytes)
+        return len(self._frames) if self.frames else len(self._bytes)
 
     def queue_events(self, events: np.ndarray, t_end_us: int,
                      max_frames: int | None = None) -> int:
@@ -148,7 +145,7 @@ class BoardLink:
         room = self.pacer.room_s(now)
         if room <= 0:
             return 0
-        if self.is_can:
+        if self.frames:
             batch, wire = [], 0.0
             while self._frames and wire < room - 1e-12:  # starts within the allowance
                 wire += self._frame_s[0]

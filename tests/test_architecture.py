@@ -115,3 +115,33 @@ def test_readme_python_examples_run() -> None:
     assert blocks
     for block in blocks:
         exec(compile(block, "README.md", "exec"), {})  # noqa: S102
+
+
+LINK_KIND_TEST = re.compile(r'kind ?[!=]= ?"(can|serial|udp)"|is_can|getattr\([^)]*"fd"')
+"""A string test of a link's kind or a probe of its FD flag: what differs by link is a
+property of the link object (skinhil/transports), asked, never tested by name."""
+
+
+def _link_kind_tests(roots: list[Path], allowed: Path) -> list[str]:
+    found = []
+    for root in roots:
+        for path in sorted(root.rglob("*.py")):
+            if path.is_relative_to(allowed):
+                continue
+            for n, line in enumerate(path.read_text().splitlines(), 1):
+                if LINK_KIND_TEST.search(line):
+                    found.append(f"{path.relative_to(root.parent)}:{n}: {line.strip()}")
+    return found
+
+
+def test_no_link_kind_test_outside_the_links() -> None:
+    found = _link_kind_tests([REPO / "skinhil", REPO / "firmware_sim"],
+                             REPO / "skinhil" / "transports")
+    assert not found, "ask the link's properties instead:\n" + "\n".join(found)
+
+
+def test_link_kind_check_sees_a_kind_test(tmp_path: Path) -> None:
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "m.py").write_text('if transport.kind == "can":\n    pass\n')
+    assert len(_link_kind_tests([pkg], tmp_path / "links")) == 1

@@ -27,7 +27,7 @@ from junitparser import Error, Failure, JUnitXml
 from skinhil.campaign.criteria import MissingKey, parse_criterion
 from skinhil.cli import main
 from skinhil.cli.parser import build_parser
-from skinhil.cli.transport_args import transport_argv
+from skinhil.cli.transport_args import link_url, transport_argv
 from skinhil.decoding.classifier import DirectionDecoder
 from skinhil.decoding.model_file import save_decoder
 from skinhil.process_output import READY, SUMMARY, last_record, records
@@ -228,9 +228,9 @@ def test_the_link_given_to_bench_is_the_boards(link: list[str]) -> None:
     bench = build_parser("bench").parse_args(["bench", "c.toml", *link])
     argv = transport_argv(bench)
     serve = build_parser("serve").parse_args(["serve", *argv])
-    for name in ("port", "baud", "udp", "can", "interface", "fd", "bitrate", "data_bitrate"):
-        if f"--{name.replace('_', '-')}" in link or name in ("fd",):
-            assert getattr(serve, name) == getattr(bench, name), name
+    url = str(link_url(serve))
+    assert argv == ["--link", url]
+    assert all(value in url for value in link if not value.startswith("--")), url
     assert transport_argv(serve) == argv
 
 

@@ -11,7 +11,6 @@ a virtual bus (it must keep the contract of what it wraps); the vcan case two so
 
 from __future__ import annotations
 
-import os
 import random
 import shutil
 import socket
@@ -31,10 +30,9 @@ from skinhil.transports import (
     CanTransport,
     FaultParams,
     FaultyTransport,
-    PtyMasterTransport,
     SerialTransport,
     Transport,
-    UdpTransport,
+    open_link,
 )
 
 CASES = ["loop", "pty", "pty-master", "faulty", "virtual", "udp",
@@ -63,21 +61,20 @@ def link(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[tuple[Any, 
     kind = request.param
     proc = None
     if kind == "loop":
-        tx = SerialTransport("loop://", 115200)
+        tx = open_link("serial:loop://?baud=115200")
         rx = tx
     elif kind == "pty":
         proc, a, b = _socat_pair(tmp_path)
         tx, rx = SerialTransport(a, 921600), SerialTransport(b, 921600)
     elif kind == "pty-master":
-        master, slave_fd = PtyMasterTransport.open_pair(921600)
-        tx, rx = master, SerialTransport(master.slave_path, 921600)
-        os.close(slave_fd)  # pyserial holds the slave open from here on
+        tx = open_link("pty:")
+        rx = open_link(f"serial:{tx.slave_path}")
     elif kind == "udp":
-        rx = UdpTransport("127.0.0.1", 0, listen=True)
-        tx = UdpTransport("127.0.0.1", rx.port)
+        rx = open_link("udp:127.0.0.1:0", "host")
+        tx = open_link(rx.url, "board")
     elif kind in ("virtual", "faulty"):
         chan = f"contract-{random.getrandbits(32)}"
-        tx, rx = CanTransport(chan, "virtual"), CanTransport(chan, "virtual")
+        tx, rx = (open_link(f"can:{chan}?interface=virtual", role) for role in ("board", "host"))
         if kind == "faulty":
             tx = FaultyTransport(tx, FaultParams(seed=1), on_send=True, on_recv=False)
             rx = FaultyTransport(rx, FaultParams(seed=2))
@@ -94,9 +91,9 @@ def link(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[tuple[Any, 
 
 def _payloads(tx: Transport[Any], n: int) -> list[Any]:
     rng = random.Random(n)
-    if tx.kind != "can":
+    if not tx.carries_frames:
         return [bytes(rng.getrandbits(8) for _ in range(rng.randint(1, 300))) for _ in range(n)]
-    fd = getattr(tx, "fd", False)
+    fd = tx.can_fd
     sizes = protocols.budget.CAN_FD_LENGTHS if fd else range(9)
     return [[protocols.CanFrame(rng.randrange(0x800), bytes(rng.getrandbits(8) for _ in
                                                             range(rng.choice(sizes))), fd)]

@@ -33,6 +33,7 @@ from skinhil.campaign.criteria import MissingKey
 from skinhil.campaign.relay import RelayLink
 from skinhil.campaign.rig import RigBounds, board_health, rig_faults
 from skinhil.process_output import READY, SUMMARY, last_record, records
+from skinhil.transports.base import DEFAULT_BAUD
 from skinhil.transports.faults import FaultParams
 
 log = logging.getLogger(__name__)
@@ -53,7 +54,7 @@ class BenchLink:
 
     link_args: tuple[str, ...] = ()
     model: Path | None = None
-    baud: int = 921600
+    baud: int = DEFAULT_BAUD
     faults: FaultParams | None = None
 
 

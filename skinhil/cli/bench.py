@@ -15,6 +15,7 @@ from skinhil.cli.transport_args import (
     add_transport_args,
     check_transport_args,
     describe_transport,
+    serial_baud,
     transport_argv,
 )
 from skinhil.errors import ConfigError
@@ -85,7 +86,7 @@ def _model(args: argparse.Namespace, sizes: tuple[str, ...]) -> Path:
         from skinhil.cli.demo import cached_model
         from skinhil.cli.options import DECODE_SNR_DB
 
-        path = cached_model(DECODE_SNR_DB, args.quiet, args.baud, 1)
+        path = cached_model(DECODE_SNR_DB, args.quiet, serial_baud(args), 1)
     else:
         path = args.model
     for size in sizes:
@@ -121,8 +122,8 @@ def run(args: argparse.Namespace) -> int:
         link_text = describe_transport(args)
     else:
         model = _model(args, tuple(str(v) for v in campaign.parameters.get("size", ("6x6",))))
-        link = BenchLink(model=model, baud=args.baud, faults=args.faults)
-        link_text = (f"bench pty pair @ {args.baud} baud, reference receiver (listen "
+        link = BenchLink(model=model, baud=serial_baud(args), faults=args.faults)
+        link_text = (f"bench pty pair @ {serial_baud(args)} baud, reference receiver (listen "
                      f"--answer, model {model})"
                      + ("" if args.faults is None else
                         f", faults {dataclasses.asdict(args.faults)}"))

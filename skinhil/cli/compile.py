@@ -36,7 +36,7 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"the kernel cache '{where}' cannot be written — set NUMBA_CACHE_DIR "
                           "to a writable folder (without a cache every run compiles again)")
     t0 = time.monotonic()
-    board = Board(BoardConfig(), lambda: SerialTransport("loop://", 921600), None,
+    board = Board(BoardConfig(), lambda: SerialTransport("loop://"), None,
                   lambda _: None)
     board.run(0.01)  # the board's warm-up runs the model and the serial link once
     events = make_events(np.arange(8, dtype=np.int64) * 100, np.arange(8))

@@ -45,7 +45,7 @@ from skinhil.receiver import DecisionAnswerer, Receiver
 from skinhil.receiver.model_file import load_window_decoder
 from skinhil.receiver.session import run_against_board, serve_command
 from skinhil.receiver.training import train_decoder
-from skinhil.transports import PtyMasterTransport
+from skinhil.transports import DEFAULT_BAUD, PtyMasterTransport
 
 DEFAULT_LIFTS = 10
 """Lifts of ``--task grasp`` (about 1.2 s each)."""
@@ -89,8 +89,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="board noise and schedule seed, 0..2^63-1 (default: 1)")
     p.add_argument("--model", type=Path, metavar="NPZ",
                    help="decoder file (default: train on first use and cache)")
-    p.add_argument("--baud", type=baud_value, default=921600,
-                   help="emulated serial baud rate (default: 921600)")
+    p.add_argument("--baud", type=baud_value, default=DEFAULT_BAUD,
+                   help=f"emulated serial baud rate (default: {DEFAULT_BAUD})")
     p.add_argument("--quiet", action="store_true", help="only the final figures")
     p.add_argument("--task", choices=("directions", "grasp"), default="directions",
                    help="directions: decide the 9 direction conditions (default); grasp: the "

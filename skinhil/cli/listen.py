@@ -28,7 +28,12 @@ from skinhil.cli.lab_outputs import (
 from skinhil.cli.nwb_options import add_nwb_args, nwb_metadata
 from skinhil.cli.options import add_size_option
 from skinhil.cli.ready_option import add_ready_option, announce_ready, check_ready
-from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
+from skinhil.cli.transport_args import (
+    add_transport_args,
+    describe_transport,
+    open_transport,
+    selected_link,
+)
 from skinhil.cli.values import MAX_DURATION_S, integer, real, udp_allow_value
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import build_mesh, format_size, spring_count
@@ -292,7 +297,7 @@ def say_ready(args: argparse.Namespace, boards: list[int] | None) -> None:
 
 def run_bus(args: argparse.Namespace, bus: BusReceiver, names: dict[int, str]) -> int:
     """``listen`` over several boards: per-board decisions and summaries, a combined view."""
-    say_ready(args, list(args.board_ids) if args.can else None)
+    say_ready(args, list(args.board_ids) if bus.transport.carries_frames else None)
     t0 = time.monotonic()
     listen_until_stopped(args, bus, lambda: {
         "boards": {str(k): r.as_dict() for k, r in bus.link_reports().items()},
@@ -312,14 +317,16 @@ def run_bus(args: argparse.Namespace, bus: BusReceiver, names: dict[int, str]) -
 
 def run(args: argparse.Namespace) -> int:
     check_ready(args)
-    if args.udp is None and (args.udp_allow is not None or args.udp_max_sources is not None):
+    link = selected_link(args)
+    if not link.whole_datagrams and (args.udp_allow is not None
+                                     or args.udp_max_sources is not None):
         raise ConfigError("--udp-allow and --udp-max-sources choose the senders of a UDP "
                           "link: use them with --udp")
     if args.udp_max_sources is None:
         args.udp_max_sources = MAX_UDP_SOURCES
-    several = len(args.board_ids) > 1 or args.udp is not None
-    if several and args.port is not None:
-        raise ConfigError("a serial port carries one board: give one --board-id")
+    several = len(args.board_ids) > 1 or link.whole_datagrams
+    if several and not (link.carries_frames or link.whole_datagrams):
+        raise ConfigError(f"a {link.kind} link carries one board: give one --board-id")
     if several and args.record is not None:
         raise ConfigError("--record saves one board's session: use it with one board on "
                           "--port or --can")
@@ -344,7 +351,8 @@ def run(args: argparse.Namespace) -> int:
         lab = LabOutputs(args, names, args.size, "listen",
                          provenance(describe_transport(args), args.model))
         try:
-            bus = BusReceiver(transport, decoder, args.board_ids if args.can else (),
+            bus = BusReceiver(transport, decoder,
+                              args.board_ids if transport.carries_frames else (),
                               max_sources=args.udp_max_sources, allow=args.udp_allow,
                               listeners=lambda key, rx: [LivePrinter(rx, args.json, names, key),
                                                          *lab.attach(key, rx)])

@@ -30,7 +30,13 @@ from skinhil.cli.options import (
     read_scenario,
 )
 from skinhil.cli.ready_option import add_ready_option, announce_ready, check_ready
-from skinhil.cli.transport_args import add_transport_args, describe_transport, open_transport
+from skinhil.cli.transport_args import (
+    add_transport_args,
+    describe_transport,
+    open_transport,
+    selected_can_fd,
+    selected_link,
+)
 from skinhil.cli.values import MAX_DURATION_S, MAX_REST_S, cores_value, integer, real
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import format_size, spring_count
@@ -240,7 +246,7 @@ def _drain_notice(board: Board) -> str | None:
     if wait_s <= DRAIN_NOTICE_S:
         return None
     return (f"stopping: sending what is queued ({len(board.fifo)} events, "
-            f"{link.queued_units()} {'frames' if link.is_can else 'bytes'}) takes up to "
+            f"{link.queued_units()} {link.transport.unit}) takes up to "
             f"{wait_s:.0f} s on this link; Ctrl-C again stops at once")
 
 
@@ -248,7 +254,7 @@ def _undrained(board: Board) -> str:
     """What a second Ctrl-C leaves unsent."""
     link = board.link
     queued = 0 if link is None else link.queued_units()
-    unit = "frames" if link is not None and link.is_can else "bytes"
+    unit = "bytes" if link is None else link.transport.unit
     return (f"stopped at once: {len(board.fifo)} events in the FIFO and {queued} {unit} "
             "queued for the link were not sent")
 
@@ -303,15 +309,10 @@ def speed_value(text: str) -> float:
     return value
 
 
-def _link_kind(args: argparse.Namespace) -> str:
-    """"serial", "udp" or "can": the kind of link the options select."""
-    return "can" if args.can is not None else "udp" if args.udp is not None else "serial"
-
-
-def _replay_text(s: ReplaySummary, path: Path, link: str) -> str:
+def _replay_text(s: ReplaySummary, path: Path, unit: str) -> str:
     return (f"replayed {s.units} units of {path} ({s.recorded_s:.3f} s recorded) in "
             f"{s.wall_s:.3f} s at speed {s.speed:g}{'' if s.complete else ' (stopped early)'}"
-            f": {s.wire_units} {'frames' if link == 'can' else 'bytes'} sent, "
+            f": {s.wire_units} {unit} sent, "
             f"{s.events} events, {s.markers} markers; pace error p50 "
             f"{s.lateness_ms['p50']:.3f} ms p99 {s.lateness_ms['p99']:.3f} ms max "
             f"{s.lateness_ms['max']:.3f} ms; {s.commands} host commands (DECISIONs scored, "
@@ -348,12 +349,13 @@ def run_replay(args: argparse.Namespace) -> int:
                           "emulated board; --replay plays a recording as it was (its board, "
                           "size, SNR and length are the recording's) — drop "
                           f"{'it' if len(given) == 1 else 'them'}")
-    check_link_fits(args.replay, _link_kind(args))
+    link = selected_link(args)
+    check_link_fits(args.replay, link.kind)
     recording = open_recording(args.replay)
-    if recording.link == "can" and recording.fd != args.fd:
+    if link.carries_frames and recording.fd != selected_can_fd(args):
         raise ConfigError(f"'{args.replay}' holds {'CAN FD' if recording.fd else 'classic CAN'}"
-                          f" frames: {'add' if recording.fd else 'drop'} --fd to replay them "
-                          "in the layout they were recorded in")
+                          f" frames: {'add' if recording.fd else 'drop'} --fd (fd=1 in --link) "
+                          "to replay them in the layout they were recorded in")
     lasts_s = recording.duration_s / args.speed
     if lasts_s > MAX_DURATION_S:
         raise ConfigError(f"replaying '{args.replay}' ({recording.duration_s:.3g} s recorded) "
@@ -389,7 +391,7 @@ def run_replay(args: argparse.Namespace) -> int:
         print(json.dumps({"type": "replay", **summary.as_dict(),
                           "scoreboard": scoreboard.summary()}), flush=True)
     elif not args.quiet:
-        print(_replay_text(summary, args.replay, recording.link), flush=True)
+        print(_replay_text(summary, args.replay, transport.unit), flush=True)
         print(scoreboard_text(scoreboard.summary()), flush=True)
     return 0
 
@@ -436,8 +438,8 @@ def run(args: argparse.Namespace) -> int:
     if args.record is None:
         return run_board(args, open_link=lambda: open_transport(args))
     n_channels = spring_count(args.size)
-    with link_recorder(args.record, _link_kind(args), wire_version(n_channels),
-                       int(round(args.dt_s * 1e6)), fd=args.fd) as recorder:
+    with link_recorder(args.record, selected_link(args).kind, wire_version(n_channels),
+                       int(round(args.dt_s * 1e6)), fd=selected_can_fd(args)) as recorder:
         boards: list[Board] = []
 
         def board_time_us() -> int:

@@ -24,9 +24,7 @@ SEND_TIMEOUT_S = 0.5
 
 def host_encoder(transport: Any, board_id: int) -> Any:
     """The protocols encoder a host uses to send COMMAND units on ``transport``'s link."""
-    if transport.kind == "can":
-        return protocols.CanEncoder(board_id=board_id, fd=bool(getattr(transport, "fd", False)))
-    return protocols.SerialEncoder()
+    return transport.codec_pair(board_id=board_id)[0]
 
 
 class CommandSender(ReceiverListener):

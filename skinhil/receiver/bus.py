@@ -61,11 +61,11 @@ class BusReceiver:
                  listeners: Callable[[BoardKey, Receiver], Iterable[ReceiverListener]]
                  | None = None, max_sources: int = MAX_UDP_SOURCES,
                  allow: Iterable[str] | None = None) -> None:
-        if transport.kind not in ("can", "udp"):
+        if not (transport.carries_frames or transport.whole_datagrams):
             raise ConfigError(f"a {transport.kind} link carries one board: use Receiver, or "
                               "several boards on a CAN bus or a UDP port")
         ids = sorted({int(b) for b in board_ids})
-        if transport.kind == "can" and not ids:
+        if transport.carries_frames and not ids:
             raise ConfigError("give the board ids to decode on the CAN bus, e.g. 0, 5, 9")
         self.transport = transport
         self.decoder = decoder
@@ -143,7 +143,7 @@ class BusReceiver:
 
     def receive(self, timeout: float | None) -> dict[BoardKey, Any]:
         """One reception from the link (``timeout`` s, uniform semantics), split by board."""
-        if self.transport.kind == "can":
+        if self.transport.carries_frames:
             return self.split_frames(self.transport.recv(timeout))
         return self.split_datagrams(self.transport.recv_from(timeout))  # type: ignore[attr-defined]
 

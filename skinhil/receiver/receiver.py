@@ -142,10 +142,8 @@ def dispatch_record(record: Any, listeners: Iterable[ReceiverListener]) -> None:
 
 
 def make_codec(transport: Transport[Any], board_id: int = 0) -> Any:
-    """The protocols decoder for ``transport``'s kind of link."""
-    if transport.kind == "can":
-        return protocols.CanDecoder(board_id=board_id, fd=bool(getattr(transport, "fd", False)))
-    return protocols.SerialDecoder()
+    """The protocols decoder that fits ``transport``'s link."""
+    return transport.codec_pair(board_id=board_id)[1]
 
 
 def scored_classes(decoder: WindowDecoder) -> tuple[int, ...]:

@@ -91,25 +91,19 @@ class Replayer:
             raise ConfigError(f"'{recording.path}' was recorded on a {recording.link} link, "
                               f"this one is {transport.kind}: replay it onto a "
                               f"{recording.link} link")
-        if recording.fd and not getattr(transport, "fd", False):
-            raise ConfigError(f"'{recording.path}' holds CAN FD frames: add --fd")
+        if recording.fd and not transport.can_fd:
+            raise ConfigError(f"'{recording.path}' holds CAN FD frames: replay them onto a "
+                              "CAN FD link (--fd, or fd=1 in --link)")
         self.recording = recording
         self.transport = transport
         self.scoreboard = scoreboard
         """Scores the DECISIONs received against the markers played (None: NACK them)."""
         self.speed = float(speed)
-        self.is_can = recording.link == "can"
-        if self.is_can:
-            args: dict[str, Any] = {"board_id": recording.board_id, "fd": recording.fd}
-            self._stream: Any = CanReplayStream()
-            self._commands: Any = protocols.CanDecoder(**args)
-            self._played: Any = protocols.CanDecoder(**args)
-            self._answers: Any = protocols.CanEncoder(**args)
-        else:
-            self._stream = SerialReplayStream()
-            self._commands = protocols.SerialDecoder()
-            self._played = protocols.SerialDecoder()
-            self._answers = protocols.SerialEncoder()
+        self.frames = transport.carries_frames
+        """True when the link carries frames (played together), False for bytes."""
+        self._stream: Any = CanReplayStream() if self.frames else SerialReplayStream()
+        self._answers, self._commands = self._codecs()
+        self._played: Any = self._codecs()[1]
         self.commands = 0
         self.markers = 0
         self.board_time_us = 0
@@ -146,19 +140,17 @@ class Replayer:
         """Run every encode, decode and renumbering path once on throwaway codecs, off the
         clock (a kernel compiled inside the loop would stall the replay for up to a
         second)."""
-        wide: dict[str, Any] = ({"n_channels": protocols.N_CHANNELS + 1}
-                                if self.recording.wire_version == 4 else {})
-        if self.is_can:
-            args: dict[str, Any] = {"board_id": self.recording.board_id,
-                                    "fd": self.recording.fd}
-            payloads = exercise_codecs(protocols.CanEncoder(**args, **wide),
-                                       protocols.CanDecoder(**args), DEFAULT_STEP_US,
-                                       _IDLE_STATUS)
+        wide = protocols.N_CHANNELS + 1 if self.recording.wire_version == 4 else None
+        payloads = exercise_codecs(*self._codecs(wide), DEFAULT_STEP_US, _IDLE_STATUS)
+        if self.frames:
             can_frame_with_seq(payloads[0][0], 1)
         else:
-            payloads = exercise_codecs(protocols.SerialEncoder(**wide), protocols.SerialDecoder(),
-                                       DEFAULT_STEP_US, _IDLE_STATUS)
             serial_packet_with_seq(payloads[0], 1)
+
+    def _codecs(self, n_channels: int | None = None) -> tuple[Any, Any]:
+        """A fresh (encoder, decoder) of the link's codecs in the recording's layout."""
+        return self.transport.codec_pair(board_id=self.recording.board_id,
+                                         n_channels=n_channels, fd=self.recording.fd)
 
     # -- the loop ------------------------------------------------------------------------
     def _poll_commands(self) -> None:
@@ -168,7 +160,7 @@ class Replayer:
         for record in self._commands.feed(data).records:
             if isinstance(record, protocols.Command | protocols.Decision | protocols.Answer):
                 answer = self._answers.ack(self.handle(record))
-                for unit in (answer if self.is_can else [answer]):
+                for unit in (answer if self.frames else [answer]):
                     self._stream.answer(unit)
 
     def _wait(self, due: float, stop: threading.Event) -> None:
@@ -191,7 +183,7 @@ class Replayer:
     def _play(self, sends: list[Any], stop: threading.Event) -> None:
         """Send ``sends`` (a CAN stream's frames together; a byte stream's payloads one by
         one: each answer apart from the recorded datagrams) and decode what was played."""
-        for payload in ([sends] if self.is_can else sends):
+        for payload in ([sends] if self.frames else sends):
             if not payload:
                 continue
             self._send(payload, stop)

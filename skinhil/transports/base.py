@@ -20,12 +20,20 @@ import abc
 import os
 import select
 import time
-from typing import Generic, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, Literal, TypeVar
 
 from skinhil.errors import TransportError
 
+if TYPE_CHECKING:
+    from skinhil.transports.url import LinkUrl
+
 P = TypeVar("P")
 
+Role = Literal["board", "host"]
+"""Which end opens a link: the board sends to the address, the host listens on it."""
+
+DEFAULT_BAUD = 921600
+"""Default serial baud rate (bits/s): every serial link and option defaults to it."""
 MIN_BAUD = 50
 """Smallest baud rate accepted (bits/s)."""
 MAX_BAUD = 20_000_000
@@ -38,7 +46,51 @@ class Transport(abc.ABC, Generic[P]):
     """A link that moves payloads of type ``P`` (``bytes`` or ``list[CanFrame]``)."""
 
     kind: str = "abstract"
-    """"serial" or "can": what payloads it carries (bytes or ``list[CanFrame]``)."""
+    """The wire family a recording of this link names: "serial", "can" or "udp"."""
+    scheme: str = ""
+    """The URL scheme this class opens (:mod:`skinhil.transports.registry`)."""
+    carries_frames: bool = False
+    """True: payloads are ``list[protocols.CanFrame]``; False: ``bytes``."""
+    can_fd: bool = False
+    """True on a CAN FD link (64-byte frames)."""
+    whole_datagrams: bool = False
+    """True when every send must hold whole packets (a datagram link, SPEC.md §10)."""
+
+    unit: str = "bytes"
+    """The name of this link's unit of payload: "bytes", or "frames" on a frames link."""
+
+    @property
+    def url(self) -> str:
+        """The URL that opens this link again (:func:`skinhil.transports.open_link`)."""
+        return self.name
+
+    @classmethod
+    def url_can_fd(cls, url: LinkUrl) -> bool:
+        """Whether the link ``url`` names is CAN FD, known before it is opened."""
+        return False
+
+    @classmethod
+    def from_url(cls, url: LinkUrl, role: Role) -> Transport[Any]:
+        """Open the link ``url`` names, for ``role`` ("board" sends, "host" listens)."""
+        raise TransportError(f"the {cls.__name__} link does not open URLs: give a link of "
+                             "one of the schemes skinhil.transports.link_schemes() lists")
+
+    def codec_pair(self, board_id: int = 0, step_us: int = 100,
+                   n_channels: int | None = None, fd: bool | None = None) -> tuple[Any, Any]:
+        """A fresh (encoder, decoder) of the protocols codecs that fit this link: the CAN
+        layout of board ``board_id`` (CAN FD when ``fd``, default :attr:`can_fd`) on a
+        frames link, the serial framing on a bytes link; ``step_us`` is the timestamp
+        resolution (µs), ``n_channels`` the board's channel count (default: the paper's)."""
+        import protocols
+
+        channels = protocols.N_CHANNELS if n_channels is None else n_channels
+        if self.carries_frames:
+            layout = self.can_fd if fd is None else fd
+            return (protocols.CanEncoder(board_id=board_id, fd=layout, step_us=step_us,
+                                         n_channels=channels),
+                    protocols.CanDecoder(board_id=board_id, fd=layout))
+        return (protocols.SerialEncoder(step_us=step_us, n_channels=channels),
+                protocols.SerialDecoder())
 
     @property
     @abc.abstractmethod
@@ -83,15 +135,23 @@ class WrappedTransport(Transport[P]):
     def __init__(self, inner: Transport[P]) -> None:
         self.inner = inner
         self.kind = inner.kind
+        self.scheme = inner.scheme
+        self.carries_frames = inner.carries_frames
+        self.can_fd = inner.can_fd
+        self.whole_datagrams = inner.whole_datagrams
+        self.unit = inner.unit
 
     @property
     def name(self) -> str:
         return self.inner.name
 
     @property
-    def fd(self) -> bool:
-        """CAN FD on the inner link (False for a link that is not CAN)."""
-        return bool(getattr(self.inner, "fd", False))
+    def url(self) -> str:
+        return self.inner.url
+
+    def codec_pair(self, board_id: int = 0, step_us: int = 100,
+                   n_channels: int | None = None, fd: bool | None = None) -> tuple[Any, Any]:
+        return self.inner.codec_pair(board_id, step_us, n_channels, fd)
 
     def send(self, payload: P, timeout: float | None = None) -> int:
         return self.inner.send(payload, timeout)
@@ -125,7 +185,7 @@ def check_baud(baud: int) -> int:
     """``baud`` if it is a usable baud rate (bits/s), else :class:`TransportError`."""
     if not isinstance(baud, int) or isinstance(baud, bool) or not MIN_BAUD <= baud <= MAX_BAUD:
         raise TransportError(f"invalid baud rate {baud!r}: give an integer from {MIN_BAUD} to "
-                             f"{MAX_BAUD} bits/s, e.g. --baud 921600")
+                             f"{MAX_BAUD} bits/s, e.g. --baud {DEFAULT_BAUD}")
     return baud
 
 

@@ -1,4 +1,8 @@
-"""CAN and CAN FD links through python-can's ``can.Bus``: socketcan, virtual, vendor adapters."""
+"""CAN and CAN FD links through python-can's ``can.Bus``: socketcan, virtual, vendor adapters.
+
+As a link URL: ``can:vcan0?interface=socketcan&fd=1&bitrate=1000000&data_bitrate=2000000``
+(docs/links.md).
+"""
 
 from __future__ import annotations
 
@@ -11,13 +15,18 @@ import time
 from typing import Any
 
 from skinhil.errors import TransportError
-from skinhil.transports.base import Deadline, Transport, check_bitrate
+from skinhil.transports.base import Deadline, Role, Transport, check_bitrate
 from skinhil.transports.socket_buffer import request_receive_buffer
+from skinhil.transports.url import LinkUrl, format_url
 
 log = logging.getLogger(__name__)
 
 CAN_RCVBUF_BYTES = 8 * 1024 * 1024
 """Socket receive buffer requested for a SocketCAN bus (the kernel may cap it)."""
+DEFAULT_CAN_BITRATE = 1_000_000
+"""Default CAN (arbitration phase) bitrate (bits/s)."""
+DEFAULT_CAN_INTERFACE = "socketcan"
+"""python-can interface used when none is given."""
 CAN_RX_QUEUE_FRAMES = 1_000_000
 """Frames the CAN reader thread holds before it counts overflows."""
 
@@ -33,14 +42,18 @@ class CanTransport(Transport[list[Any]]):
     """
 
     kind = "can"
+    scheme = "can"
+    carries_frames = True
+    unit = "frames"
 
-    def __init__(self, channel: str, interface: str = "socketcan", fd: bool = False,
-                 bitrate: int = 1_000_000, data_bitrate: int | None = None) -> None:
+    def __init__(self, channel: str, interface: str = DEFAULT_CAN_INTERFACE, fd: bool = False,
+                 bitrate: int = DEFAULT_CAN_BITRATE, data_bitrate: int | None = None) -> None:
         import can
 
         self.channel = channel
         self.interface = interface
         self.fd = bool(fd)
+        self.can_fd = self.fd
         self.bitrate = check_bitrate(bitrate)
         self.data_bitrate = None if data_bitrate is None else check_bitrate(
             data_bitrate, "data bitrate")
@@ -98,9 +111,29 @@ class CanTransport(Transport[list[Any]]):
                                         daemon=True)
         self._reader.start()
 
+    @classmethod
+    def url_can_fd(cls, url: LinkUrl) -> bool:
+        return url.bool_option("fd")
+
+    @classmethod
+    def from_url(cls, url: LinkUrl, role: Role) -> CanTransport:
+        """``can:CHANNEL?interface=NAME&fd=1&bitrate=N&data_bitrate=N``; either role."""
+        url.check_options(("interface", "fd", "bitrate", "data_bitrate"))
+        bitrate = url.int_option("bitrate", DEFAULT_CAN_BITRATE)
+        return cls(url.require_target("can:vcan0?fd=1"),
+                   url.options.get("interface", DEFAULT_CAN_INTERFACE),
+                   fd=cls.url_can_fd(url),
+                   bitrate=DEFAULT_CAN_BITRATE if bitrate is None else bitrate,
+                   data_bitrate=url.int_option("data_bitrate", None))
+
     @property
     def name(self) -> str:
         return f"{self.interface}:{self.channel}"
+
+    @property
+    def url(self) -> str:
+        return format_url("can", self.channel, interface=self.interface, fd=self.fd,
+                          bitrate=self.bitrate, data_bitrate=self.data_bitrate)
 
     def _read_loop(self) -> None:
         import can

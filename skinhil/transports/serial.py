@@ -1,6 +1,7 @@
 """Serial links through pyserial: a device path (``/dev/ttyUSB0``, a pty) or a URL.
 
-URLs are pyserial's (``loop://``, ``socket://host:port``, ``rfc2217://``, ...).
+URLs are pyserial's (``loop://``, ``socket://host:port``, ``rfc2217://``, ...). As a link
+URL: ``serial:/dev/ttyUSB0?baud=921600``, ``serial:loop://`` (docs/links.md).
 """
 
 from __future__ import annotations
@@ -12,7 +13,8 @@ import queue
 import sys
 
 from skinhil.errors import TransportError
-from skinhil.transports.base import Deadline, Transport, check_baud, write_fd
+from skinhil.transports.base import DEFAULT_BAUD, Deadline, Role, Transport, check_baud, write_fd
+from skinhil.transports.url import LinkUrl, format_url
 
 log = logging.getLogger(__name__)
 
@@ -79,8 +81,9 @@ class SerialTransport(Transport[bytes]):
     """
 
     kind = "serial"
+    scheme = "serial"
 
-    def __init__(self, port: str, baud: int = 921600) -> None:
+    def __init__(self, port: str, baud: int = DEFAULT_BAUD) -> None:
         import serial  # pyserial
 
         self.baud = check_baud(baud)
@@ -106,9 +109,21 @@ class SerialTransport(Transport[bytes]):
         except OSError as exc:
             raise TransportError(_serial_open_message(port, exc)) from None
 
+    @classmethod
+    def from_url(cls, url: LinkUrl, role: Role) -> SerialTransport:
+        """``serial:PORT?baud=N``: PORT a device path or a pyserial URL; either role."""
+        url.check_options(("baud",))
+        baud = url.int_option("baud", DEFAULT_BAUD)
+        return cls(url.require_target("serial:/dev/ttyUSB0?baud=921600 or serial:loop://"),
+                   DEFAULT_BAUD if baud is None else baud)
+
     @property
     def name(self) -> str:
         return self._port_name
+
+    @property
+    def url(self) -> str:
+        return format_url("serial", self._port_name, baud=self.baud)
 
     def _set_timeout(self, timeout: float | None) -> None:
         if timeout != self._timeout:

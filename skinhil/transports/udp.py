@@ -10,6 +10,9 @@ to the source heard last).
 There is no bit timing to emulate: ``bitrate`` (bits/s, default 100 Mbit/s) only sets the
 wire budget a sender paces itself to, counting payload bytes (8 bits each; IP and UDP headers
 are not counted).
+
+As a link URL: ``udp:HOST:PORT?bitrate=N`` (the board sends to it, the host listens on it;
+a host may give ``udp:PORT``, listening on :data:`UDP_LISTEN_HOST`), docs/links.md.
 """
 
 from __future__ import annotations
@@ -20,13 +23,16 @@ import select
 import socket
 
 from skinhil.errors import TransportError
-from skinhil.transports.base import Deadline, Transport
+from skinhil.transports.base import Deadline, Role, Transport
 from skinhil.transports.socket_buffer import request_receive_buffer
+from skinhil.transports.url import LinkUrl, format_url
 
 log = logging.getLogger(__name__)
 
 DEFAULT_UDP_BITRATE = 100_000_000
 """Default wire budget of a UDP link (bits/s of payload): Fast Ethernet."""
+UDP_LISTEN_HOST = "127.0.0.1"
+"""Address a host listens on when a UDP URL gives only a port (0.0.0.0: every interface)."""
 MAX_UDP_BITRATE = 10_000_000_000
 """Largest UDP wire budget accepted (bits/s)."""
 MAX_DATAGRAM_BYTES = 1472
@@ -85,6 +91,8 @@ class UdpTransport(Transport[bytes]):
     """
 
     kind = "udp"
+    scheme = "udp"
+    whole_datagrams = True
 
     def __init__(self, host: str, port: int, listen: bool = False,
                  bitrate: int = DEFAULT_UDP_BITRATE,
@@ -98,6 +106,7 @@ class UdpTransport(Transport[bytes]):
             raise TransportError(f"UDP datagram limit {max_datagram} bytes is outside 64..65507")
         self.bitrate = bitrate
         self.listen = listen
+        self.host = host
         self.max_datagram = max_datagram
         self.refused = 0
         """Datagrams the network refused (nobody listening at the destination yet): lost."""
@@ -136,9 +145,27 @@ class UdpTransport(Transport[bytes]):
         """The local port (the bound one when listening)."""
         self._name = f"udp:{host}:{self.port if listen else port}"
 
+    @classmethod
+    def from_url(cls, url: LinkUrl, role: Role) -> UdpTransport:
+        """``udp:HOST:PORT?bitrate=N``: role "board" sends to it, "host" listens on it
+        (``udp:PORT`` listens on :data:`UDP_LISTEN_HOST`)."""
+        url.check_options(("bitrate",))
+        listen = role == "host"
+        host, port = parse_address(url.require_target("udp:127.0.0.1:9000"),
+                                   UDP_LISTEN_HOST if listen else None)
+        bitrate = url.int_option("bitrate", DEFAULT_UDP_BITRATE)
+        return cls(host, port, listen=listen,
+                   bitrate=DEFAULT_UDP_BITRATE if bitrate is None else bitrate)
+
     @property
     def name(self) -> str:
         return self._name
+
+    @property
+    def url(self) -> str:
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        port = self.port if self.listen else (self.peer[1] if self.peer else self.port)
+        return format_url("udp", f"{host}:{port}", bitrate=self.bitrate)
 
     def _check_open(self) -> None:
         if self._closed:

@@ -38,19 +38,24 @@ class GoldenLink(Transport[Any]):
     """An in-memory link of unlimited rate: keeps every unit the board sends; hands the board
     the host's units scheduled for the current tick (:attr:`tick`, set by the player)."""
 
-    def __init__(self, kind: str, script: dict[int, list[Any]], fd: bool = False) -> None:
-        self.kind = kind
-        self.fd = fd
-        self.script = script
+    scheme = "golden"
+
+    def __init__(self, frames: bool, can_fd: bool = False) -> None:
+        self.kind = "can" if frames else "serial"
+        self.carries_frames = frames
+        self.unit = "frames" if frames else "bytes"
+        self.can_fd = can_fd
+        self.script: dict[int, list[Any]] = {}
+        """The host's units by the tick they arrive at."""
         self.tick = -1
         self.units: list[Any] = []
 
     @property
     def name(self) -> str:
-        return f"golden-{self.kind}"
+        return f"golden-{self.unit}"
 
     def send(self, payload: Any, timeout: float | None = None) -> int:
-        if self.kind == "can":
+        if self.carries_frames:
             self.units.extend(payload)
         else:
             self.units.append(bytes(payload))
@@ -61,8 +66,8 @@ class GoldenLink(Transport[Any]):
         out: list[Any] = []
         for k in sorted(due):
             for unit in self.script.pop(k):
-                out.extend(unit) if self.kind == "can" else out.append(unit)
-        if self.kind == "can":
+                out.extend(unit) if self.carries_frames else out.append(unit)
+        if self.carries_frames:
             return out
         return b"".join(out)
 
@@ -70,7 +75,7 @@ class GoldenLink(Transport[Any]):
         return len(payload) * UNIT_WIRE_S
 
     def empty(self) -> Any:
-        return [] if self.kind == "can" else b""
+        return [] if self.carries_frames else b""
 
     def shutdown(self) -> None:
         pass
@@ -79,7 +84,7 @@ class GoldenLink(Transport[Any]):
 def capture_bytes(link: GoldenLink) -> bytes:
     """The units a board sent, as one byte string: a serial stream as it is; CAN frames one
     after another as id (u16 LE), FD flag (u8), length (u8), data."""
-    if link.kind != "can":
+    if not link.carries_frames:
         return b"".join(link.units)
     out = bytearray()
     for f in link.units:
@@ -93,7 +98,7 @@ class Session:
     """One golden session: how the board is made, what the host sends when, how long."""
 
     name: str
-    kind: str
+    frames: bool
     ticks: int
     config: BoardConfig
     commands: dict[int, list[Any]]
@@ -101,11 +106,11 @@ class Session:
     board_args: Callable[[], dict[str, Any]] = field(default=lambda: {})
 
 
-def _host_script(kind: str, fd: bool, board_id: int,
+def _host_script(link: GoldenLink, board_id: int,
                  commands: dict[int, list[Any]]) -> dict[int, list[Any]]:
-    """The host's commands encoded as a host sends them (its own sequence numbers)."""
-    enc: Any = (protocols.CanEncoder(board_id=board_id, fd=fd) if kind == "can"
-                else protocols.SerialEncoder())
+    """The host's commands encoded as a host sends them on ``link`` (its own sequence
+    numbers)."""
+    enc = link.codec_pair(board_id=board_id)[0]
     return {k: [enc.command(c) for c in cmds] for k, cmds in commands.items()}
 
 
@@ -168,18 +173,17 @@ def sessions() -> list[Session]:
         return {"scene": lift_scene(params, 2), "grasp": params}
 
     return [
-        Session("serial", "serial", 1500, serial, _common_commands()),
-        Session("can_fd", "can", 1500, can, _common_commands(), fd=True),
-        Session("contact_answers", "serial", 4200, contact, _answers(), board_args=scenario),
-        Session("grasp_grips", "can", 3000, grasp, _grips(), fd=False, board_args=held),
+        Session("serial", False, 1500, serial, _common_commands()),
+        Session("can_fd", True, 1500, can, _common_commands(), fd=True),
+        Session("contact_answers", False, 4200, contact, _answers(), board_args=scenario),
+        Session("grasp_grips", True, 3000, grasp, _grips(), fd=False, board_args=held),
     ]
 
 
 def play(session: Session) -> tuple[bytes, dict[str, Any]]:
     """Play ``session``: the capture (:func:`capture_bytes`) and the board's scores."""
-    script = _host_script(session.kind, session.fd, session.config.board_id,
-                          session.commands)
-    link = GoldenLink(session.kind, script, fd=session.fd)
+    link = GoldenLink(session.frames, can_fd=session.fd)
+    link.script = _host_script(link, session.config.board_id, session.commands)
     board = Board(session.config, lambda: link, **session.board_args())
     board.warm_up()
     assert board.link is not None
