@@ -72,11 +72,7 @@ from skinhil.model.geometry import format_size, parse_size  # noqa: E402
 from skinhil.model.mechanics.geometric import GeometricMechanics, rk4_kernel  # noqa: E402
 from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, leapfrog_kernel  # noqa: E402
 from skinhil.model.pipeline import SensorPipeline  # noqa: E402
-from skinhil.model.sensor import (  # noqa: E402
-    SkinSensor,
-    _geometric_sensor_kernel,
-    _leapfrog_sensor_kernel,
-)
+from skinhil.model.sensor import SkinSensor  # noqa: E402
 from skinhil.model.skin import SkinModel, SkinParams  # noqa: E402
 from skinhil.model.stimuli import Schedule  # noqa: E402
 from skinhil.model.strain import max_strain  # noqa: E402
@@ -181,12 +177,12 @@ def measure(size: tuple[int, int], threads: int, snr_db: float, seconds: float,
     springs = stepper.advance(forces)
     if isinstance(stepper, LeapfrogMechanics):  # its kernel alone, as the tick runs it
         slotted, out = stepper.by_slot(forces), np.empty_like(springs)
-        mech_us = _best_per_tick(lambda: leapfrog_kernel(slotted, out, DT_S, stepper.substeps,
-                                                         *stepper.operands),
+        mech_us = _best_per_tick(lambda: leapfrog_kernel(slotted, out, DT_S,
+                                                         stepper.kernel_tuple),
                                  seconds / 4, repeats)
     elif isinstance(stepper, GeometricMechanics):  # likewise
         slotted, out = stepper.by_slot(forces), np.empty_like(springs)
-        mech_us = _best_per_tick(lambda: rk4_kernel(slotted, out, DT_S, *stepper.operands),
+        mech_us = _best_per_tick(lambda: rk4_kernel(slotted, out, DT_S, stepper.kernel_tuple),
                                  seconds / 4, repeats)
     else:
         mech_us = _best_per_tick(lambda: stepper.advance(forces), seconds / 4, repeats)
@@ -196,15 +192,8 @@ def measure(size: tuple[int, int], threads: int, snr_db: float, seconds: float,
     fused = sensor.stepper
     if threads == 1 and isinstance(fused, LeapfrogMechanics | GeometricMechanics):
         slotted = fused.by_slot(forces)
-        out, raster = np.empty_like(springs), np.empty(springs.shape, dtype=np.bool_)
-        if isinstance(fused, LeapfrogMechanics):
-            both_us = _best_per_tick(lambda: _leapfrog_sensor_kernel(
-                slotted, out, raster, DT_S, fused.substeps, fused.operands,
-                neurons.kernel_operands()), seconds / 4, repeats)
-        else:
-            both_us = _best_per_tick(lambda: _geometric_sensor_kernel(
-                slotted, out, raster, DT_S, fused.operands, neurons.kernel_operands()),
-                seconds / 4, repeats)
+        both_us = _best_per_tick(lambda: sensor.run_fused(len(slotted), forces=slotted),
+                                 seconds / 4, repeats)
     first = sensor.step_index
     events = sensor.events(spikes, first)
     events_us = _best_per_tick(lambda: sensor.events(spikes, first), seconds / 8, repeats)

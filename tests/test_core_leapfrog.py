@@ -65,10 +65,10 @@ def _error_vs_exact(dt: float, tension_n: float) -> float:
 def test_only_free_masses_are_stepped_and_fixed_springs_read_zero() -> None:
     model = SkinModel(SkinParams(size=(12, 9)))
     mech = LeapfrogMechanics(model.mesh, 1e-4, 50.0, 0.05, 0.0, 1e-4)
-    bands = mech.operands[9]
+    bands = mech.operands.moving
     assert len(bands) == 2  # layers 1 and 2, from the first free mass to the last
     stepped = np.concatenate([np.arange(s0, s0 + n) for s0, n in bands])
-    moves = stepped[mech.operands[10][stepped] > 0]  # a fixed mass's 1/m is 0
+    moves = stepped[mech.operands.inv_m[stepped] > 0]  # a fixed mass's 1/m is 0
     assert np.array_equal(moves, mech.slots[model.mesh.free])  # each free mass, in its slot
     push = np.zeros((200, model.n_masses, 3))
     push[:, model.mesh.free, 2] = -0.01

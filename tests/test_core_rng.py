@@ -142,7 +142,7 @@ def test_the_kernel_draws_normal_pair_on_every_channel(threads: int) -> None:
     pop.u[:] = rng.uniform(-16, -10, (batch, n))
     current = rng.uniform(-0.01, 0.01, (3, n))
     sigma = math.sqrt(10 ** (-snr_db / 10) * dt_ms)
-    keys = pop.kernel_operands()[11]
+    keys = pop.kernel_operands().keys
     v, u = pop.v.copy(), pop.u.copy()
     misses = 0
     for k in range(3):

@@ -22,16 +22,16 @@ dt = 1 ms the noise is exactly ``awgn`` applied once per step; at a finer step t
 per unit time is the same, so spike counts and ISI statistics do not move with dt.
 ``snr_db = inf`` adds nothing and the model is deterministic.
 
-Option ``NoiseParams(definition="measured")`` (never the default) keeps the earlier
-definition, MATLAB's ``awgn(x, snr, 'measured')`` applied at every step whatever dt:
-``σ² = mean(x²) · 10^(−snr_db/10)`` over the population vector ``x`` (the values of v, or of
-u, of one trial) at that step. Because σ is measured from the state it is added to, the
-noise on u feeds itself: u relaxes by ``(1 − a·dt)`` per step, so its mean square grows
-without bound when ``10^(−SNR/10) > 1 − (1 − a·dt)²``, below about 24 dB at dt = 0.1 ms (14
-dB at 1 ms). Left alone it overflows to NaN and the population falls silent for good, so
-under this option, before the noise of a step, a trial whose population RMS of u exceeds
-``BLOWUP_RMS_MV`` (10⁴ mV, a thousand times any physiological value) or whose v is not
-finite is put back at rest (v = c, u = b·c) and counted in ``NeuronPopulation.blowups``.
+Option ``NoiseParams(definition="measured")`` (never the default) is MATLAB's ``awgn(x,
+snr, 'measured')`` applied at every step whatever dt: ``σ² = mean(x²) · 10^(−snr_db/10)``
+over the population vector ``x`` (the values of v, or of u, of one trial) at that step.
+Because σ is measured from the state it is added to, the noise on u feeds itself: u relaxes
+by ``(1 − a·dt)`` per step, so its mean square grows without bound when ``10^(−SNR/10) > 1
+− (1 − a·dt)²``, below about 24 dB at dt = 0.1 ms (14 dB at 1 ms). Left alone it overflows
+to NaN and the population falls silent for good, so under this option, before the noise of
+a step, a trial whose population RMS of u exceeds ``BLOWUP_RMS_MV`` (10⁴ mV, a thousand
+times any physiological value) or whose v is not finite is put back at rest (v = c, u =
+b·c) and counted in ``NeuronPopulation.blowups``.
 The diffusion noise has a fixed σ and needs no such guard.
 
 The per-step order, for every step k of length dt (ms), each trial independently:
@@ -53,7 +53,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
-from typing import ClassVar, Literal
+from typing import ClassVar, Literal, NamedTuple
 
 import numba
 import numpy as np
@@ -77,10 +77,37 @@ from skinhil.validation import (
     validate_params,
 )
 
-KernelOperands = tuple[np.ndarray, np.ndarray, float, float, float, float, float, float, bool,
-                       float, float, np.ndarray, np.ndarray, np.ndarray]
-"""``NeuronPopulation.kernel_operands()``: v, u, a, b, c, d, K, v_peak, measured, noise
-variance, reference step (ms), noise keys, step count, run-away counts."""
+
+class NeuronOperands(NamedTuple):
+    """What the compiled neuron step reads (:meth:`NeuronPopulation.kernel_operands`): the
+    membranes and the noise streams, updated in place, and the parameters."""
+
+    v: np.ndarray
+    """Membrane potentials (batch, n) mV."""
+    u: np.ndarray
+    """Recovery variables (batch, n)."""
+    a: float
+    b: float
+    c: float
+    """Reset potential (mV)."""
+    d: float
+    gain: float
+    """K (mV/ms per newton)."""
+    v_peak: float
+    """Spike threshold (mV)."""
+    measured: bool
+    """Whether the noise is the measured-power one."""
+    noise_var: float
+    """:meth:`NoiseParams.variance` at the SNR."""
+    ref_step_ms: float
+    """The diffusion's reference step (ms)."""
+    keys: np.ndarray
+    """Noise keys (batch, n) uint64."""
+    clock: np.ndarray
+    """Steps made (1,) int64: where the noise streams are."""
+    blowups: np.ndarray
+    """Per trial, the measured-power noise's run-aways (batch,) int64."""
+
 
 CHANNEL_BLOCK = 1024
 """Channels the kernels update together (while their state is in cache), and the unit of work
@@ -281,27 +308,26 @@ def _diffusion_block(v: np.ndarray, u: np.ndarray, current: np.ndarray, keys: np
 
 
 @numba.njit(cache=True, fastmath=False, nogil=True)
-def _izhikevich_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray, v: np.ndarray,
-                       u: np.ndarray, a: float, b: float, c: float, d: float, gain: float,
-                       v_peak: float, measured: bool, noise_var: float, ref_step_ms: float,
-                       keys: np.ndarray, clock: np.ndarray,
-                       blowups: np.ndarray) -> None:  # pragma: no cover - compiled
+def _izhikevich_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray,
+                       neurons: tuple) -> None:  # pragma: no cover - compiled
     # current (n_steps, 1 or n_batch, n) N over steps of dt_ms (ms) → spikes (n_steps,
-    # n_batch, n); the rest are NeuronPopulation.kernel_operands()
+    # n_batch, n); neurons is NeuronPopulation.kernel_operands() as a plain tuple
+    p = NeuronOperands(*neurons)
+    v, u, keys, c, d = p.v, p.u, p.keys, p.c, p.d
     n_steps, n_batch, n = spikes.shape
     shared_input = current.shape[1] == 1
-    sigma_step = math.sqrt(noise_var * dt_ms / ref_step_ms)  # diffusion σ per step (mV)
-    first = clock[0]
-    clock[0] += n_steps
-    if not measured:  # block by block: each block's state used while in cache
+    sigma_step = math.sqrt(p.noise_var * dt_ms / p.ref_step_ms)  # diffusion σ per step (mV)
+    first = p.clock[0]
+    p.clock[0] += n_steps
+    if not p.measured:  # block by block: each block's state used while in cache
         for k in range(n_steps):
             for bb in range(n_batch):
                 cur = current[k, 0 if shared_input else bb]
                 for lo in range(0, n, CHANNEL_BLOCK):
                     hi = min(n, lo + CHANNEL_BLOCK)
                     _diffusion_block(v[bb, lo:hi], u[bb, lo:hi], cur[lo:hi], keys[bb, lo:hi],
-                                     first + k, sigma_step, dt_ms, a, b, c, d, gain, v_peak,
-                                     spikes[k, bb, lo:hi])
+                                     first + k, sigma_step, dt_ms, p.a, p.b, c, d, p.gain,
+                                     p.v_peak, spikes[k, bb, lo:hi])
         return
     zv = np.zeros(n)  # this step's normals, drawn before use; zero without noise
     zu = np.zeros(n)
@@ -309,37 +335,36 @@ def _izhikevich_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray, v:
         for bb in range(n_batch):
             vb = v[bb]
             ub = u[bb]
-            _euler_step(vb, ub, current[k, 0 if shared_input else bb], dt_ms, a, b, gain)
+            _euler_step(vb, ub, current[k, 0 if shared_input else bb], dt_ms, p.a, p.b, p.gain)
             pv, pu = _power(vb, ub)
             if not (pu <= n * BLOWUP_RMS_MV * BLOWUP_RMS_MV and pv < math.inf):
                 # the measured-power noise has run away: this trial starts again at rest
-                blowups[bb] += 1
+                p.blowups[bb] += 1
                 vb[:] = c
-                ub[:] = b * c
+                ub[:] = p.b * c
                 pv = n * c * c
-                pu = n * (b * c) * (b * c)
-            sv = math.sqrt(pv / n * noise_var)
-            su = math.sqrt(pu / n * noise_var)
-            if noise_var > 0.0:
+                pu = n * (p.b * c) * (p.b * c)
+            sv = math.sqrt(pv / n * p.noise_var)
+            su = math.sqrt(pu / n * p.noise_var)
+            if p.noise_var > 0.0:
                 fill_normal_pairs(keys[bb], first + k, zv, zu)
-            _noise_and_threshold(vb, ub, zv, zu, sv, su, c, d, v_peak, spikes[k, bb])
+            _noise_and_threshold(vb, ub, zv, zu, sv, su, c, d, p.v_peak, spikes[k, bb])
 
 
 @numba.njit(cache=True, fastmath=False, parallel=True, nogil=True)
 def _izhikevich_parallel_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray,
-                                v: np.ndarray, u: np.ndarray, a: float, b: float, c: float,
-                                d: float, gain: float, v_peak: float, measured: bool,
-                                noise_var: float, ref_step_ms: float, keys: np.ndarray,
-                                clock: np.ndarray,
-                                blowups: np.ndarray) -> None:  # pragma: no cover - compiled
+                                neurons: tuple) -> None:  # pragma: no cover - compiled
     # _izhikevich_kernel for the diffusion noise (measured is False), the channel blocks of
     # every trial shared among numba's threads: the same arithmetic and draws per channel,
     # so the same spikes; blowups stays untouched (the diffusion never runs away)
+    p = NeuronOperands(*neurons)
+    v, u, keys = p.v, p.u, p.keys
+    a, b, c, d, gain, v_peak = p.a, p.b, p.c, p.d, p.gain, p.v_peak
     n_steps, n_batch, n = spikes.shape
     n_blocks = -(-n // CHANNEL_BLOCK)
     shared_input = current.shape[1] == 1
-    sigma_step = math.sqrt(noise_var * dt_ms / ref_step_ms)
-    first = clock[0]
+    sigma_step = math.sqrt(p.noise_var * dt_ms / p.ref_step_ms)
+    first = p.clock[0]
     for job in numba.prange(n_batch * n_blocks):
         bb = job // n_blocks
         lo = (job % n_blocks) * CHANNEL_BLOCK
@@ -349,7 +374,19 @@ def _izhikevich_parallel_kernel(current: np.ndarray, dt_ms: float, spikes: np.nd
                              current[k, 0 if shared_input else bb, lo:hi], keys[bb, lo:hi],
                              first + k, sigma_step, dt_ms, a, b, c, d, gain, v_peak,
                              spikes[k, bb, lo:hi])
-    clock[0] += n_steps
+    p.clock[0] += n_steps
+
+
+@numba.njit(cache=True, nogil=True)
+def fire(springs: np.ndarray, dt_s: float, spikes: np.ndarray,
+         neurons: tuple) -> None:  # pragma: no cover - compiled
+    """One trial's neurons over a block: spring forces (n_steps, n) N, each held over a step
+    of ``dt_s`` (s) → bool ``spikes`` (n_steps, n); ``neurons`` is
+    :meth:`NeuronPopulation.kernel_operands` as a plain tuple (the sensor kernels' last
+    piece)."""
+    n_steps, n = springs.shape
+    _izhikevich_kernel(springs.reshape(n_steps, 1, n), dt_s * 1e3,
+                       spikes.reshape(n_steps, 1, n), neurons)
 
 
 def check_threads(threads: int) -> int:
@@ -361,8 +398,8 @@ def check_threads(threads: int) -> int:
                           f"may use; set NUMBA_NUM_THREADS for more), got {threads!r}")
     if threads > 1:
         # OpenMP threads that spin between parallel regions (one per block) take the cores
-        # from everything else: on a busy 2-core machine 10,138 neurons on two threads took
-        # 921 µs per step spinning and 146 µs passive (one thread: 128 µs). Read when the
+        # from everything else, on a busy machine many times the work itself
+        # (benchmarks/bench_size.py --threads 2 measures the neurons). Read when the
         # OpenMP runtime starts, i.e. at the first parallel block, unless already set.
         os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
     return int(threads)
@@ -407,6 +444,7 @@ class NeuronPopulation:
         self.v = np.empty((self._n_batch, self.n_channels))
         self.u = np.empty_like(self.v)
         self.reset()
+        self._operands = self._named_operands()
 
     def reset(self) -> None:
         """Membranes back to rest (v = c, u = b·c); the noise streams continue."""
@@ -427,6 +465,7 @@ class NeuronPopulation:
         """Change the noise level (dB; inf for none) from the next step on."""
         self._noise_var = self.noise.variance(snr_db)
         self.snr_db = check_snr_db(snr_db)
+        self._operands = self._named_operands()
 
     def step_block(self, current_n: np.ndarray, dt_s: float) -> np.ndarray:
         """Advance ``n_steps`` steps of ``dt_s`` (s) with input forces ``current_n`` (N).
@@ -450,22 +489,25 @@ class NeuronPopulation:
         if self.threads > 1:
             numba.set_num_threads(self.threads)
             _izhikevich_parallel_kernel(np.ascontiguousarray(cur), dt_s * 1e3, spikes,
-                                        *self.kernel_operands())
+                                        tuple(self.kernel_operands()))
         else:
             _izhikevich_kernel(np.ascontiguousarray(cur), dt_s * 1e3, spikes,
-                               *self.kernel_operands())
+                               tuple(self.kernel_operands()))
         return spikes[:, 0, :] if self.batch is None else spikes
 
-    def kernel_operands(self) -> KernelOperands:
-        """What the compiled step takes after the current, the step (ms) and the spikes: the
-        membranes v (mV) and u, the parameters a, b, c (mV), d, K, v_peak (mV), whether the
-        noise is measured, :meth:`NoiseParams.variance` at the SNR, the reference step (ms),
-        the noise keys (batch, n) and the step count (the noise streams' position) and the
-        run-away counts; the arrays are updated in place."""
+    def kernel_operands(self) -> NeuronOperands:
+        """What the compiled step takes after the current, the step (ms) and the spikes
+        (:class:`NeuronOperands`; its arrays are updated in place). A Python caller hands a
+        kernel ``tuple(...)`` of it, which the kernel names on entry: numba types a plain
+        tuple from its C fingerprint, a named one through Python (benchmarks/bench_size.py
+        times the call)."""
+        return self._operands
+
+    def _named_operands(self) -> NeuronOperands:
         p = self.params
-        return (self.v, self.u, p.a, p.b, p.c_mv, p.d, p.gain, p.v_peak_mv,
-                self.noise.definition == "measured", self._noise_var, self.noise.ref_step_ms,
-                self._keys, self._clock, self.blowups)
+        return NeuronOperands(self.v, self.u, p.a, p.b, p.c_mv, p.d, p.gain, p.v_peak_mv,
+                              self.noise.definition == "measured", self._noise_var,
+                              self.noise.ref_step_ms, self._keys, self._clock, self.blowups)
 
 
 def simulate_spikes(forces_n: np.ndarray, dt_s: float, snr_db: float = math.inf,
@@ -539,8 +581,8 @@ def raster_to_events(raster: np.ndarray, dt_s: float, t0_us: int = 0) -> np.ndar
     """Event array from a bool raster (n_steps, n): spike in step k → ``t = t0 + k·dt`` (µs).
 
     Events are sorted by time, then address. ``dt_s`` must be a whole number of µs. A
-    compiled scan that skips spike-free cache lines: 11.6-11.9 µs for a 1 ms tick of 17,866
-    channels with 20 spikes, against 19.6-20.2 for numpy's flat nonzero.
+    compiled scan that skips spike-free cache lines: faster than numpy's flat nonzero on a
+    tick's few spikes (benchmarks/bench_size.py, ``ev`` column).
     """
     dt_us = _dt_us(dt_s)
     r = np.ascontiguousarray(raster, dtype=np.bool_)

@@ -28,7 +28,8 @@ function of where it is used:
   multiplier moves by < 2^-31 of itself, and is defined as the packed double, so the fast and
   the slow path use the same one), so one gathered word gives both. The table is 16 KiB: with
   1,024 layers (8 KiB) twice as many pairs miss the fast path (0.85 %), with 4,096 (32 KiB) it
-  fills the first-level cache; 2,048 was the fastest of the three on the Zen 4 VM.
+  fills the first-level cache; 2,048 is the fastest of the three
+  (benchmarks/bench_core.py times the neurons).
 - **The slow path** (the wedges and the tail beyond :data:`ZIG_R`, 0.23 % of normals, 0.45 %
   of pairs) runs outside the vectorised loop (:func:`normal_pair`, inlined into the
   kernel's second pass): its uniforms come from a SplitMix64
@@ -229,8 +230,8 @@ def _normal_slow(iz: np.intp, hz: np.int64, s: np.uint64) -> float:  # pragma: n
 def normal_pair(key: np.uint64, step: int) -> tuple[float, float]:  # pragma: no cover
     """The pair of standard normals of the channel with ``key`` at ``step``: the fast path of
     :func:`fast_pair` where it holds, else the slow path. Inlined, slow path included, where
-    a kernel calls it: a call out of line per miss cost the neurons' kernel 0.15 ns per
-    channel-step at 34x34 (Zen 4 VM), the same draws."""
+    a kernel calls it: a call out of line per miss slows the neurons' kernel for the same
+    draws (benchmarks/bench_size.py, ``neur`` column)."""
     x = key ^ step_hash(step)
     w = mix64(x)
     z1, z2, ok1, ok2 = fast_pair(w)

@@ -17,112 +17,116 @@ O(springs) with the leapfrog and the geometric mechanics, and the neurons O(chan
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numba
 import numpy as np
 
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import format_size
-from skinhil.model.mechanics.geometric import GeometricMechanics, GeometricOperands, rk4_kernel
-from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, LeapfrogOperands, leapfrog_kernel
-from skinhil.model.mechanics.linear import LinearMechanics, ModalOperands, _advance_modal_kernel
+from skinhil.model.mechanics.geometric import GeometricMechanics, GeometricOperands, rk4_step
+from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, LeapfrogOperands, leapfrog_step
+from skinhil.model.mechanics.linear import LinearMechanics, ModalOperands, modal_step
 from skinhil.model.neurons import (
     MAX_CHANNELS,
     IzhikevichParams,
-    KernelOperands,
     NeuronPopulation,
     NoiseParams,
-    _izhikevich_kernel,
+    fire,
     raster_to_events,
 )
 from skinhil.model.skin import SkinModel
-from skinhil.model.stimuli import Schedule, ScheduleOperands, add_schedule_forces
+from skinhil.model.stimuli import Schedule, add_schedule_forces
+from skinhil.model.surface import surface_forces
 
 
-@numba.njit(cache=True)
-def _modal_sensor_kernel(forces: np.ndarray, springs: np.ndarray, spikes: np.ndarray,
-                         dt_s: float, mechanics: ModalOperands,
-                         neurons: KernelOperands) -> None:  # pragma: no cover - compiled
-    # forces (n, n_masses, 3) N → springs (n, n_springs) N → spikes over steps of dt_s (s);
-    # mechanics is LinearMechanics.modal_operands, neurons NeuronPopulation.kernel_operands()
-    _advance_modal_kernel(forces, springs, *mechanics)
-    n_steps, n = springs.shape
-    _izhikevich_kernel(springs.reshape(n_steps, 1, n), dt_s * 1e3,
-                       spikes.reshape(n_steps, 1, n), *neurons)
+@numba.njit(inline="always")
+def _step_times(first_step: int, n_steps: int, dt_s: float,
+                t_offset_s: float) -> np.ndarray:  # pragma: no cover - compiled
+    # the schedule time (s) of each step of a block: step k starts at k·dt_s (s) of sensor
+    # time, schedule time 0 at t_offset_s (s)
+    return (first_step + np.arange(n_steps)) * dt_s - t_offset_s
 
 
-@numba.njit(cache=True)
-def _scheduled_modal_sensor_kernel(
-        first_step: int, dt_s: float, t_offset_s: float, n_masses: int, springs: np.ndarray,
-        spikes: np.ndarray, schedule: ScheduleOperands, mechanics: ModalOperands,
-        neurons: KernelOperands) -> None:  # pragma: no cover - compiled
-    # the schedule's forces (N) for steps first_step.. of dt_s (s), schedule time 0 at
-    # t_offset_s (s), then _modal_sensor_kernel; schedule is Schedule.kernel_operands
+@numba.njit(inline="always")
+def _schedule_by_slot(first_step: int, dt_s: float, t_offset_s: float, slots: np.ndarray,
+                      n_slots: int, springs: np.ndarray,
+                      schedule: tuple) -> np.ndarray:  # pragma: no cover - compiled
+    # the schedule's forces (N) by step, component and slot (a strip stepper's input, in
+    # the precision of springs: the stepper's); schedule is Schedule.kernel_operands
     n_steps = springs.shape[0]
-    t = (first_step + np.arange(n_steps)) * dt_s - t_offset_s
-    forces = np.zeros((n_steps, n_masses, 3))
-    add_schedule_forces(forces, t, *schedule)
-    _modal_sensor_kernel(forces, springs, spikes, dt_s, mechanics, neurons)
-
-
-@numba.njit(cache=True)
-def _leapfrog_sensor_kernel(forces: np.ndarray, springs: np.ndarray, spikes: np.ndarray,
-                            dt_s: float, substeps: int, mechanics: LeapfrogOperands,
-                            neurons: KernelOperands) -> None:  # pragma: no cover - compiled
-    # forces (n, 3, n_slots) N by slot → springs (n, n_springs) N → spikes over steps
-    # of dt_s (s); mechanics is LeapfrogMechanics.operands, neurons
-    # NeuronPopulation.kernel_operands()
-    leapfrog_kernel(forces, springs, dt_s, substeps, *mechanics)
-    n_steps, n = springs.shape
-    _izhikevich_kernel(springs.reshape(n_steps, 1, n), dt_s * 1e3,
-                       spikes.reshape(n_steps, 1, n), *neurons)
-
-
-@numba.njit(cache=True)
-def _scheduled_leapfrog_sensor_kernel(
-        first_step: int, dt_s: float, t_offset_s: float, slots: np.ndarray, n_slots: int,
-        springs: np.ndarray, spikes: np.ndarray, schedule: ScheduleOperands, substeps: int,
-        mechanics: LeapfrogOperands, neurons: KernelOperands) -> None:  # pragma: no cover
-    # the schedule's forces (N) for steps first_step.. of dt_s (s), schedule time 0 at
-    # t_offset_s (s), on the masses' slots (LeapfrogMechanics.slots), then
-    # _leapfrog_sensor_kernel; schedule is Schedule.kernel_operands
-    n_steps = springs.shape[0]
-    t = (first_step + np.arange(n_steps)) * dt_s - t_offset_s
-    forces = np.zeros((n_steps, 3, n_slots), dtype=springs.dtype)  # the stepper's precision
+    forces = np.zeros((n_steps, 3, n_slots), dtype=springs.dtype)
     starts, onsets, ends, which, stim_onsets, stim_ends, taus, ptr, pushed, peaks = schedule
-    add_schedule_forces(forces.transpose(0, 2, 1), t, starts, onsets, ends, which,
-                        stim_onsets, stim_ends, taus, ptr, slots[pushed], peaks)
-    _leapfrog_sensor_kernel(forces, springs, spikes, dt_s, substeps, mechanics, neurons)
+    add_schedule_forces(forces.transpose(0, 2, 1),
+                        _step_times(first_step, n_steps, dt_s, t_offset_s), starts, onsets,
+                        ends, which, stim_onsets, stim_ends, taus, ptr, slots[pushed], peaks)
+    return forces
 
 
-@numba.njit(cache=True)
-def _geometric_sensor_kernel(forces: np.ndarray, springs: np.ndarray, spikes: np.ndarray,
-                             dt_s: float, mechanics: GeometricOperands,
-                             neurons: KernelOperands) -> None:  # pragma: no cover - compiled
-    # forces (n, 3, n_slots) N by slot → springs (n, n_springs) N → spikes over steps
-    # of dt_s (s); mechanics is GeometricMechanics.operands, neurons
-    # NeuronPopulation.kernel_operands()
-    rk4_kernel(forces, springs, dt_s, *mechanics)
-    n_steps, n = springs.shape
-    _izhikevich_kernel(springs.reshape(n_steps, 1, n), dt_s * 1e3,
-                       spikes.reshape(n_steps, 1, n), *neurons)
+# The sensor kernels: one per mechanics, one compiled call per block. Per step k of the
+# block: the input of step k (given, or the schedule's, made in the kernel), plus what
+# touches the surface (skinhil.model.surface: nothing without a touch), then the mechanics'
+# step; then the neurons over the block. Arguments: the block's first step, dt_s (s), the
+# schedule's time offset t_offset_s (s), the forces (N; None under a schedule), the
+# schedule's operands (Schedule.kernel_operands, or None), the touch (a world's operands,
+# or None), the outputs springs (n_steps, n_springs) N and spikes (bool, same shape), the
+# mechanics' kernel_tuple and tuple(NeuronPopulation.kernel_operands()). An absent part is
+# None, and the kernel compiled for it is as if the part were not written.
 
 
-@numba.njit(cache=True)
-def _scheduled_geometric_sensor_kernel(
-        first_step: int, dt_s: float, t_offset_s: float, slots: np.ndarray, n_slots: int,
-        springs: np.ndarray, spikes: np.ndarray, schedule: ScheduleOperands,
-        mechanics: GeometricOperands, neurons: KernelOperands) -> None:  # pragma: no cover
-    # the schedule's forces (N) for steps first_step.. of dt_s (s), schedule time 0 at
-    # t_offset_s (s), on the masses' slots (GeometricMechanics.slots), then
-    # _geometric_sensor_kernel; schedule is Schedule.kernel_operands
+@numba.njit(cache=True, nogil=True)
+def _modal_sensor_kernel(first_step: int, dt_s: float, t_offset_s: float,
+                         forces: Any, schedule: tuple | None,
+                         springs: np.ndarray, spikes: np.ndarray, mechanics: tuple,
+                         neurons: tuple) -> None:  # pragma: no cover - compiled
+    # forces by mass (n, n_masses, 3); the exact ZOH carries no force of the state: no touch
+    ops = ModalOperands(*mechanics)
     n_steps = springs.shape[0]
-    t = (first_step + np.arange(n_steps)) * dt_s - t_offset_s
-    forces = np.zeros((n_steps, 3, n_slots))
-    starts, onsets, ends, which, stim_onsets, stim_ends, taus, ptr, pushed, peaks = schedule
-    add_schedule_forces(forces.transpose(0, 2, 1), t, starts, onsets, ends, which,
-                        stim_onsets, stim_ends, taus, ptr, slots[pushed], peaks)
-    _geometric_sensor_kernel(forces, springs, spikes, dt_s, mechanics, neurons)
+    if schedule is None:
+        fs = forces
+    else:
+        fs = np.zeros((n_steps, ops.n_masses, 3))
+        add_schedule_forces(fs, _step_times(first_step, n_steps, dt_s, t_offset_s), *schedule)
+    flat = fs.reshape(n_steps, -1)
+    for k in range(n_steps):
+        modal_step(flat[k], springs[k], ops)
+    fire(springs, dt_s, spikes, neurons)
+
+
+@numba.njit(cache=True, nogil=True)
+def _leapfrog_sensor_kernel(first_step: int, dt_s: float, t_offset_s: float,
+                            forces: Any, schedule: tuple | None,
+                            touch: tuple | None, springs: np.ndarray, spikes: np.ndarray,
+                            mechanics: tuple, neurons: tuple) -> None:  # pragma: no cover
+    # forces by slot (n, 3, n_slots); the surface sees the velocity at the step's start (w)
+    ops = LeapfrogOperands(*mechanics)
+    if schedule is None:
+        fs = forces
+    else:
+        fs = _schedule_by_slot(first_step, dt_s, t_offset_s, ops.slots, ops.q.shape[1],
+                               springs, schedule)
+    for k in range(springs.shape[0]):
+        surface_forces(touch, k, (first_step + k) * dt_s, dt_s, ops.q, ops.w, fs[k])
+        leapfrog_step(fs[k], springs[k], dt_s, ops)
+    fire(springs, dt_s, spikes, neurons)
+
+
+@numba.njit(cache=True, nogil=True)
+def _geometric_sensor_kernel(first_step: int, dt_s: float, t_offset_s: float,
+                             forces: Any, schedule: tuple | None,
+                             touch: tuple | None, springs: np.ndarray, spikes: np.ndarray,
+                             mechanics: tuple, neurons: tuple) -> None:  # pragma: no cover
+    # forces by slot (n, 3, n_slots)
+    ops = GeometricOperands(*mechanics)
+    if schedule is None:
+        fs = forces
+    else:
+        fs = _schedule_by_slot(first_step, dt_s, t_offset_s, ops.slots, ops.q.shape[1],
+                               springs, schedule)
+    for k in range(springs.shape[0]):
+        surface_forces(touch, k, (first_step + k) * dt_s, dt_s, ops.q, ops.v, fs[k])
+        rk4_step(fs[k], springs[k], dt_s, ops)
+    fire(springs, dt_s, spikes, neurons)
 
 
 class SkinSensor:
@@ -150,13 +154,11 @@ class SkinSensor:
         """Threads the neurons of a block run on (the mechanics step on one)."""
         self.step_index = 0
         """Steps taken since the last reset; step k starts at ``k·dt_s``."""
-        fused = self.threads == 1  # one compiled call per block; else stepper, then neurons
-        self._modal = (self.stepper.modal_operands
-                       if fused and isinstance(self.stepper, LinearMechanics) else None)
-        self._leapfrog = (self.stepper if fused and isinstance(self.stepper, LeapfrogMechanics)
-                          else None)
-        self._geometric = (self.stepper
-                           if fused and isinstance(self.stepper, GeometricMechanics) else None)
+        self.fused = self.threads == 1 and (
+            isinstance(self.stepper, LeapfrogMechanics | GeometricMechanics)
+            or isinstance(self.stepper, LinearMechanics) and self.stepper.modal)
+        """Whether a block is one compiled call (:meth:`run_fused`): mechanics and neurons
+        on one thread, any stepper but the linear one with a baseline tension."""
         self._checked: Schedule | None = None
 
     def reset(self) -> None:
@@ -175,61 +177,65 @@ class SkinSensor:
         Returns the spring forces (n, n_springs) N at the start of each step and the bool
         spikes (n, n_springs) fired during each step.
         """
-        if self._modal is not None:
-            springs, spikes = self._advance_modal(forces_n)
-        elif self._leapfrog is not None:
-            forces = self._leapfrog.by_slot(forces_n)
-            springs, spikes = self._outputs(forces.shape[0])
-            _leapfrog_sensor_kernel(forces, springs, spikes, self.dt_s,
-                                    self._leapfrog.substeps, self._leapfrog.operands,
-                                    self.neurons.kernel_operands())
-        elif self._geometric is not None:
-            forces = self._geometric.by_slot(forces_n)
-            springs, spikes = self._outputs(forces.shape[0])
-            _geometric_sensor_kernel(forces, springs, spikes, self.dt_s,
-                                     self._geometric.operands, self.neurons.kernel_operands())
-        else:
+        if not self.fused:
             springs = self.stepper.advance(forces_n)
             spikes = self.neurons.step_block(springs, self.dt_s)
-        self.step_index += len(forces_n)
-        return springs, spikes
-
-    def _advance_modal(self, forces_n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`advance`'s mechanics and neurons in one compiled call (modal stepper)."""
-        assert self._modal is not None
-        forces = np.ascontiguousarray(forces_n, dtype=np.float64)
-        springs, spikes = self._outputs(forces.shape[0])
-        _modal_sensor_kernel(forces, springs, spikes, self.dt_s, self._modal,
-                             self.neurons.kernel_operands())
-        return springs, spikes
+            self.step_index += len(forces_n)
+            return springs, spikes
+        stepper = self.stepper
+        if isinstance(stepper, LeapfrogMechanics | GeometricMechanics):
+            forces = stepper.by_slot(forces_n)
+        else:
+            forces = np.ascontiguousarray(forces_n, dtype=np.float64)
+        return self.run_fused(len(forces), forces=forces)
 
     def advance_schedule(self, schedule: Schedule, n_steps: int,
                          t_offset_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """Step ``n_steps`` under ``schedule`` (schedule time 0 at sensor time ``t_offset_s``)."""
+        self.check_schedule(schedule)
+        if not self.fused:
+            t = (self.step_index + np.arange(n_steps)) * self.dt_s - t_offset_s
+            return self.advance(schedule.force_at(t, self.model.size))
+        return self.run_fused(n_steps, schedule=schedule, t_offset_s=t_offset_s)
+
+    def check_schedule(self, schedule: Schedule) -> None:
+        """:class:`ConfigError` unless ``schedule`` pushes masses of this skin (checked once
+        per schedule)."""
         if schedule is not self._checked:
             self.model.check_schedule(schedule)
             self._checked = schedule
-        if self._modal is None and self._leapfrog is None and self._geometric is None:
-            t = (self.step_index + np.arange(n_steps)) * self.dt_s - t_offset_s
-            return self.advance(schedule.force_at(t, self.model.size))
+
+    def run_fused(self, n_steps: int, forces: np.ndarray | None = None,
+                  schedule: Schedule | None = None, t_offset_s: float = 0.0,
+                  touch: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Step ``n_steps`` in one compiled call (:attr:`fused` only): under ``forces`` (N,
+        as the stepper reads them: by slot for a strip stepper, by mass for the modal one)
+        or ``schedule`` (schedule time 0 at sensor time ``t_offset_s``, s), plus ``touch``,
+        the operands of what touches the surface (:mod:`skinhil.model.surface`; not with
+        the modal stepper). Returns the spring forces (n_steps, n_springs) N and the bool
+        spikes."""
+        if not self.fused:
+            raise ConfigError("one compiled call per block runs the neurons on one thread, "
+                              "after the leapfrog, the geometric or the modal mechanics: "
+                              "step this sensor with advance()")
         springs, spikes = self._outputs(n_steps)
-        if self._leapfrog is not None:
-            _scheduled_leapfrog_sensor_kernel(
-                self.step_index, self.dt_s, float(t_offset_s), self._leapfrog.slots,
-                self._leapfrog.state.shape[2], springs, spikes, schedule.kernel_operands,
-                self._leapfrog.substeps,
-                self._leapfrog.operands, self.neurons.kernel_operands())
-        elif self._geometric is not None:
-            _scheduled_geometric_sensor_kernel(
-                self.step_index, self.dt_s, float(t_offset_s), self._geometric.slots,
-                self._geometric.state.shape[2], springs, spikes, schedule.kernel_operands,
-                self._geometric.operands, self.neurons.kernel_operands())
+        stepper = self.stepper
+        plan = None if schedule is None else schedule.kernel_operands
+        neurons = tuple(self.neurons.kernel_operands())
+        first, dt, offset = self.step_index, self.dt_s, float(t_offset_s)
+        if isinstance(stepper, LeapfrogMechanics):
+            _leapfrog_sensor_kernel(first, dt, offset, forces, plan, touch, springs, spikes,
+                                    stepper.kernel_tuple, neurons)
+        elif isinstance(stepper, GeometricMechanics):
+            _geometric_sensor_kernel(first, dt, offset, forces, plan, touch, springs, spikes,
+                                     stepper.kernel_tuple, neurons)
+        elif (isinstance(stepper, LinearMechanics) and stepper.kernel_tuple is not None
+              and touch is None):
+            _modal_sensor_kernel(first, dt, offset, forces, plan, springs, spikes,
+                                 stepper.kernel_tuple, neurons)
         else:
-            assert self._modal is not None
-            _scheduled_modal_sensor_kernel(self.step_index, self.dt_s, float(t_offset_s),
-                                           self.model.n_masses, springs, spikes,
-                                           schedule.kernel_operands, self._modal,
-                                           self.neurons.kernel_operands())
+            raise ConfigError("a touch needs the leapfrog or the geometric mechanics: build "
+                              "the sensor with state_forces=True")
         self.step_index += n_steps
         return springs, spikes
 
@@ -237,7 +243,8 @@ class SkinSensor:
         """Fresh spring-force (N, in the stepper's precision) and bool spike arrays for a
         block, each (n_steps, n_springs)."""
         shape = (n_steps, self.model.n_springs)
-        dtype = np.float64 if self._leapfrog is None else self._leapfrog.dtype
+        stepper = self.stepper
+        dtype = stepper.dtype if isinstance(stepper, LeapfrogMechanics) else np.float64
         return np.empty(shape, dtype=dtype), np.empty(shape, dtype=np.bool_)
 
     def events(self, spikes: np.ndarray, first_step: int) -> np.ndarray:

@@ -112,7 +112,7 @@ class HeldObject:
 
     def before_tick(self) -> None:
         """The grip onto every lift's contact (0 N on a dropped object's)."""
-        setpoint = self.world.state[4]
+        setpoint = self.world.state.setpoint
         setpoint[:] = np.where(self.dropped, 0.0, self.grip_n)
 
     def lift_at(self, scene_s: float) -> int:

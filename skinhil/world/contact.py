@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import ClassVar, NamedTuple
 
 import numba
 import numpy as np
@@ -126,31 +126,98 @@ class ContactParams:
             raise ConfigError(f"contact at dt {dt_s:g} s: the penalty spring's mode "
                               f"(omega·dt = {omega * dt_s:.2f}) is not resolved; lower --dt")
 
-    def packed(self) -> np.ndarray:
-        """k_n, c_n, k_t, c_t, admittance, margin, tangential admittance as the kernel reads
-        them."""
-        return np.array([self.normal_stiffness_n_per_m, self.normal_damping_n_s_per_m,
-                         self.tangential_stiffness_n_per_m, self.tangential_damping_n_s_per_m,
-                         self.admittance_m_per_n_s, self.margin_m,
-                         self.tangential_admittance_m_per_n_s])
+
+class ContactOperands(NamedTuple):
+    """What the compiled contact step reads of a scene on a skin
+    (:attr:`skinhil.world.scene.World.operands`, built there)."""
+
+    columns: np.ndarray
+    """Each top-layer mass's (row-major) column in the stepper's state; -1 where fixed."""
+    rest_xy: np.ndarray
+    """The top-layer masses' rest positions (n_top, 2) m."""
+    rows: int
+    """Top-layer rows."""
+    cols: int
+    """Top-layer columns."""
+    spacing: float
+    """Mass spacing (m)."""
+    kn: float
+    """Normal stiffness (N/m)."""
+    cn: float
+    """Normal damping (N·s/m)."""
+    kt: float
+    """Tangential (stick) stiffness (N/m)."""
+    ct: float
+    """Tangential damping (N·s/m)."""
+    bn: float
+    """Normal force control's admittance (m/s per N)."""
+    bt: float
+    """Tangential force control's admittance (m/s per N)."""
+    margin: float
+    """Masses within reach plus this (m) of an axis are tested."""
+    shapes: np.ndarray
+    """Per contact, its indenter's code (:mod:`skinhil.world.indenters`)."""
+    geos: np.ndarray
+    """Per contact, its indenter's geometry."""
+    reach: np.ndarray
+    """Per contact, its indenter's reach from the axis (m)."""
+    starts: np.ndarray
+    """Per contact, its start (s, scene time)."""
+    key_ptr: np.ndarray
+    """Per contact, where its keyframes start in :attr:`keys` (CSR pointers)."""
+    keys: np.ndarray
+    """Every contact's keyframes (t s, x m, y m, depth m or load N), one after the other."""
+    control: np.ndarray
+    """Per contact, whether the normal and the tangential axes are force-controlled."""
+    vib: np.ndarray
+    """Per contact, its vibration's amplitude (m), frequency (Hz) and axis (0, 1, 2)."""
+    mu: np.ndarray
+    """Per contact, its static and kinetic friction coefficients."""
+    origin: np.ndarray
+    """Per contact, where a force-controlled tangential axis starts (x, y) m."""
+
+
+class ContactState(NamedTuple):
+    """What the compiled contact step updates in place (:attr:`skinhil.world.scene.World.
+    state`)."""
+
+    pose: np.ndarray
+    """Per contact, its pose (x, y, z_tip) m now."""
+    prev: np.ndarray
+    """... and a step back."""
+    meas: np.ndarray
+    """Per contact, the last measured force (Fx, Fy, N) N."""
+    live: np.ndarray
+    """Per contact, whether it runs."""
+    setpoint: np.ndarray
+    """Per contact, the load set-point (N; NaN: the trajectory's)."""
+    nodes: np.ndarray
+    """Per contact and top-layer mass, its friction state (0, :data:`STICK`, :data:`SLIP`)."""
+    anchor: np.ndarray
+    """Per contact and top-layer mass, its stick spring's anchor (m, the indenter's frame)."""
+    stamp: np.ndarray
+    """Per contact and top-layer mass, the last step it touched."""
+    counter: np.ndarray
+    """The step counter (1,)."""
 
 
 @numba.njit(cache=True, nogil=True)
 def contact_forces(t_s: float, dt_s: float, q: np.ndarray, v: np.ndarray, out: np.ndarray,
-                   operands: tuple, state: tuple,
+                   ops: ContactOperands, state: ContactState,
                    truth: np.ndarray) -> None:  # pragma: no cover - compiled
     """Add the contacts' forces (N) at scene time ``t_s`` (s) into ``out`` (3, n) from the
     displacements ``q`` (3, n) m and velocities ``v`` (3, n) m/s; write each contact's truth
-    row into ``truth`` (n_contacts, RAW_FIELDS). ``operands`` and ``state`` are
-    :attr:`skinhil.world.scene.World.operands` and ``.state`` (module docstring)."""
-    (index, rest_xy, grid, spacing, params, shapes, geos, reach, starts, key_ptr, keys,
-     control, vib, mu, origin) = operands
-    pose, prev, meas, live, setpoint, nodes, anchor, stamp, counter = state
-    counter[0] += 1
-    now = counter[0]
-    kn, cn, kt, ct, bn, margin = params[0], params[1], params[2], params[3], params[4], params[5]
-    bt = params[6]
-    rows, cols = grid[0], grid[1]
+    row into ``truth`` (n_contacts, RAW_FIELDS) (module docstring)."""
+    index, rest_xy, spacing, shapes, geos, reach = (ops.columns, ops.rest_xy, ops.spacing,
+                                                    ops.shapes, ops.geos, ops.reach)
+    starts, key_ptr, keys, control, vib, mu = (ops.starts, ops.key_ptr, ops.keys, ops.control,
+                                               ops.vib, ops.mu)
+    pose, prev, meas, live = state.pose, state.prev, state.meas, state.live
+    setpoint, nodes, anchor, stamp = state.setpoint, state.nodes, state.anchor, state.stamp
+    state.counter[0] += 1
+    now = state.counter[0]
+    kn, cn, kt, ct, bn, bt = ops.kn, ops.cn, ops.kt, ops.ct, ops.bn, ops.bt
+    rows, cols = ops.rows, ops.cols
     half_w = 0.5 * (cols - 1) * spacing
     half_h = 0.5 * (rows - 1) * spacing
     for c in range(shapes.shape[0]):
@@ -176,7 +243,7 @@ def contact_forces(t_s: float, dt_s: float, q: np.ndarray, v: np.ndarray, out: n
             elif axis == 1:
                 y += wob
         elif live[c] == 0:
-            x, y = origin[c, 0], origin[c, 1]
+            x, y = ops.origin[c, 0], ops.origin[c, 1]
         else:
             x = pose[c, 0] + dt_s * bt * (x - meas[c, 0])
             y = pose[c, 1] + dt_s * bt * (y - meas[c, 1])
@@ -202,7 +269,7 @@ def contact_forces(t_s: float, dt_s: float, q: np.ndarray, v: np.ndarray, out: n
         uz = (z - prev[c, 2]) / dt_s
         tr[T_ACTIVE] = 1.0
         tr[T_IX], tr[T_IY], tr[T_DEPTH] = x, y, -z
-        span = reach[c] + margin
+        span = reach[c] + ops.margin
         c0 = max(0, int(math.floor((x - span + half_w) / spacing)))
         c1 = min(cols - 1, int(math.ceil((x + span + half_w) / spacing)))
         r0 = max(0, int(math.floor((half_h - y - span) / spacing)))

@@ -11,7 +11,7 @@ import numpy as np
 
 from skinhil.errors import ConfigError
 from skinhil.validation import Constraints, Interval, check_param, non_negative, validate_params
-from skinhil.world.contact import ContactParams
+from skinhil.world.contact import ContactOperands, ContactParams, ContactState
 from skinhil.world.indenters import Indenter
 from skinhil.world.trajectory import AXES, Trajectory
 
@@ -85,36 +85,44 @@ class World:
         keys = [c.trajectory.keyframes for c in cs]
         ptr = np.concatenate([[0], np.cumsum([len(k) for k in keys])]).astype(np.int64)
         t = [c.trajectory for c in cs]
-        self.operands = (
-            np.ascontiguousarray(index, dtype=np.int64),
-            np.ascontiguousarray(rest_xy, dtype=np.float64),
-            np.array(size, dtype=np.int64), float(spacing_m), params.packed(),
-            np.array([c.indenter.code for c in cs], dtype=np.int64),
-            np.stack([c.indenter.geometry() for c in cs]),
-            np.array([c.indenter.reach_m for c in cs]),
-            np.array([c.start_s for c in cs]), ptr, np.concatenate(keys),
-            np.array([[x.normal == "force", x.tangential == "force"] for x in t],
-                     dtype=np.int64),
-            np.array([[x.vibration_amplitude_m, x.vibration_frequency_hz,
-                       AXES.index(x.vibration_axis)] for x in t]),
-            np.array([[c.mu_static, c.mu_kinetic] for c in cs]),
-            np.array([x.origin_m for x in t], dtype=np.float64))
+        self.operands = ContactOperands(
+            columns=np.ascontiguousarray(index, dtype=np.int64),
+            rest_xy=np.ascontiguousarray(rest_xy, dtype=np.float64),
+            rows=int(size[0]), cols=int(size[1]), spacing=float(spacing_m),
+            kn=float(params.normal_stiffness_n_per_m), cn=float(params.normal_damping_n_s_per_m),
+            kt=float(params.tangential_stiffness_n_per_m),
+            ct=float(params.tangential_damping_n_s_per_m),
+            bn=float(params.admittance_m_per_n_s),
+            bt=float(params.tangential_admittance_m_per_n_s), margin=float(params.margin_m),
+            shapes=np.array([c.indenter.code for c in cs], dtype=np.int64),
+            geos=np.stack([c.indenter.geometry() for c in cs]),
+            reach=np.array([c.indenter.reach_m for c in cs]),
+            starts=np.array([c.start_s for c in cs]), key_ptr=ptr, keys=np.concatenate(keys),
+            control=np.array([[x.normal == "force", x.tangential == "force"] for x in t],
+                             dtype=np.int64),
+            vib=np.array([[x.vibration_amplitude_m, x.vibration_frequency_hz,
+                           AXES.index(x.vibration_axis)] for x in t]),
+            mu=np.array([[c.mu_static, c.mu_kinetic] for c in cs]),
+            origin=np.array([x.origin_m for x in t], dtype=np.float64))
+        """What the compiled contact step reads (:class:`ContactOperands`)."""
         n, n_top = len(cs), len(index)
-        self.state = (np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3)),
-                      np.zeros(n, dtype=np.int64), np.full(n, np.nan),
-                      np.zeros((n, n_top), dtype=np.int8), np.zeros((n, n_top, 2)),
-                      np.full((n, n_top), -10, dtype=np.int64), np.zeros(1, dtype=np.int64))
-        """Pose (x, y, z_tip) m now and a step back, the last measured force (Fx, Fy, N) N,
-        running or not, the load set-point (N, NaN: the trajectory's), each mass's friction
-        state, anchor (m) and last step in contact, the step counter."""
+        self.state = ContactState(
+            pose=np.zeros((n, 3)), prev=np.zeros((n, 3)), meas=np.zeros((n, 3)),
+            live=np.zeros(n, dtype=np.int64), setpoint=np.full(n, np.nan),
+            nodes=np.zeros((n, n_top), dtype=np.int8), anchor=np.zeros((n, n_top, 2)),
+            stamp=np.full((n, n_top), -10, dtype=np.int64), counter=np.zeros(1, dtype=np.int64))
+        """What the compiled contact step updates in place (:class:`ContactState`)."""
+        self.kernel_tuple = (tuple(self.operands), tuple(self.state))
+        """:attr:`operands` and :attr:`state` as the kernels called from Python take them
+        (:meth:`~skinhil.model.neurons.NeuronPopulation.kernel_operands` says why)."""
 
     def reset(self) -> None:
         """Nothing touching, set-points cleared."""
-        pose, prev, meas, live, setpoint, nodes, anchor, stamp, counter = self.state
-        for a in (pose, prev, meas, live, nodes, anchor, counter):
+        st = self.state
+        for a in (st.pose, st.prev, st.meas, st.live, st.nodes, st.anchor, st.counter):
             a[...] = 0
-        setpoint[:] = np.nan
-        stamp[:] = -10
+        st.setpoint[:] = np.nan
+        st.stamp[:] = -10
 
     def set_load(self, contact: int, load_n: float | None) -> None:
         """Replace a force-controlled contact's load (N) from the next step on (a grip
@@ -126,4 +134,4 @@ class World:
             raise ConfigError(f"contact {contact} is position-controlled: no load to set")
         if load_n is not None:
             check_param("load_n", load_n, non_negative("N"))
-        self.state[4][contact] = np.nan if load_n is None else float(load_n)
+        self.state.setpoint[contact] = np.nan if load_n is None else float(load_n)

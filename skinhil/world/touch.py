@@ -6,6 +6,9 @@ from the skin's state at the start of step ``k`` (:func:`skinhil.world.contact.c
 added to the top layer's input of step ``k``; the mechanics' step ``k`` with that input held
 over it. The neurons then step the block as without contact. So a contact's force enters
 exactly where a stimulus's does, and a block without contacts gives the very same numbers.
+The block is the model's own sensor kernel (:meth:`skinhil.model.sensor.SkinSensor.run_fused`)
+with a :class:`Touch`: this module registers the contacts as its surface piece
+(:mod:`skinhil.model.surface`).
 
 Two mechanics can carry a force that depends on the state: the leapfrog (the linear
 mechanics above 8x8, or ``linear_stepper="leapfrog"``) and the geometric mechanics; the exact
@@ -16,17 +19,20 @@ ZOH of the linear mechanics cannot (:meth:`skinhil.model.skin.SkinModel.regime_f
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numba
 import numpy as np
+from numba.extending import overload
 
 from skinhil.errors import ConfigError
-from skinhil.model.mechanics.geometric import GeometricMechanics, rk4_step
-from skinhil.model.mechanics.leapfrog import LeapfrogMechanics, leapfrog_kernel
-from skinhil.model.neurons import _izhikevich_kernel
+from skinhil.model.mechanics.geometric import GeometricMechanics
+from skinhil.model.mechanics.leapfrog import LeapfrogMechanics
 from skinhil.model.sensor import SkinSensor
 from skinhil.model.skin import SkinParams
-from skinhil.model.stimuli import Schedule, add_schedule_forces
-from skinhil.world.contact import ContactParams, contact_forces
+from skinhil.model.stimuli import Schedule
+from skinhil.model.surface import surface_forces
+from skinhil.world.contact import ContactOperands, ContactParams, ContactState, contact_forces
 from skinhil.world.scene import Scene, World
 from skinhil.world.truth import RAW_FIELDS, truth_records
 
@@ -34,58 +40,32 @@ IDLE_OFFSET_S = 1e300
 """Scene offset of a world that is not playing: every contact is before its start."""
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _step_times_and_schedule_forces(first_step, dt, t_offset, slots, n_slots, springs,
-                                    schedule):  # pragma: no cover - compiled
-    # each step's sensor time (s) and the schedule's forces (N) by step, component and slot
-    # in the precision of springs (the stepper's), as the schedule's sensor kernels make
-    # them; inlined into each touch kernel (Numba IR), so each compiles as if written there
-    n_steps = springs.shape[0]
-    t = (first_step + np.arange(n_steps)) * dt
-    forces = np.zeros((n_steps, 3, n_slots), dtype=springs.dtype)
-    starts, onsets, ends, which, stim_onsets, stim_ends, taus, ptr, pushed, peaks = schedule
-    add_schedule_forces(forces.transpose(0, 2, 1), t - t_offset, starts, onsets, ends, which,
-                        stim_onsets, stim_ends, taus, ptr, slots[pushed], peaks)
-    return t, forces
+class Touch(NamedTuple):
+    """A world's operands of the sensor kernels' surface piece (:mod:`skinhil.model.surface`);
+    a kernel takes it as a plain tuple of plain tuples (:meth:`TouchSensor.advance_schedule`)."""
+
+    scene_offset_s: float
+    """Sensor time (s) of scene time 0."""
+    contacts: tuple
+    """:attr:`skinhil.world.scene.World.operands` (:class:`ContactOperands`), plain."""
+    state: tuple
+    """:attr:`skinhil.world.scene.World.state` (:class:`ContactState`), plain."""
+    truth: np.ndarray
+    """The contacts' truth by step of the block (n_steps, n_contacts, RAW_FIELDS)."""
 
 
-@numba.njit(cache=True, nogil=True)
-def _leapfrog_touch_kernel(first_step, dt, t_offset, scene_offset, slots, n_slots, springs,
-                           spikes, schedule, substeps, mechanics, neurons, operands, state,
-                           truth):  # pragma: no cover - compiled
-    # the schedule's forces by slot (as _scheduled_leapfrog_sensor_kernel), then per step the
-    # contact on the state at its start and one leapfrog step; then the neurons
-    n_steps = springs.shape[0]
-    t, forces = _step_times_and_schedule_forces(first_step, dt, t_offset, slots, n_slots,
-                                                springs, schedule)
-    q = mechanics[12]
-    w = mechanics[14]
-    for k in range(n_steps):
-        contact_forces(t[k] - scene_offset, dt, q, w, forces[k], operands, state, truth[k])
-        leapfrog_kernel(forces[k:k + 1], springs[k:k + 1], dt, substeps, *mechanics)
-    n = springs.shape[1]
-    _izhikevich_kernel(springs.reshape(n_steps, 1, n), dt * 1e3,
-                       spikes.reshape(n_steps, 1, n), *neurons)
-
-
-@numba.njit(cache=True, nogil=True)
-def _geometric_touch_kernel(first_step, dt, t_offset, scene_offset, slots, n_slots, springs,
-                            spikes, schedule, mechanics, neurons, operands, state,
-                            truth):  # pragma: no cover - compiled
-    # the schedule's forces by slot (as _scheduled_geometric_sensor_kernel), then per step the
-    # contact on the state at its start and one RK4 step of the geometric mechanics; then
-    # the neurons
-    n_steps = springs.shape[0]
-    t, forces = _step_times_and_schedule_forces(first_step, dt, t_offset, slots, n_slots,
-                                                springs, schedule)
-    q = mechanics[13]
-    v = mechanics[14]
-    for k in range(n_steps):
-        contact_forces(t[k] - scene_offset, dt, q, v, forces[k], operands, state, truth[k])
-        rk4_step(forces[k], springs[k], dt, *mechanics)
-    n = springs.shape[1]
-    _izhikevich_kernel(springs.reshape(n_steps, 1, n), dt * 1e3,
-                       spikes.reshape(n_steps, 1, n), *neurons)
+@overload(surface_forces, inline="always")
+def _contacts(touch, step, t_s, dt_s, q, v, out):  # type: ignore[no-untyped-def]
+    # a touch of the world: the contacts' forces on the state at the step's start, and
+    # their truth at that step
+    if isinstance(touch, numba.types.BaseTuple):
+        def contacts(touch, step, t_s, dt_s, q, v, out):  # type: ignore[no-untyped-def]
+            world = Touch(*touch)
+            contact_forces(t_s - world.scene_offset_s, dt_s, q, v, out,
+                           ContactOperands(*world.contacts), ContactState(*world.state),
+                           world.truth[step])
+        return contacts
+    return None
 
 
 class TouchSensor:
@@ -115,7 +95,6 @@ class TouchSensor:
         self.world = World(scene, index, model.positions[:n_top, :2], model.size,
                            model.params.spacing_m, self.params)
         self.scene_offset_s = IDLE_OFFSET_S
-        self._checked: Schedule | None = None
 
     @property
     def scene(self) -> Scene:
@@ -144,29 +123,12 @@ class TouchSensor:
         n_springs) and the contacts' truth at every step (n, n_contacts,
         :data:`skinhil.world.truth.RAW_FIELDS`), SI units."""
         s = self.sensor
-        if schedule is not self._checked:
-            s.model.check_schedule(schedule)
-            self._checked = schedule
-        stepper = s.stepper
+        s.check_schedule(schedule)
         truth = np.zeros((n_steps, len(self.scene.contacts), RAW_FIELDS))
-        shape = (n_steps, s.model.n_springs)
-        spikes = np.empty(shape, dtype=np.bool_)
-        if isinstance(stepper, LeapfrogMechanics):
-            springs = np.empty(shape, dtype=stepper.dtype)
-            _leapfrog_touch_kernel(s.step_index, s.dt_s, float(t_offset_s),
-                                   self.scene_offset_s, stepper.slots, stepper.state.shape[2],
-                                   springs, spikes, schedule.kernel_operands, stepper.substeps,
-                                   stepper.operands, s.neurons.kernel_operands(),
-                                   self.world.operands, self.world.state, truth)
-        else:
-            assert isinstance(stepper, GeometricMechanics)
-            springs = np.empty(shape)
-            _geometric_touch_kernel(
-                s.step_index, s.dt_s, float(t_offset_s), self.scene_offset_s, stepper.slots,
-                stepper.state.shape[2], springs, spikes, schedule.kernel_operands,
-                stepper.operands, s.neurons.kernel_operands(), self.world.operands,
-                self.world.state, truth)
-        s.step_index += n_steps
+        contacts, state = self.world.kernel_tuple
+        touch = tuple(Touch(self.scene_offset_s, contacts, state, truth))
+        springs, spikes = s.run_fused(n_steps, schedule=schedule, t_offset_s=t_offset_s,
+                                      touch=touch)
         return springs, spikes, truth
 
     def truth_at(self, truth: np.ndarray, first_step: int, every: int) -> np.ndarray:

@@ -33,27 +33,34 @@ contiguous slices and the compiler vectorises it. With ``u = 1/|d|`` the force o
 
 (the formula above, ``e = d·u``): one square root and one division per spring, nothing else
 per spring that the rest directions do not fix. A spring of zero length pushes nothing (its
-``d`` is 0), as before. The net force at rest (the preload) is this pass's own at ``q = 0``,
+``d`` is 0). The net force at rest (the preload) is this pass's own at ``q = 0``,
 so rest stays exactly at rest. Each RK4 stage is one pass over the strips and one over the
 bands of moving slots, which also accumulates the RK4 sum, so a step holds no per-stage
 arrays. State components below :data:`~skinhil.model.mechanics.leapfrog.TINY` (1e-150 m or
-m/s) are flushed to zero when the step ends: subnormals are ~100x slower on x86, and the
-former formulation in absolute positions (~1e-3 m) did not resolve 1e-19 m anyway. The
-results are the former per-spring formulation's (absolute positions, ``e = d/L``, forces
-scattered spring by spring) to rounding: tests/test_core_geometric_kernel.py pins them to
-within 1e-11 of the peak force. Per step at 6x6 (338 springs, 201 of them with a free end):
-7.1 µs against 10.5 spring by spring (README, "Performance").
+m/s) are flushed to zero when the step ends: subnormals are ~100x slower on x86, and a
+formulation in absolute positions (~1e-3 m) would not resolve 1e-19 m anyway. The
+results are a per-spring formulation's (absolute positions, ``e = d/L``, forces scattered
+spring by spring) to rounding: tests/test_core_geometric_kernel.py pins them to within
+1e-11 of the peak force; the strips are the faster (benchmarks/bench_size.py, ``mech``
+column).
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
 
 from skinhil.model.geometry import Mesh
-from skinhil.model.mechanics.leapfrog import TINY, strip_layout, to_slots, write_readouts
+from skinhil.model.mechanics.leapfrog import (
+    TINY,
+    scatter_strip,
+    strip_layout,
+    to_slots,
+    write_readouts,
+)
 from skinhil.model.mechanics.linear import spring_frames
 from skinhil.model.mechanics.readout import Readout, length_signal
 
@@ -70,27 +77,64 @@ double precision at 512 bits), so that no pair of it runs in the compiler's scal
 JOIN_GAP = 16
 """Strips of one kind are joined across at most this many pairs of fixed masses
 (:func:`~skinhil.model.mechanics.leapfrog.join_runs`): a strip's own overhead costs about
-what 20 pairs do, so at 6x6 the two layers' strips of a kind become one (7 strips of 377
-pairs instead of 14 of 299: 6.3 -> 5.9 µs per step)."""
+what 20 pairs do, so at 6x6 the two layers' strips of a kind become one, which steps
+faster (benchmarks/bench_size.py, ``mech`` column)."""
 
 SHORTEST_SQUARED = 1e-300
 """|d|² is taken at least this (m²): a spring of zero length then has a finite ``u`` and,
 its ``d`` being 0, pushes nothing."""
 
-GeometricOperands = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                          np.ndarray, bool, float, float, float, np.ndarray, np.ndarray,
-                          np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                          np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
-"""``GeometricMechanics.operands``: the strip table, each strip's reach (its length rounded
-up to :data:`LANES`), the readout plan
-(:class:`~skinhil.model.mechanics.leapfrog.StripLayout`), each strip's rest unit vector and
-rest length (m), the springs between fixed masses, whether the readout is the length
-change, k (N/m), c (N·s/m), T (N), the span of moving slots (first, end), 1/m per slot (0
-where fixed, 1/kg), the preload (3, n_slots) N; then the state q (m) and v (m/s) (3,
-n_slots each) and scratch: the stage's q and v, the RK4 sums of q' and v', the springs' net
-force (3, n_slots each), the readouts (n_strips, longest reach) and the forces (3, longest
-reach). Arrays updated in place, double precision; the slots extend :data:`LANES` past the
-grid's (never moving)."""
+class GeometricOperands(NamedTuple):
+    """What the compiled RK4 step reads (:attr:`GeometricMechanics.operands`): arrays
+    updated in place, double precision, by component and slot; the slots extend
+    :data:`LANES` past the grid's (never moving)."""
+
+    strips: np.ndarray
+    """The strip table (:func:`~skinhil.model.mechanics.leapfrog.join_runs`)."""
+    reach: np.ndarray
+    """Each strip's length rounded up to :data:`LANES`."""
+    plan: np.ndarray
+    """The readout plan (:class:`~skinhil.model.mechanics.leapfrog.StripLayout`)."""
+    run_e: np.ndarray
+    """Each strip's rest unit vector (n_strips, 3)."""
+    run_l0: np.ndarray
+    """Each strip's rest length (m)."""
+    still: np.ndarray
+    """The springs between fixed masses: they read 0."""
+    length: bool
+    """Whether the readout is the length change (else the axial projection)."""
+    k: float
+    """Spring stiffness (N/m)."""
+    c: float
+    """Damping (N·s/m)."""
+    t: float
+    """Baseline tension (N)."""
+    span: np.ndarray
+    """The span of moving slots (first, end)."""
+    inv_m: np.ndarray
+    """1/m per slot (1/kg; 0 where fixed)."""
+    preload: np.ndarray
+    """The springs' net force at rest (3, n_slots) N."""
+    slots: np.ndarray
+    """Each mass's slot (:func:`~skinhil.model.mechanics.leapfrog.grid_slots`)."""
+    q: np.ndarray
+    """Displacement (3, n_slots) m."""
+    v: np.ndarray
+    """Velocity (3, n_slots) m/s."""
+    qs: np.ndarray
+    """Scratch: a stage's displacement (m)."""
+    vs: np.ndarray
+    """Scratch: a stage's velocity (m/s)."""
+    sq: np.ndarray
+    """Scratch: the RK4 sum of q' (m/s)."""
+    sv: np.ndarray
+    """Scratch: the RK4 sum of v' (m/s²)."""
+    net: np.ndarray
+    """Scratch: the springs' net force (3, n_slots) N."""
+    signals: np.ndarray
+    """Scratch: the readouts (n_strips, longest reach) N."""
+    scratch: np.ndarray
+    """Scratch: a strip's forces (3, longest reach) N."""
 
 
 @numba.njit(inline="always", fastmath=True)
@@ -116,7 +160,6 @@ def strip_forces(q: np.ndarray, v: np.ndarray, out: np.ndarray, strips: np.ndarr
     out[:] = 0.0
     qx, qy, qz = q[0], q[1], q[2]
     vx, vy, vz = v[0], v[1], v[2]
-    gx, gy, gz = out[0], out[1], out[2]
     fx_s, fy_s, fz_s = scratch[0], scratch[1], scratch[2]
     for r in range(strips.shape[0]):
         i0, j0, n, nn = strips[r, 0], strips[r, 1], strips[r, 2], reach[r]
@@ -157,42 +200,32 @@ def strip_forces(q: np.ndarray, v: np.ndarray, out: np.ndarray, strips: np.ndarr
                 fx_s[m] = g * dx
                 fy_s[m] = g * dy
                 fz_s[m] = g * dz
-        # +f on mass i, −f on mass j: two loops, since the masses i of a strip may be its j
-        gxi, gyi, gzi = gx[i0:i0 + n], gy[i0:i0 + n], gz[i0:i0 + n]
-        gxj, gyj, gzj = gx[j0:j0 + n], gy[j0:j0 + n], gz[j0:j0 + n]
-        for m in range(n):
-            gxi[m] += fx_s[m]
-            gyi[m] += fy_s[m]
-            gzi[m] += fz_s[m]
-        for m in range(n):
-            gxj[m] -= fx_s[m]
-            gyj[m] -= fy_s[m]
-            gzj[m] -= fz_s[m]
+        scatter_strip(out, scratch, i0, j0, n)
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
-def rk4_step(fs: np.ndarray, row: np.ndarray, dt: float, strips: np.ndarray,
-             reach: np.ndarray, plan: np.ndarray, run_e: np.ndarray, run_l0: np.ndarray,
-             still: np.ndarray, length: bool, k: float, c: float, t: float,
-             span: np.ndarray, inv_m: np.ndarray, preload: np.ndarray, q: np.ndarray,
-             v: np.ndarray, qs: np.ndarray, vs: np.ndarray, sq: np.ndarray, sv: np.ndarray,
-             net: np.ndarray, signals: np.ndarray,
-             scratch: np.ndarray) -> None:  # pragma: no cover - compiled
+def rk4_step(fs: np.ndarray, row: np.ndarray, dt: float,
+             ops: GeometricOperands) -> None:  # pragma: no cover - compiled
     """One step: the external forces ``fs`` (3, n_slots) N by component and slot, held over
-    ``dt`` (s) → ``row`` (n_springs,) N, the readouts at the step's start; the operands
-    after ``dt`` are :attr:`GeometricMechanics.operands`. A caller stepping one step at a
-    time (the contact) passes its rows: contiguous, so the loops stay vectorised."""
+    ``dt`` (s) → ``row`` (n_springs,) N, the readouts at the step's start; ``ops`` after
+    ``dt`` (:attr:`GeometricMechanics.operands`). Contiguous rows keep the loops
+    vectorised."""
+    q, v, qs, vs, sq, sv, net = ops.q, ops.v, ops.qs, ops.vs, ops.sq, ops.sv, ops.net
+    strips, reach, run_e, run_l0 = ops.strips, ops.reach, ops.run_e, ops.run_l0
+    k, c, t, length, signals, scratch = ops.k, ops.c, ops.t, ops.length, ops.signals, \
+        ops.scratch
+    preload, inv_m = ops.preload, ops.inv_m
     half_dt = 0.5 * dt
     sixth_dt = dt / 6.0
-    m0, m1 = span[0], span[1]
+    m0, m1 = ops.span[0], ops.span[1]
     width = m1 - m0
-    for s in still:  # between fixed masses: never stretched
+    for s in ops.still:  # between fixed masses: never stretched
         row[s] = 0.0
     for stage in range(4):
         if stage == 0:  # the state at the step's start: its readouts too
             strip_forces(q, v, net, strips, reach, run_e, run_l0, k, c, t, scratch,
                          signals, True, length)
-            write_readouts(row, signals, plan)
+            write_readouts(row, signals, ops.plan)
         else:
             strip_forces(qs, vs, net, strips, reach, run_e, run_l0, k, c, t, scratch,
                          signals, False, length)
@@ -227,16 +260,17 @@ def rk4_step(fs: np.ndarray, row: np.ndarray, dt: float, strips: np.ndarray,
                     qa[m] = qm if abs(qm) > TINY_F64 else 0.0
                     va[m] = vm if abs(vm) > TINY_F64 else 0.0
 
-@numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
+
+@numba.njit(cache=True, nogil=True)
 def rk4_kernel(forces: np.ndarray, out: np.ndarray, dt: float,
-               *operands: *GeometricOperands) -> None:  # pragma: no cover - compiled
+               operands: tuple) -> None:  # pragma: no cover - compiled
     """forces (n, 3, n_slots) N by component and slot (:meth:`GeometricMechanics.by_slot`),
     each held over a step of ``dt`` (s) → out (n, n_springs) N, the readouts at the start of
-    each step (:func:`rk4_step` step by step); the operands after ``dt`` are
-    :attr:`GeometricMechanics.operands`."""
+    each step (:func:`rk4_step` step by step); ``operands`` is
+    ``tuple(GeometricMechanics.operands)``."""
+    ops = GeometricOperands(*operands)
     for step in range(forces.shape[0]):
-        rk4_step(forces[step], out[step], dt, *operands)
-
+        rk4_step(forces[step], out[step], dt, ops)
 
 
 def max_stable_dt(mesh: Mesh, mass_kg: float, stiffness_n_per_m: float,
@@ -299,19 +333,26 @@ class GeometricMechanics:
         strip_forces(self.state[0], self.state[1], preload, strips, reach, layout.run_e,
                      layout.run_l0, float(self.k), float(self.c), float(self.t), scratch,
                      signals, False, True)
-        self.operands: GeometricOperands = (
-            strips, reach, layout.plan, layout.run_e, layout.run_l0, layout.still,
-            readout == "length", float(self.k), float(self.c), float(self.t), span,
-            np.append(np.where(layout.fixed, 0.0, self.inv_m), np.zeros(LANES)), preload,
-            self.state[0], self.state[1], np.zeros((3, n_slots)), np.zeros((3, n_slots)),
-            np.zeros((3, n_slots)), np.zeros((3, n_slots)), np.zeros((3, n_slots)), signals,
-            scratch)
+        self.operands = GeometricOperands(
+            strips=strips, reach=reach, plan=layout.plan, run_e=layout.run_e,
+            run_l0=layout.run_l0, still=layout.still, length=readout == "length",
+            k=float(self.k), c=float(self.c), t=float(self.t), span=span,
+            inv_m=np.append(np.where(layout.fixed, 0.0, self.inv_m), np.zeros(LANES)),
+            preload=preload, slots=self.slots, q=self.state[0], v=self.state[1],
+            qs=np.zeros((3, n_slots)), vs=np.zeros((3, n_slots)), sq=np.zeros((3, n_slots)),
+            sv=np.zeros((3, n_slots)), net=np.zeros((3, n_slots)), signals=signals,
+            scratch=scratch)
+        """What the compiled step reads (:class:`GeometricOperands`); a kernel called from
+        Python takes ``tuple(operands)`` (:meth:`~skinhil.model.neurons.NeuronPopulation.
+        kernel_operands` says why)."""
+        self.kernel_tuple = tuple(self.operands)
+        """:attr:`operands` as the kernels called from Python take them."""
 
     @property
     def preload(self) -> np.ndarray:
         """The springs' net force at rest on every mass (n_masses, 3) N, held by the
         surrounding tissue (module docstring)."""
-        return self.operands[12][:, self.slots].T.copy()
+        return self.operands.preload[:, self.slots].T.copy()
 
     def by_slot(self, forces_n: np.ndarray) -> np.ndarray:
         """External forces (n, n_masses, 3) N as :func:`rk4_kernel` reads them: (n, 3,
@@ -345,7 +386,7 @@ class GeometricMechanics:
         """
         forces = self.by_slot(forces_n)
         out = np.empty((forces.shape[0], self.n_springs))
-        rk4_kernel(forces, out, self.dt_s, *self.operands)
+        rk4_kernel(forces, out, self.dt_s, self.kernel_tuple)
         return out
 
     def energy_j(self) -> float:

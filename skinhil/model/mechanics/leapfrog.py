@@ -7,11 +7,10 @@ displacements and velocities of its two masses and adding its force to both, so 
 O(springs) time and memory where the exact ZOH of :mod:`skinhil.model.mechanics.linear` costs
 O(dof²). The pass goes run by run (:func:`spring_runs`: the springs of one kind along a row
 of the grid), each run reading and updating its masses as contiguous slices, so the compiler
-vectorises it: a third less time per step at 32x32 than spring by spring. Only what can
+vectorises it, faster than spring by spring (benchmarks/bench_size.py). Only what can
 move is stepped: the free masses (:func:`moving_bands`) and the runs with a free mass; the
-springs between fixed masses (all of layer 3's, the edges') read 0 (26x26: 38 -> 32 µs per
-step). The model uses it above ``EXACT_MAX_FREE_DOFS`` free degrees of freedom
-(:mod:`skinhil.model.skin`).
+springs between fixed masses (all of layer 3's, the edges') read 0. The model uses it
+above ``EXACT_MAX_FREE_DOFS`` free degrees of freedom (:mod:`skinhil.model.skin`).
 
 A row's run is short (32-33 springs at 34x34), shorter than one pass of the compiler's
 vector loop (16 single-precision lanes, unrolled), which then ran it a float at a time. So
@@ -21,8 +20,8 @@ of one kind join masses a constant number of slots apart in every row, and the r
 kind are joined across the fixed pairs between rows into strips of ~1,100
 (:func:`join_runs`: 14 strips at 34x34 instead of 382 runs); the readouts go out to the
 springs' order by a plan (:func:`readout_plan`), the moving masses in one band per layer
-(:func:`moving_bands`). At 34x34, single precision: 30.7 µs per step by runs, 24.8 by
-strips, 22.3 with the plan, the fixed part (the masses' update) 4.9 -> 2.8 µs with bands.
+(:func:`moving_bands`): each of the three shortens the step (benchmarks/bench_size.py,
+``mech`` column).
 
 Scheme (kick-drift leapfrog, velocities at half steps; ``h = dt``, ``m`` the nodal mass):
 
@@ -52,7 +51,7 @@ rad/s and γ ≈ 4,200 /s at every size: one substep at dt = 0.1 ms; a baseline 
 
 Precision: the state, the input and the spring forces are single precision
 (:data:`DTYPE`), which halves the memory the step streams through and doubles the lanes of
-its vector instructions: 30.7 against 38.8 µs per step at 34x34 (17,866 springs). Error
+its vector instructions (benchmarks/bench_size.py against ``dtype=np.float64``). Error
 budget: single precision rounds at 6e-8 of a value; the scheme's own error is 1.3e-3 of the
 peak force; measured, the forces stay within 4e-7 of the peak of the double-precision
 reference (``dtype=np.float64``, the same code), and the spikes are the reference's: not one
@@ -72,6 +71,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -105,19 +105,53 @@ RUN_FIELDS = 5
 MAX_GAP = 4
 """:func:`join_runs` bridges at most this many pairs of fixed masses between two runs."""
 
-LeapfrogOperands = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                         np.ndarray, bool, np.floating, np.floating, np.ndarray, np.ndarray,
-                         np.floating, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                         np.ndarray, np.ndarray, np.ndarray]
-"""``LeapfrogMechanics.operands``: the strip table (:func:`join_runs`) and the readout plan
-(:func:`readout_plan`), each strip's unit vector e, T/L and rest
-length, the springs between fixed masses, whether the readout is the length change, k, c,
-the bands of slots stepped (:func:`moving_bands`), 1/m per slot (0 where fixed), the flush
-threshold, then
-the state q, v, w (velocity at the step start), f_prev, and scratch: acc (3, n_slots), the
-readouts (n_strips, longest strip) and the forces (3, longest strip); arrays updated in
-place, the state stored by component and slot (3, n_slots, :func:`grid_slots`); the reals
-all in the stepper's precision (:data:`DTYPE`)."""
+class LeapfrogOperands(NamedTuple):
+    """What the compiled leapfrog step reads (:attr:`LeapfrogMechanics.operands`): arrays
+    updated in place, the state stored by component and slot (3, n_slots,
+    :func:`grid_slots`), the reals in the stepper's precision (:data:`DTYPE`)."""
+
+    strips: np.ndarray
+    """The strip table (:func:`join_runs`)."""
+    plan: np.ndarray
+    """The readout plan (:func:`readout_plan`)."""
+    run_e: np.ndarray
+    """Each strip's rest unit vector (n_strips, 3)."""
+    run_tl: np.ndarray
+    """Each strip's T/L (N/m)."""
+    run_l0: np.ndarray
+    """Each strip's rest length (m)."""
+    still: np.ndarray
+    """The springs between fixed masses: they read 0."""
+    length: bool
+    """Whether the readout is the length change (else the axial projection)."""
+    k: np.floating
+    """Spring stiffness (N/m)."""
+    c: np.floating
+    """Damping (N·s/m)."""
+    moving: np.ndarray
+    """The bands of slots stepped (:func:`moving_bands`)."""
+    inv_m: np.ndarray
+    """1/m per slot (1/kg; 0 where fixed)."""
+    tiny: np.floating
+    """State components below this are flushed to zero (:data:`TINY`)."""
+    slots: np.ndarray
+    """Each mass's slot (:func:`grid_slots`)."""
+    substeps: int
+    """Leapfrog steps per step (:func:`substeps_for`)."""
+    q: np.ndarray
+    """Displacement (m)."""
+    v: np.ndarray
+    """Velocity at the half step (m/s)."""
+    w: np.ndarray
+    """Velocity at the step's start (m/s)."""
+    f_prev: np.ndarray
+    """The last input (N)."""
+    acc: np.ndarray
+    """Scratch: the springs' net force (N), (3, n_slots)."""
+    signals: np.ndarray
+    """Scratch: the readouts (n_strips, longest strip)."""
+    scratch: np.ndarray
+    """Scratch: the forces of a strip (3, longest strip)."""
 
 
 def grid_slots(mesh: Mesh) -> np.ndarray:
@@ -362,20 +396,38 @@ def write_readouts(row: np.ndarray, signals: np.ndarray,
                 row[s0 + ds * t] = a[t]
 
 
+@numba.njit(inline="always")
+def scatter_strip(acc: np.ndarray, forces: np.ndarray, i0: int, j0: int,
+                  n: int) -> None:  # pragma: no cover - compiled
+    """Add a strip's spring forces ``forces`` (3, >= n) N, those on its masses ``i``, to the
+    net force ``acc`` (3, n_slots) on its slots ``i0 ..`` and minus them on ``j0 ..``: two
+    loops, since the masses i of a strip may be its masses j."""
+    gxi, gyi, gzi = acc[0, i0:i0 + n], acc[1, i0:i0 + n], acc[2, i0:i0 + n]
+    gxj, gyj, gzj = acc[0, j0:j0 + n], acc[1, j0:j0 + n], acc[2, j0:j0 + n]
+    fx_s, fy_s, fz_s = forces[0], forces[1], forces[2]
+    for m in range(n):
+        gxi[m] += fx_s[m]
+        gyi[m] += fy_s[m]
+        gzi[m] += fz_s[m]
+    for m in range(n):
+        gxj[m] -= fx_s[m]
+        gyj[m] -= fy_s[m]
+        gzj[m] -= fz_s[m]
+
+
 @numba.njit(cache=True, fastmath=True, nogil=True, error_model="numpy")
-def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: int,
-                    runs: np.ndarray, plan: np.ndarray, run_e: np.ndarray,
-                    run_tl: np.ndarray,
-                    run_l0: np.ndarray, still: np.ndarray, length: bool, k: np.floating,
-                    c: np.floating, moving: np.ndarray, inv_m: np.ndarray, tiny: np.floating,
-                    q: np.ndarray, v: np.ndarray, w: np.ndarray,
-                    f_prev: np.ndarray, acc: np.ndarray, signals: np.ndarray,
-                    scratch: np.ndarray) -> None:  # pragma: no cover - compiled
-    """forces (n, 3, n_slots) N, by component and slot (:meth:`LeapfrogMechanics.by_slot`),
-    held per step of ``dt`` (s), each in
-    ``substeps`` leapfrog steps → out (n, n_springs) N; the operands after ``substeps`` are
-    :attr:`LeapfrogMechanics.operands`. Every real is in the state's precision: no float64
+def leapfrog_step(fs: np.ndarray, row: np.ndarray, dt: float,
+                  ops: LeapfrogOperands) -> None:  # pragma: no cover - compiled
+    """One step of ``dt`` (s) in ``ops.substeps`` leapfrog steps: the external forces ``fs``
+    (3, n_slots) N by component and slot, held over it → ``row`` (n_springs,) N, the
+    readouts at the step's start. Every real is in the state's precision: no float64
     constant promotes single-precision arithmetic."""
+    q, v, w, f_prev, acc = ops.q, ops.v, ops.w, ops.f_prev, ops.acc
+    runs, run_e, run_tl, run_l0, signals = ops.strips, ops.run_e, ops.run_tl, ops.run_l0, \
+        ops.signals
+    k, c, length, moving, inv_m, tiny = ops.k, ops.c, ops.length, ops.moving, ops.inv_m, \
+        ops.tiny
+    substeps = ops.substeps
     real = q.dtype.type
     h = real(dt / substeps)
     half = real(0.5)
@@ -383,66 +435,63 @@ def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float, substeps: in
     zero = real(0.0)
     qx, qy, qz = q[0], q[1], q[2]
     wx, wy, wz = w[0], w[1], w[2]
-    gx, gy, gz = acc[0], acc[1], acc[2]
+    scratch = ops.scratch
     fx_s, fy_s, fz_s = scratch[0], scratch[1], scratch[2]
+    for s in ops.still:  # between fixed masses: never stretched
+        row[s] = 0.0
+    for sub in range(substeps):
+        acc[:] = 0.0
+        for r in range(runs.shape[0]):  # strip by strip
+            i0, j0, n = runs[r, 0], runs[r, 1], runs[r, 2]
+            sig_s = signals[r]
+            ex, ey, ez, tl = run_e[r, 0], run_e[r, 1], run_e[r, 2], run_tl[r]
+            kex, key, kez, l0 = k * ex, k * ey, k * ez, run_l0[r]
+            qxi, qyi, qzi = qx[i0:i0 + n], qy[i0:i0 + n], qz[i0:i0 + n]
+            qxj, qyj, qzj = qx[j0:j0 + n], qy[j0:j0 + n], qz[j0:j0 + n]
+            wxi, wyi, wzi = wx[i0:i0 + n], wy[i0:i0 + n], wz[i0:i0 + n]
+            wxj, wyj, wzj = wx[j0:j0 + n], wy[j0:j0 + n], wz[j0:j0 + n]
+            for t in range(n):  # extension, its rate along e, the spring's force, readout
+                dx = qxj[t] - qxi[t]
+                dy = qyj[t] - qyi[t]
+                dz = qzj[t] - qzi[t]
+                ext = ex * dx + ey * dy + ez * dz
+                rate = (ex * (wxj[t] - wxi[t]) + ey * (wyj[t] - wyi[t])
+                        + ez * (wzj[t] - wzi[t]))
+                sig_s[t] = spring_signal(kex, key, kez, dx, dy, dz, k, l0, length)
+                ax = k * ext + c * rate - tl * ext  # axial, along e; tension across
+                fx_s[t] = ax * ex + tl * dx
+                fy_s[t] = ax * ey + tl * dy
+                fz_s[t] = ax * ez + tl * dz
+            scatter_strip(acc, scratch, i0, j0, n)
+        if sub == 0:
+            write_readouts(row, signals, ops.plan)
+        for a in range(3):  # the bands of moving masses (a fixed one's 1/m is 0)
+            for mr in range(moving.shape[0]):
+                m0, nm = moving[mr, 0], moving[mr, 1]
+                qa, va, wa = q[a, m0:m0 + nm], v[a, m0:m0 + nm], w[a, m0:m0 + nm]
+                fa, ga, fsa = f_prev[a, m0:m0 + nm], acc[a, m0:m0 + nm], fs[a, m0:m0 + nm]
+                ima = inv_m[m0:m0 + nm]
+                for m in range(nm):
+                    f_now = fsa[m]
+                    am = (ga[m] + half * (fa[m] + f_now)) * ima[m]
+                    fa[m] = f_now
+                    vm = va[m] + h * am
+                    qm = qa[m] + h * vm
+                    wm = vm + half_h * am
+                    va[m] = vm if abs(vm) > tiny else zero
+                    qa[m] = qm if abs(qm) > tiny else zero
+                    wa[m] = wm if abs(wm) > tiny else zero
+
+
+@numba.njit(cache=True, nogil=True)
+def leapfrog_kernel(forces: np.ndarray, out: np.ndarray, dt: float,
+                    operands: tuple) -> None:  # pragma: no cover - compiled
+    """forces (n, 3, n_slots) N, by component and slot (:meth:`LeapfrogMechanics.by_slot`),
+    held per step of ``dt`` (s) → out (n, n_springs) N (:func:`leapfrog_step` step by
+    step); ``operands`` is ``tuple(LeapfrogMechanics.operands)``."""
+    ops = LeapfrogOperands(*operands)
     for step in range(forces.shape[0]):
-        fs = forces[step]
-        row = out[step]
-        for s in still:  # between fixed masses: never stretched
-            row[s] = 0.0
-        for sub in range(substeps):
-            acc[:] = 0.0
-            for r in range(runs.shape[0]):  # strip by strip
-                i0, j0, n = runs[r, 0], runs[r, 1], runs[r, 2]
-                sig_s = signals[r]
-                ex, ey, ez, tl = run_e[r, 0], run_e[r, 1], run_e[r, 2], run_tl[r]
-                kex, key, kez, l0 = k * ex, k * ey, k * ez, run_l0[r]
-                qxi, qyi, qzi = qx[i0:i0 + n], qy[i0:i0 + n], qz[i0:i0 + n]
-                qxj, qyj, qzj = qx[j0:j0 + n], qy[j0:j0 + n], qz[j0:j0 + n]
-                wxi, wyi, wzi = wx[i0:i0 + n], wy[i0:i0 + n], wz[i0:i0 + n]
-                wxj, wyj, wzj = wx[j0:j0 + n], wy[j0:j0 + n], wz[j0:j0 + n]
-                for t in range(n):  # extension, its rate along e, the spring's force, readout
-                    dx = qxj[t] - qxi[t]
-                    dy = qyj[t] - qyi[t]
-                    dz = qzj[t] - qzi[t]
-                    ext = ex * dx + ey * dy + ez * dz
-                    rate = (ex * (wxj[t] - wxi[t]) + ey * (wyj[t] - wyi[t])
-                            + ez * (wzj[t] - wzi[t]))
-                    sig_s[t] = spring_signal(kex, key, kez, dx, dy, dz, k, l0, length)
-                    ax = k * ext + c * rate - tl * ext  # axial, along e; tension across
-                    fx_s[t] = ax * ex + tl * dx
-                    fy_s[t] = ax * ey + tl * dy
-                    fz_s[t] = ax * ez + tl * dz
-                # the spring's force (axial along e, tension across) on mass i, and minus it
-                # on mass j: two loops, since the masses i of a run may be its masses j
-                gxi, gyi, gzi = gx[i0:i0 + n], gy[i0:i0 + n], gz[i0:i0 + n]
-                gxj, gyj, gzj = gx[j0:j0 + n], gy[j0:j0 + n], gz[j0:j0 + n]
-                for t in range(n):
-                    gxi[t] += fx_s[t]
-                    gyi[t] += fy_s[t]
-                    gzi[t] += fz_s[t]
-                for t in range(n):
-                    gxj[t] -= fx_s[t]
-                    gyj[t] -= fy_s[t]
-                    gzj[t] -= fz_s[t]
-            if sub == 0:
-                write_readouts(row, signals, plan)
-            for a in range(3):  # the bands of moving masses (a fixed one's 1/m is 0)
-                for mr in range(moving.shape[0]):
-                    m0, nm = moving[mr, 0], moving[mr, 1]
-                    qa, va, wa = q[a, m0:m0 + nm], v[a, m0:m0 + nm], w[a, m0:m0 + nm]
-                    fa, ga, fsa = f_prev[a, m0:m0 + nm], acc[a, m0:m0 + nm], fs[a, m0:m0 + nm]
-                    ima = inv_m[m0:m0 + nm]
-                    for m in range(nm):
-                        f_now = fsa[m]
-                        am = (ga[m] + half * (fa[m] + f_now)) * ima[m]
-                        fa[m] = f_now
-                        vm = va[m] + h * am
-                        qm = qa[m] + h * vm
-                        wm = vm + half_h * am
-                        va[m] = vm if abs(vm) > tiny else zero
-                        qa[m] = qm if abs(qm) > tiny else zero
-                        wa[m] = wm if abs(wm) > tiny else zero
+        leapfrog_step(forces[step], out[step], dt, ops)
 
 
 def fastest_rates(mesh: Mesh, mass_kg: float, stiffness_n_per_m: float,
@@ -499,15 +548,22 @@ class LeapfrogMechanics:
         and the last input (N), by component and slot (:attr:`slots`); updated in place."""
         longest = int(strips[:, 2].max(initial=1))
         state = self.state
-        self.operands: LeapfrogOperands = (
-            strips, layout.plan, layout.run_e.astype(self.dtype),
-            layout.run_tl.astype(self.dtype), layout.run_l0.astype(self.dtype), layout.still,
-            readout == "length", real(stiffness_n_per_m), real(damping_n_s_per_m),
-            layout.moving, np.where(layout.fixed, 0.0, 1.0 / mass_kg).astype(self.dtype),
-            real(TINY[self.dtype]),
-            state[0], state[1], state[2], state[3], np.zeros((3, n_slots), dtype=self.dtype),
-            np.zeros((len(strips), longest), dtype=self.dtype),
-            np.zeros((3, longest), dtype=self.dtype))
+        self.operands = LeapfrogOperands(
+            strips=strips, plan=layout.plan, run_e=layout.run_e.astype(self.dtype),
+            run_tl=layout.run_tl.astype(self.dtype), run_l0=layout.run_l0.astype(self.dtype),
+            still=layout.still, length=readout == "length", k=real(stiffness_n_per_m),
+            c=real(damping_n_s_per_m), moving=layout.moving,
+            inv_m=np.where(layout.fixed, 0.0, 1.0 / mass_kg).astype(self.dtype),
+            tiny=real(TINY[self.dtype]), slots=self.slots, substeps=self.substeps,
+            q=state[0], v=state[1], w=state[2], f_prev=state[3],
+            acc=np.zeros((3, n_slots), dtype=self.dtype),
+            signals=np.zeros((len(strips), longest), dtype=self.dtype),
+            scratch=np.zeros((3, longest), dtype=self.dtype))
+        """What the compiled step reads (:class:`LeapfrogOperands`); a kernel called from
+        Python takes ``tuple(operands)`` (:meth:`~skinhil.model.neurons.NeuronPopulation.
+        kernel_operands` says why)."""
+        self.kernel_tuple = tuple(self.operands)
+        """:attr:`operands` as the kernels called from Python take them."""
 
     def by_slot(self, forces_n: np.ndarray) -> np.ndarray:
         """External forces (n, n_masses, 3) N as :func:`leapfrog_kernel` reads them: (n, 3,
@@ -532,5 +588,5 @@ class LeapfrogMechanics:
         (n, n_springs) N, row ``j`` the spring forces at the start of step ``j``."""
         forces = self.by_slot(forces_n)
         out = np.empty((forces.shape[0], self.n_springs), dtype=self.dtype)
-        leapfrog_kernel(forces, out, self.dt_s, self.substeps, *self.operands)
+        leapfrog_kernel(forces, out, self.dt_s, self.kernel_tuple)
         return out

@@ -20,6 +20,8 @@ computed from the displacements inside the compiled step. The dynamics are the s
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numba
 import numpy as np
 from scipy import sparse
@@ -131,11 +133,41 @@ def spring_slots(mesh: Mesh, stiffness_n_per_m: float) -> tuple[np.ndarray, np.n
     return ke, slot[mesh.springs[:, 0]], slot[mesh.springs[:, 1]]
 
 
-ModalOperands = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
-                      np.ndarray, np.ndarray, np.ndarray, float, np.ndarray, bool]
-"""``LinearMechanics.modal_operands``: Φ, Φᵀ, per-mode Ad and Bd, k·e, the spring slots ii
-and jj, the free degrees of freedom, the modal state η, then the readout's k (N/m), rest
-lengths (m) and whether it is the length change."""
+class ModalOperands(NamedTuple):
+    """What the compiled modal step reads (:attr:`LinearMechanics.modal_operands`); its
+    arrays are the stepper's state and scratch, updated in place."""
+
+    phi: np.ndarray
+    """Φ (n, n): the modes by column."""
+    phi_t: np.ndarray
+    """Φᵀ."""
+    mad: np.ndarray
+    """Per mode the 2x2 ``Ad`` row-major (4, n)."""
+    mbd: np.ndarray
+    """Per mode ``Bd`` (2, n)."""
+    ke: np.ndarray
+    """k·e (3, n_springs) N/m."""
+    ii: np.ndarray
+    """Each spring's first mass's offset in :attr:`q`."""
+    jj: np.ndarray
+    """Each spring's second mass's offset in :attr:`q`."""
+    dofs: np.ndarray
+    """The free degrees of freedom in the (n_masses·3) force vector."""
+    eta: np.ndarray
+    """The modal state [η; η'] (2, n)."""
+    k: float
+    """Spring stiffness (N/m), for the readout."""
+    rest: np.ndarray
+    """Rest lengths (m)."""
+    length: bool
+    """Whether the readout is the length change (else the axial projection)."""
+    q: np.ndarray
+    """Scratch: the free displacements (m) and three zeros (:func:`spring_slots`)."""
+    g: np.ndarray
+    """Scratch: the modal force (N)."""
+    n_masses: int
+    """Masses of the mesh (the force input's rows)."""
+
 
 TINY = 1e-150
 """State components below this are flushed to zero: a decaying state would otherwise reach
@@ -185,31 +217,37 @@ def _advance_kernel(ad: np.ndarray, bd_t: np.ndarray, ke: np.ndarray, ii: np.nda
 
 
 @numba.njit(cache=True, fastmath=True, nogil=True)
-def _advance_modal_kernel(forces: np.ndarray, out: np.ndarray, phi: np.ndarray,
-                          phi_t: np.ndarray, mad: np.ndarray, mbd: np.ndarray, ke: np.ndarray,
-                          ii: np.ndarray, jj: np.ndarray, dofs: np.ndarray,
-                          eta: np.ndarray, k: float, rest: np.ndarray,
-                          length: bool) -> None:  # pragma: no cover - compiled
-    # forces (n, 77, 3) N → out (n, 338) N; the rest are LinearMechanics.modal_operands
-    flat = forces.reshape(forces.shape[0], -1)
+def modal_step(fs: np.ndarray, row: np.ndarray,
+               ops: ModalOperands) -> None:  # pragma: no cover - compiled
+    """One step: the external forces ``fs`` (n_masses·3,) N held over it → ``row``
+    (n_springs,) N, the readouts at the step's start; ``ops`` after the step."""
+    eta, phi_t, mad, mbd, q, g = ops.eta, ops.phi_t, ops.mad, ops.mbd, ops.q, ops.g
     n_modes = eta.shape[1]
-    g = np.empty(n_modes)
-    q = np.zeros(n_modes + 3)
+    # physical displacements q = Φ η (m), column by column
+    q[:n_modes] = 0.0
+    for m in range(n_modes):
+        pos = eta[0, m]
+        for i in range(n_modes):
+            q[i] += phi_t[m, i] * pos
+    _spring_forces(ops.ke, ops.ii, ops.jj, q, row, ops.k, ops.rest, ops.length)
+    g[:] = 0.0
+    _add_input(fs, ops.dofs, ops.phi, g)
+    for m in range(n_modes):
+        e0 = mad[0, m] * eta[0, m] + mad[1, m] * eta[1, m] + mbd[0, m] * g[m]
+        e1 = mad[2, m] * eta[0, m] + mad[3, m] * eta[1, m] + mbd[1, m] * g[m]
+        eta[0, m] = e0 if abs(e0) > TINY else 0.0
+        eta[1, m] = e1 if abs(e1) > TINY else 0.0
+
+
+@numba.njit(cache=True, nogil=True)
+def modal_kernel(forces: np.ndarray, out: np.ndarray,
+                 operands: tuple) -> None:  # pragma: no cover - compiled
+    """forces (n, n_masses, 3) N → out (n, n_springs) N (:func:`modal_step` step by step);
+    ``operands`` is ``tuple(LinearMechanics.modal_operands)``."""
+    ops = ModalOperands(*operands)
+    flat = forces.reshape(forces.shape[0], -1)
     for step in range(flat.shape[0]):
-        # physical displacements q = Φ η (m), column by column
-        q[:n_modes] = 0.0
-        for m in range(n_modes):
-            pos = eta[0, m]
-            for i in range(n_modes):
-                q[i] += phi_t[m, i] * pos
-        _spring_forces(ke, ii, jj, q, out[step], k, rest, length)
-        g[:] = 0.0
-        _add_input(flat[step], dofs, phi, g)
-        for m in range(n_modes):
-            e0 = mad[0, m] * eta[0, m] + mad[1, m] * eta[1, m] + mbd[0, m] * g[m]
-            e1 = mad[2, m] * eta[0, m] + mad[3, m] * eta[1, m] + mbd[1, m] * g[m]
-            eta[0, m] = e0 if abs(e0) > TINY else 0.0
-            eta[1, m] = e1 if abs(e1) > TINY else 0.0
+        modal_step(flat[step], out[step], ops)
 
 
 def modal_form(k_free: np.ndarray, mass_kg: float, damping_per_stiffness_s: float,
@@ -266,8 +304,7 @@ class LinearMechanics:
         """What the compiled modal step takes after the forces and the output (None when
         not modal); their contents are the stepper's state, updated in place."""
         n = self.dofs.size
-        # small matrices: BLAS threads only contend (0.78 s per stepper with two threads on
-        # a busy 2-core machine, 3-7 ms with one)
+        # small matrices: BLAS threads only contend, on a busy machine by orders of magnitude
         with threadpool_limits(1):
             if not self.modal:  # the full state space, discretised once (modal form: below)
                 self.ad, self.bd = zoh(a, b, dt_s)
@@ -279,9 +316,14 @@ class LinearMechanics:
         else:
             self.phi_t = np.ascontiguousarray(self.phi.T)
             self.eta = np.zeros((2, n))
-            self.modal_operands = (self.phi, self.phi_t, self.mad, self.mbd, self.ke, self.ii,
-                                   self.jj, self.dofs, self.eta, self.k, self.rest,
-                                   self.length_readout)
+            self.modal_operands = ModalOperands(
+                phi=self.phi, phi_t=self.phi_t, mad=self.mad, mbd=self.mbd, ke=self.ke,
+                ii=self.ii, jj=self.jj, dofs=self.dofs, eta=self.eta, k=self.k, rest=self.rest,
+                length=self.length_readout, q=np.zeros(n + 3), g=np.zeros(n),
+                n_masses=self.n_masses)
+        self.kernel_tuple = None if self.modal_operands is None else tuple(self.modal_operands)
+        """:attr:`modal_operands` as the kernels called from Python take them (None when not
+        modal; :meth:`~skinhil.model.neurons.NeuronPopulation.kernel_operands` says why)."""
 
     def reset(self) -> None:
         """Back to rest: zero displacement and velocity."""
@@ -309,8 +351,8 @@ class LinearMechanics:
         """
         out = np.empty((forces_n.shape[0], self.cy.shape[0]))
         forces = np.ascontiguousarray(forces_n, dtype=np.float64)
-        if self.modal_operands is not None:
-            _advance_modal_kernel(forces, out, *self.modal_operands)
+        if self.kernel_tuple is not None:
+            modal_kernel(forces, out, self.kernel_tuple)
         else:
             _advance_kernel(self.ad, self.bd_t, self.ke, self.ii, self.jj, self.x, forces,
                             self.dofs, out, self.k, self.rest, self.length_readout)
