@@ -118,14 +118,14 @@ class Board:
         self.status_reporter = StatusReporter(model, self.timeline, scoring.posed_tasks)
         self.link_keeper = LinkKeeper(open_link, model.n_springs,
                                       on_link or (lambda msg: log.warning("%s", msg)))
-        owners: list[Participant] = [
-            self.world, self.model, scoring,
-            *([HeldObjectStage(self.plant, self.touch, self.truth)]
-              if self.plant is not None and self.touch is not None else []),
-            Encoder(self.sensor.events), self.status_reporter, self.link_keeper]
-        self.commands = HostCommands(owners)
-        self.participants: list[Participant] = [*owners[:-2], self.commands, *owners[-2:]]
+        held = ([HeldObjectStage(self.plant, self.touch, self.truth)]
+                if self.plant is not None and self.touch is not None else [])
+        self.commands = HostCommands()
+        self.participants: list[Participant] = [
+            self.world, self.model, scoring, *held, Encoder(self.sensor.events), self.commands,
+            self.status_reporter, self.link_keeper]
         """In the order their hooks run within a phase."""
+        self.commands.register(self.participants)
         self._hooks = {name: [getattr(p, name) for p in self.participants
                               if callable(getattr(type(p), name, None))] for name in phases.HOOKS}
         self._schedule: list[tuple[Phase, list[Callable[..., None]]]] = [
@@ -183,8 +183,7 @@ class Board:
         A link lost on the wire ends the wire's phases (``link_lost`` hooks)."""
         ctx = self.ctx
         for phase, hooks in self._schedule:
-            if not ctx.serving and phase.when != "always" or (
-                    phase.when == "wire" and ctx.link is None):
+            if not phase.runs(ctx.serving, ctx.link is not None):
                 continue
             for hook in hooks:
                 try:

@@ -51,15 +51,13 @@ def _stop(ctx: TickContext, cmd: Any, arrival_us: int | None) -> Any:
 
 
 class HostCommands(Participant):
-    """The command intake and the dispatch table of the participants ``owners``."""
+    """The command intake and the dispatch table."""
 
-    def __init__(self, owners: Iterable[Participant]) -> None:
+    def __init__(self) -> None:
         codes = protocols.CommandCode
         self.table: dict[int, CommandHandler] = {
             codes.START: _start, codes.STOP: _stop, codes.GRIP: _no_object}
-        """opcode → handler: the participants' own, over the fallbacks."""
-        for p in owners:
-            self.table.update(p.commands())
+        """opcode → handler: the participants' own (:meth:`register`), over the fallbacks."""
         self._pending: collections.deque[tuple[Any, int]] = collections.deque()
         """Host commands received and not yet executed, with their arrival (µs): at most
         :data:`~firmware_sim.command_budget.PENDING_COMMANDS`."""
@@ -67,6 +65,11 @@ class HostCommands(Participant):
         self._link: BoardLink | None = None
         self._statuses_owed = 0
         """QUERY_STATUS answered this tick (their STATUS: after the first, at the end)."""
+
+    def register(self, owners: Iterable[Participant]) -> None:
+        """Dispatch to each of ``owners`` the opcodes its ``commands()`` names."""
+        for p in owners:
+            self.table.update(p.commands())
 
     def handle(self, ctx: TickContext, cmd: Any, arrival_us: int | None = None) -> Any:
         """Execute a host command received at board time ``arrival_us`` (µs; None: now);

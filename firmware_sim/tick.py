@@ -35,6 +35,10 @@ class Phase:
     name: str
     when: str = "always"
 
+    def runs(self, serving: bool, link_up: bool) -> bool:
+        """Whether the phase runs in a tick ``serving`` whose link is up (``link_up``)."""
+        return self.when == "always" or serving and (self.when == "served" or link_up)
+
 
 SCHEDULE: tuple[Phase, ...] = (
     Phase("before_model"),  # the held object's grip applied
