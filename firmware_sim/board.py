@@ -129,7 +129,8 @@ class Board:
         self._hooks = {name: [getattr(p, name) for p in self.participants
                               if callable(getattr(type(p), name, None))] for name in phases.HOOKS}
         self._schedule: list[tuple[Phase, list[Callable[..., None]]]] = [
-            (phase, self._hooks[phase.name]) for phase in phases.SCHEDULE]
+            (phase, self._hooks[phase.name]) for phase in phases.SCHEDULE
+            if self._hooks[phase.name]]  # a phase no participant takes part in is skipped
         self._each("attach")
         self.ctx.start_scene = lambda mode, now_s: self._each("start_scene", mode, now_s)
         self.ctx.start_scene(config.schedule_mode, 0.0)

@@ -115,11 +115,11 @@ class TickContext:
     """Encode the FIFO's events and the due markers into the transmit queue."""
     start_scene: Callable[[int, float], None] = lambda mode, now_s: None
     """The scene plays from ``now_s`` (s) in schedule mode ``mode`` (``start_scene`` hooks)."""
+    dt_us: int = field(init=False)
+    """The step (µs)."""
 
-    @property
-    def dt_us(self) -> int:
-        """The step (µs)."""
-        return int(round(self.config.dt_s * 1e6))
+    def __post_init__(self) -> None:
+        self.dt_us = int(round(self.config.dt_s * 1e6))
 
     def board_time_us(self) -> int:
         """Board time (µs): the end of the last step whose spikes are out."""
