@@ -42,8 +42,9 @@ def request_realtime(priority: int = 10) -> str | None:
     the CPU to itself. Returns None on success, else why not (one line).
 
     Needs root or CAP_SYS_NICE (or ``ulimit -r``). The board sleeps between ticks, so it
-    takes its ~20 % of one core first and leaves the rest to everything else; Linux's
-    real-time throttling caps it at 95 % should it ever spin.
+    takes its share of one core first (``python benchmarks/bench_serve.py --realtime``
+    measures it) and leaves the rest to everything else; Linux's real-time throttling caps
+    it at 95 % should it ever spin.
     """
     try:
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(int(priority)))

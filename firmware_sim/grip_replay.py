@@ -2,10 +2,10 @@
 the session's grip log executed at the board time it was executed live.
 
 Live, a tick steps the model and then executes the commands read (:meth:`Board.tick`); a
-GRIP holds from the next tick on. Here :meth:`Board.step_model` and :meth:`Board.handle` run
-in that same order, with no clock and no link traffic, so the held object's truth and the
-contacts' (the board's :class:`~skinhil.world.TruthLog`) come out bit for bit as they were
-(tests/test_grasp_loop.py).
+GRIP holds from the next tick on. Here :meth:`Board.step_model` (the tick's model phases)
+and :meth:`Board.handle` run in that same order, with no clock and no link traffic, so the
+held object's truth and the contacts' (the board's :class:`~skinhil.world.TruthLog`) come
+out bit for bit as they were (tests/test_grasp_loop.py).
 """
 
 from __future__ import annotations

@@ -11,14 +11,14 @@ from pathlib import Path
 from typing import Any
 
 import protocols
-from firmware_sim.board import (
+from firmware_sim.board import Board
+from firmware_sim.clock import pin_to_cores, request_realtime
+from firmware_sim.config import (
     DEFAULT_RESPONSE_WINDOW_S,
     REALTIME_SPIN_S,
-    Board,
     BoardConfig,
     BoardSummary,
 )
-from firmware_sim.clock import pin_to_cores, request_realtime
 from protocols.versions import wire_version
 from skinhil.cli import signals
 from skinhil.cli.kernel_notice import announce_cold_cache

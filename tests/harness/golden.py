@@ -187,11 +187,11 @@ def play(session: Session) -> tuple[bytes, dict[str, Any]]:
     board = Board(session.config, lambda: link, **session.board_args())
     board.warm_up()
     assert board.link is not None
-    board.queue_session(board.link, protocols.SessionReason.START)
+    board.queue_session(protocols.SessionReason.START)
     for k in range(session.ticks):
         link.tick = k
         board.tick()
-    board._finish(protocols.RunEndReason.DURATION)
+    board.finish(protocols.RunEndReason.DURATION)
     summary = board.summary()
     scores: dict[str, Any] = {"generated": summary.generated, "sent": summary.sent,
                               "dropped_by": summary.dropped_by, "commands": summary.commands,
