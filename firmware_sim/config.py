@@ -5,13 +5,24 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from numbers import Integral, Real
+from typing import Any, ClassVar
 
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import PAPER_SIZE, MeshSize
-from skinhil.model.neurons import NoiseParams, check_threads
-from skinhil.model.skin import DEFAULT_AMPLITUDE
+from skinhil.model.neurons import MAX_SNR_DB, MIN_SNR_DB, NoiseParams, check_threads
+from skinhil.model.skin import AMPLITUDES, DEFAULT_AMPLITUDE, SkinParams
 from skinhil.model.timeline import Timeline
+from skinhil.validation import (
+    Constraints,
+    InstanceOf,
+    Interval,
+    Options,
+    StrOptions,
+    non_negative,
+    positive,
+    validate_params,
+)
 
 REALTIME_SPIN_S = 3e-4
 """Spin before each tick under ``serve --realtime`` (s): a wake-up from sleep delayed by the
@@ -84,10 +95,34 @@ class BoardConfig:
     def steps_per_tick(self) -> int:
         return int(round(self.tick_s / self.dt_s))
 
+    _parameter_constraints: ClassVar[Constraints] = {
+        "dt_s": positive("s", "the simulation step, e.g. 1e-4"),
+        "tick_s": positive("s", "the publish tick, e.g. 1e-3"),
+        "fifo_events": Interval(Integral, 1, None, closed="left", unit="events"),
+        "status_period_s": positive("s"),
+        "spin_s": non_negative("s"),
+        "tx_target_s": positive("s"),
+        "snr_db": [Interval(Real, MIN_SNR_DB, MAX_SNR_DB, closed="both", unit="dB"),
+                   Options([math.inf])],
+        "noise": InstanceOf(NoiseParams),
+        "seed": Interval(Integral, 0, None, closed="left"),
+        "board_id": Interval(Integral, 0, None, closed="left"),
+        "mechanics": SkinParams._parameter_constraints["mechanics"],
+        "readout": SkinParams._parameter_constraints["readout"],
+        "amplitude": StrOptions(set(AMPLITUDES)),
+        "threads": Interval(Integral, 1, None, closed="left", unit="threads"),
+        "schedule_mode": Options([Timeline.SCHEDULE_NONE, Timeline.SCHEDULE_RANDOM,
+                                  Timeline.SCHEDULE_FILE]),
+        "rest_s": non_negative("s"),
+        "reconnect_period_s": positive("s"),
+        "drain_timeout_s": non_negative("s"),
+        "response_window_s": positive("s", "the response window (--response-window), e.g. 0.5"),
+    }
+
     def check(self) -> BoardConfig:
-        """Return self if consistent, else raise :class:`ConfigError`."""
-        if not (math.isfinite(self.dt_s) and self.dt_s > 0):
-            raise ConfigError(f"step must be a positive number of seconds, got {self.dt_s!r}")
+        """Return self if consistent, else raise :class:`ConfigError`: each field as
+        declared, then the rules that tie them together."""
+        validate_params(self, where="board: ")
         us = self.dt_s * 1e6
         if abs(us - round(us)) > 1e-6 or round(us) < 1:
             raise ConfigError(f"step {self.dt_s!r} s is not a whole number of microseconds")
@@ -95,16 +130,9 @@ class BoardConfig:
         if not (math.isfinite(n) and n >= 1 and abs(n - round(n)) < 1e-6):
             raise ConfigError(f"tick {self.tick_s!r} s must be a whole number (>= 1) of "
                               f"steps of {self.dt_s!r} s")
-        if self.fifo_events < 1:
-            raise ConfigError(f"FIFO capacity must be >= 1 event, got {self.fifo_events!r}")
-        if not self.status_period_s > 0:
-            raise ConfigError("status period must be > 0 s")
-        if not 0 <= self.spin_s < self.tick_s:
+        if not self.spin_s < self.tick_s:
             raise ConfigError(f"spin {self.spin_s!r} s must lie in [0, tick {self.tick_s!r} s)")
         check_threads(self.threads)
-        if not (math.isfinite(self.response_window_s) and self.response_window_s > 0):
-            raise ConfigError(f"response window (--response-window) {self.response_window_s!r}"
-                              " is not a positive number of seconds: give one such as 0.5")
         return self
 
 

@@ -50,6 +50,7 @@ PARAMETER_CLASSES = [
     ("skinhil.analysis.sweep", "SweepSpec"),
     ("skinhil.analysis.decoding_snr", "DecodingSetup"),
     ("skinhil.campaign.rig", "RigBounds"),
+    ("firmware_sim.config", "BoardConfig"),
 ]
 """The classes whose fields are declared through the validator."""
 
