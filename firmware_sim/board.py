@@ -68,6 +68,8 @@ from skinhil.model.stimulus_table import stimulus_table
 from skinhil.model.timeline import MarkerEvent, Timeline
 from skinhil.plant import GraspParams, HeldObject
 from skinhil.scoring import DecisionScoreboard, TaskScoreboard, answer_reason
+from skinhil.tasks import registry as task_registry
+from skinhil.tasks import tasks_mask
 from skinhil.transports import Transport
 from skinhil.world import Scene, TouchSensor, TruthLog
 
@@ -395,8 +397,8 @@ class Board:
     def posed_tasks(self) -> int:
         """The tasks whose ANSWERs this board scores, bit n for task n (SPEC.md §3.7):
         classification always (a DECISION's), the contact tasks a scenario poses."""
-        posed = [protocols.Task.CLASSIFICATION, *(self.tasks.tasks if self.tasks else ())]
-        return sum(1 << int(t) for t in posed)
+        return tasks_mask([protocols.Task.CLASSIFICATION,
+                           *(self.tasks.tasks if self.tasks else ())])
 
     def queue_session(self, link: BoardLink, reason: Any) -> None:
         """Queue a SESSION record and the stimulus table's STIMULUS records (SPEC.md §3.7)."""
@@ -562,7 +564,7 @@ class Board:
         task = int(answer.task)
         if task == protocols.Task.CLASSIFICATION:
             return self._score(protocols.Decision(answer.token, int(answer.values[0])), t_us)
-        if task not in protocols.Task._value2member_map_:
+        if task_registry.task(task) is None:
             return protocols.NackReason.UNKNOWN_TASK
         if self.tasks is None or not self.tasks.posed(task):
             if self.tasks is not None:
