@@ -12,6 +12,8 @@ import protocols
 from firmware_sim.tick import CommandHandler, Participant, TickContext
 from skinhil.plant import HeldObject
 from skinhil.scoring import DecisionScoreboard, TaskScoreboard, answer_reason
+from skinhil.tasks import registry as task_registry
+from skinhil.tasks import tasks_mask
 from skinhil.world import Scene
 
 log = logging.getLogger(__name__)
@@ -55,8 +57,8 @@ class Scoring(Participant):
     def posed_tasks(self) -> int:
         """The tasks whose ANSWERs this board scores, bit n for task n (SPEC.md §3.7):
         classification always (a DECISION's), the contact tasks a scenario poses."""
-        posed = [protocols.Task.CLASSIFICATION, *(self.tasks.tasks if self.tasks else ())]
-        return sum(1 << int(t) for t in posed)
+        return tasks_mask([protocols.Task.CLASSIFICATION,
+                           *(self.tasks.tasks if self.tasks else ())])
 
     def commands(self) -> dict[int, CommandHandler]:
         codes = protocols.CommandCode
@@ -87,7 +89,7 @@ class Scoring(Participant):
         if task == protocols.Task.CLASSIFICATION:
             return self._score(ctx, protocols.Decision(answer.token, int(answer.values[0])),
                                t_us)
-        if task not in protocols.Task._value2member_map_:
+        if task_registry.task(task) is None:
             return protocols.NackReason.UNKNOWN_TASK
         if self.tasks is None or not self.tasks.posed(task):
             if self.tasks is not None:

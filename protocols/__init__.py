@@ -17,6 +17,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import protocols.kernel_cache  # noqa: F401  (numba's cache keyed on the sources, before any kernel)
+from protocols.answer_layouts import ANSWER_LAYOUTS, AnswerLayout, register_answer_layout
 from protocols.budget import can_frame_seconds, serial_seconds
 from protocols.can_codec import CanDecoder, CanEncoder, full_events_frame
 from protocols.constants import N_CHANNELS
@@ -66,6 +67,7 @@ __all__ = [
     "SessionReason", "StimulusEntry", "table_digest",
     "Command", "CommandCode", "DecodeResult", "Decision", "LinkCounters", "Marker", "MarkerPhase",
     "MAX_PACKET_BYTES", "NackReason", "Record", "SerialDecoder", "SerialEncoder", "Status",
-    "ANSWER_SCALE", "ANSWER_UNITS", "Answer", "Task", "answer_range",
+    "ANSWER_LAYOUTS", "ANSWER_SCALE", "ANSWER_UNITS", "Answer", "AnswerLayout", "Task",
+    "answer_range", "register_answer_layout",
     "can_frame_seconds", "full_events_frame", "serial_seconds",
 ]

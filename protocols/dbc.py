@@ -17,12 +17,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from protocols import can_kernels as k
+from protocols.answer_layouts import ANSWER_LAYOUTS
 from protocols.can_codec import STATUS_LEN_FD, can_id
 from protocols.constants import PROTOCOL_VERSION
 from protocols.errors import ProtocolError
-from protocols.record_fields import ANSWER_FIELD_BITS, PLACE_BITS
 from protocols.records import (
-    ANSWER_SCALE,
     CONFIDENCE_STEPS,
     CommandCode,
     MarkerPhase,
@@ -108,22 +107,17 @@ def _event_slots(header_bits: int, slots: int, wide: bool = False) -> tuple[Sign
 def _answer_signals(opcode: int) -> tuple[Signal, ...]:
     """The ANSWER command's fields (SPEC.md §3.5.3): ``AnswerTask`` (bits 32..35), itself a
     multiplexer of the task's values in bits 36..63."""
-    def field(name: str, start: int, bits: int, task: Task, unit: str = "",
-              scale: float = 1.0, signed: bool = False) -> Signal:
-        return Signal(name, start, bits, unit, mux=f"m{int(task)}",
-                      mux_range=(int(task), int(task)), scale=scale, signed=signed,
-                      multiplexer="AnswerTask")
-    return (
-        Signal("AnswerTask", 32, 4, mux=f"m{opcode}M", mux_range=(opcode, opcode),
-               choices=_enum_choices(Task)),
-        field("AnswerStimulusId", 36, 24, Task.CLASSIFICATION),
-        field("AnswerXmm", 36, PLACE_BITS, Task.LOCALISATION, "mm",
-              ANSWER_SCALE[Task.LOCALISATION], True),
-        field("AnswerYmm", 36 + PLACE_BITS, PLACE_BITS, Task.LOCALISATION, "mm",
-              ANSWER_SCALE[Task.LOCALISATION], True),
-        field("AnswerForceN", 36, ANSWER_FIELD_BITS, Task.FORCE, "N", ANSWER_SCALE[Task.FORCE]),
-        field("AnswerFrequencyHz", 36, ANSWER_FIELD_BITS, Task.VIBRATION, "Hz",
-              ANSWER_SCALE[Task.VIBRATION]))
+    out = [Signal("AnswerTask", 32, 4, mux=f"m{opcode}M", mux_range=(opcode, opcode),
+                  choices=tuple((t, ANSWER_LAYOUTS[t].name.upper())
+                                for t in sorted(ANSWER_LAYOUTS)))]
+    for task in sorted(ANSWER_LAYOUTS):
+        lay = ANSWER_LAYOUTS[task]
+        for i, (name, unit) in enumerate(zip(lay.signal_names(), lay.unit_names(),
+                                             strict=True)):
+            out.append(Signal(name, 36 + i * lay.bits, lay.bits, unit, mux=f"m{task}",
+                              mux_range=(task, task), scale=lay.scale, signed=lay.signed,
+                              multiplexer="AnswerTask"))
+    return tuple(out)
 
 
 def _payload_signals(fields: tuple[tuple[str, int, int], ...], fd: bool,

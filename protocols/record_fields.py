@@ -7,9 +7,13 @@ import math
 import struct
 from typing import TypeVar
 
+from protocols.answer_layouts import (
+    ANSWER_LAYOUTS,
+    AnswerLayout,
+    answer_layout,
+)
 from protocols.errors import ProtocolError
 from protocols.records import (
-    ANSWER_SCALE,
     CONFIDENCE_STEPS,
     Answer,
     Command,
@@ -56,59 +60,55 @@ def arg_value(opcode: int, bits: int) -> int | float:
     return bits
 
 
-ANSWER_FIELD_BITS = 28
-"""An ANSWER's argument: bits 3..0 the task, bits 31..4 its 28-bit field (SPEC.md §3.5.3)."""
-PLACE_BITS = 14
+PLACE_BITS = ANSWER_LAYOUTS[Task.LOCALISATION].bits
 """Each coordinate of a LOCALISATION answer: a signed 14-bit count of 0.01 mm (±81.91 mm)."""
 
 
-def _field_steps(task: int) -> tuple[int, int, int]:
-    """The wire field of each value of ``task``: its bits, least and greatest step (the
-    coordinates of LOCALISATION signed, the others not)."""
-    if task == Task.LOCALISATION:
-        return PLACE_BITS, -(1 << (PLACE_BITS - 1)), (1 << (PLACE_BITS - 1)) - 1
-    return ANSWER_FIELD_BITS, 0, (1 << ANSWER_FIELD_BITS) - 1
+def _layout(task: int) -> AnswerLayout:
+    """The layout of ``task``: its registered one, or one raw 28-bit value for an id none
+    defines (decoded to be NACKed)."""
+    lay = answer_layout(task)
+    if lay is None:
+        return AnswerLayout(int(task), f"task {int(task)}", ("field",), integer=True)
+    return lay
 
 
 def answer_range(task: int) -> tuple[float, float]:
-    """The least and greatest value (units of :data:`ANSWER_UNITS`) each value of ``task``
-    (LOCALISATION, FORCE or VIBRATION) can carry on the wire (SPEC.md §3.5.3)."""
-    _, lo, hi = _field_steps(task)
-    return lo * ANSWER_SCALE[task], hi * ANSWER_SCALE[task]
+    """The least and greatest value (units of the task's :class:`AnswerLayout` fields) each
+    value of ``task`` can carry on the wire (SPEC.md §3.5.3)."""
+    lay = answer_layout(task)
+    if lay is None:
+        raise ProtocolError(f"task {task} has no answer layout: register one "
+                            "(protocols.register_answer_layout)")
+    return lay.value_range
 
 
-def _steps(value: float, task: int, what: str) -> int:
-    """``value`` in wire steps of ``task`` (:data:`ANSWER_SCALE`), checked to fit."""
+def _steps(value: float, lay: AnswerLayout, what: str) -> int:
+    """``value`` in wire steps of ``lay``, checked to fit, masked to its bits."""
+    if lay.integer:
+        return check_uint(int(value), lay.bits, f"ANSWER {what}")
     v = float(value)
-    bits, lo, hi = _field_steps(task)
-    n = round(v / ANSWER_SCALE[task]) if math.isfinite(v) else lo - 1
+    lo, hi = lay.steps
+    n = round(v / lay.scale) if math.isfinite(v) else lo - 1
     if not lo <= n <= hi:
         raise ProtocolError(f"ANSWER {what} {value!r} is outside "
-                            f"{lo * ANSWER_SCALE[task]:g}..{hi * ANSWER_SCALE[task]:g}")
-    return n & ((1 << bits) - 1)
+                            f"{lo * lay.scale:g}..{hi * lay.scale:g}")
+    return n & ((1 << lay.bits) - 1)
 
 
 def answer_field(answer: Answer) -> int:
     """The 32-bit argument of an :class:`Answer` (SPEC.md §3.5.3): task in bits 3..0, its
-    values in bits 31..4; raises ProtocolError for values that do not fit or a wrong count."""
+    values in bits 31..4 as its :class:`AnswerLayout` says; raises ProtocolError for values
+    that do not fit or a wrong count."""
     task = check_uint(int(answer.task), 4, "ANSWER task")
     vals = tuple(answer.values)
-    need = {Task.CLASSIFICATION: 1, Task.LOCALISATION: 2, Task.FORCE: 1, Task.SLIP: 0,
-            Task.VIBRATION: 1}.get(task, 1)  # type: ignore[call-overload]
-    if len(vals) != need:
-        raise ProtocolError(f"an ANSWER of task {task} carries {need} value(s), got "
-                            f"{len(vals)}: {vals!r}")
-    if task == Task.CLASSIFICATION:
-        field = check_uint(int(vals[0]), 24, "ANSWER stimulus_id")
-    elif task == Task.LOCALISATION:
-        field = (_steps(vals[0], task, "x_mm")
-                 | _steps(vals[1], task, "y_mm") << PLACE_BITS)
-    elif task in (Task.FORCE, Task.VIBRATION):
-        field = _steps(vals[0], task, "value")
-    elif task == Task.SLIP:
-        field = 0
-    else:
-        field = check_uint(int(vals[0]), ANSWER_FIELD_BITS, "ANSWER field")
+    lay = _layout(task)
+    if len(vals) != len(lay.fields):
+        raise ProtocolError(f"an ANSWER of task {task} carries {len(lay.fields)} value(s), "
+                            f"got {len(vals)}: {vals!r}")
+    field = 0
+    for i, (v, name) in enumerate(zip(vals, lay.fields, strict=True)):
+        field |= _steps(v, lay, name) << (i * lay.bits)
     return task | field << 4
 
 
@@ -116,21 +116,16 @@ def answer_record(token: int, bits: int) -> Answer:
     """The :class:`Answer` a 32-bit ANSWER argument carries (the inverse of
     :func:`answer_field`; reserved bits ignored)."""
     task, field = bits & 0xF, bits >> 4
-    values: tuple[float, ...]
-    if task == Task.CLASSIFICATION:
-        values = (field & 0xFFFFFF,)
-    elif task == Task.LOCALISATION:
-        half = 1 << (PLACE_BITS - 1)
-        x = ((field & 0x3FFF) ^ half) - half
-        y = (((field >> PLACE_BITS) & 0x3FFF) ^ half) - half
-        values = (x * ANSWER_SCALE[task], y * ANSWER_SCALE[task])
-    elif task in (Task.FORCE, Task.VIBRATION):
-        values = (field * ANSWER_SCALE[task],)
-    elif task == Task.SLIP:
-        values = ()
-    else:
-        values = (field,)
-    return Answer(token, enum_or_int(Task, task), values)
+    lay = _layout(task)
+    mask = (1 << lay.bits) - 1
+    values: list[float] = []
+    for i in range(len(lay.fields)):
+        n = (field >> (i * lay.bits)) & mask
+        if lay.signed:
+            half = 1 << (lay.bits - 1)
+            n = (n ^ half) - half
+        values.append(n if lay.integer else n * lay.scale)
+    return Answer(token, enum_or_int(Task, task), tuple(values))
 
 
 def command_fields(command: Command | Decision | Answer) -> tuple[int, int, int]:

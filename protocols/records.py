@@ -11,6 +11,7 @@ import enum
 
 import numpy as np
 
+from protocols.answer_layouts import BUILT_IN_LAYOUTS
 from protocols.events import EVENT_DTYPE
 
 
@@ -256,14 +257,13 @@ class Task(enum.IntEnum):
     """What vibrates: values ``(frequency_hz,)`` (Hz)."""
 
 
-ANSWER_UNITS: dict[int, tuple[str, ...]] = {
-    Task.CLASSIFICATION: ("stimulus_id",), Task.LOCALISATION: ("x_mm", "y_mm"),
-    Task.FORCE: ("force_n",), Task.SLIP: (), Task.VIBRATION: ("frequency_hz",)}
-"""The names (with units) of each task's values, in order."""
-ANSWER_SCALE: dict[int, float] = {
-    Task.CLASSIFICATION: 1.0, Task.LOCALISATION: 0.01, Task.FORCE: 1e-6,
-    Task.VIBRATION: 1e-3}
-"""One wire step of each task's values: 1 id, 0.01 mm, 1 µN, 1 mHz (SPEC.md §3.5.3)."""
+ANSWER_UNITS: dict[int, tuple[str, ...]] = {lay.task: lay.fields for lay in BUILT_IN_LAYOUTS}
+"""The names (with units) of each built-in task's values, in order (a task added at run time:
+:data:`protocols.answer_layouts.ANSWER_LAYOUTS`)."""
+ANSWER_SCALE: dict[int, float] = {lay.task: lay.scale for lay in BUILT_IN_LAYOUTS
+                                  if lay.fields}
+"""One wire step of each built-in task's values: 1 id, 0.01 mm, 1 µN, 1 mHz (SPEC.md
+§3.5.3)."""
 
 
 @dataclasses.dataclass(frozen=True)

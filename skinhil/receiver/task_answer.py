@@ -51,6 +51,7 @@ from skinhil.receiver.task_decoders import (
     within_touch,
 )
 from skinhil.receiver.touch_kind import RELEASE, TOUCH_DOWN, in_layer, touch_kind
+from skinhil.tasks import registry
 
 log = logging.getLogger(__name__)
 
@@ -273,13 +274,9 @@ def _oracle_answers(path: Path) -> list[tuple[int, int, tuple[float, ...]]]:
                 from None
         if row.get("type") != "trial":
             continue
-        task = protocols.Task[str(row["task"]).upper()]
-        values: tuple[float, ...] = {
-            protocols.Task.LOCALISATION: (row["x_mm"], row["y_mm"]),
-            protocols.Task.FORCE: (row["normal_n"],), protocols.Task.SLIP: (),
-            protocols.Task.VIBRATION: (row["frequency_hz"],)}[task]
-        if any(v is None for v in values):
+        task = registry.by_name(str(row["task"]))
+        if any(row.get(k) is None for k in task.truth):
             continue
-        out.append((int(row["t_us"]) + int(ORACLE_DELAY_S * 1e6), int(task),
-                    tuple(round(float(v), 2) for v in values)))
+        out.append((int(row["t_us"]) + int(ORACLE_DELAY_S * 1e6), task.wire_id,
+                    task.oracle_values(row)))
     return sorted(out)

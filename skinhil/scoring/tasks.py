@@ -35,8 +35,8 @@ from typing import Any
 
 import numpy as np
 
-import protocols
 from skinhil.scoring.matching import MatchKind, OnsetMatcher
+from skinhil.tasks import TaskDef, TrialKind, registry
 from skinhil.world.truth import SLIP_STATES, T_NODES, T_NORMAL, T_SLIP, T_X, T_Y
 
 TOUCH_GAP_US = 20_000
@@ -81,7 +81,7 @@ class Trial:
 class TaskScore:
     """One task's counters, errors and latencies."""
 
-    task: protocols.Task
+    task: TaskDef
     matcher: OnsetMatcher
     trials: list[Trial] = field(default_factory=list)
     counts: Counter[str] = field(default_factory=Counter)
@@ -112,10 +112,12 @@ class TaskScoreboard:
         self.tolerance_mm = float(tolerance_mm)
         self.tolerance_n = float(tolerance_n)
         window_us = int(round(response_window_s * 1e6))
-        posed = [protocols.Task.LOCALISATION, protocols.Task.FORCE, protocols.Task.SLIP]
+        kinds = {TrialKind.TOUCH, TrialKind.SLIP}
         if self.classes_hz:
-            posed.append(protocols.Task.VIBRATION)
-        self.tasks = {t: TaskScore(t, OnsetMatcher(window_us)) for t in posed}
+            kinds.add(TrialKind.VIBRATING_TOUCH)
+        self.tasks = {wire_id: TaskScore(t, OnsetMatcher(window_us))
+                      for wire_id, t in registry.tasks().items() if t.trials in kinds}
+        """Per posed task id (id order): its score."""
         n = len(self.frequencies_hz)
         self._touch_last = np.full(n, -10**12, dtype=np.int64)
         self._slip_last = np.full(n, -10**12, dtype=np.int64)
@@ -149,18 +151,21 @@ class TaskScoreboard:
             self._touch_last[c] = t_us
             if gross[c] and t_us - self._touch_t0[c] >= SETTLE_US:
                 if t_us - self._slip_last[c] > SLIP_GAP_US:
-                    self.tasks[protocols.Task.SLIP].add_trial(Trial(t_us, c))
+                    for score in self.tasks.values():
+                        if score.task.trials is TrialKind.SLIP:
+                            score.add_trial(Trial(t_us, c))
                 self._slip_last[c] = t_us
 
     def _new_touch(self, t_us: int, c: int) -> list[Trial]:
         out = []
-        for task in (protocols.Task.LOCALISATION, protocols.Task.FORCE,
-                     protocols.Task.VIBRATION):
-            if task == protocols.Task.VIBRATION and not self.frequencies_hz[c] > 0:
-                continue
-            trial = Trial(t_us, c, frequency_hz=self.frequencies_hz[c])
-            self.tasks[task].add_trial(trial)
-            out.append(trial)
+        touch = {TrialKind.TOUCH}
+        if self.frequencies_hz[c] > 0:
+            touch.add(TrialKind.VIBRATING_TOUCH)
+        for score in self.tasks.values():
+            if score.task.trials in touch:
+                trial = Trial(t_us, c, frequency_hz=self.frequencies_hz[c])
+                score.add_trial(trial)
+                out.append(trial)
         return out
 
     def answer(self, answer: Any, t_us: int, running: bool = True) -> str:
@@ -183,21 +188,10 @@ class TaskScoreboard:
         return outcome
 
     def _verdict(self, score: TaskScore, trial: Trial, values: tuple[float, ...]) -> str:
-        task = score.task
-        if task == protocols.Task.SLIP:
-            return "right"
-        if task == protocols.Task.LOCALISATION:
-            err = math.hypot(values[0] - trial.x_mm, values[1] - trial.y_mm)
-            score.errors.append(err)
-            return "right" if err <= self.tolerance_mm else "wrong"
-        if task == protocols.Task.FORCE:
-            err = abs(values[0] - trial.normal_n)
-            score.errors.append(err)
-            return "right" if err <= self.tolerance_n else "wrong"
-        err = abs(values[0] - trial.frequency_hz)
-        score.errors.append(err)
-        nearest = min(self.classes_hz, key=lambda f: abs(f - values[0]))
-        return "right" if nearest == trial.frequency_hz else "wrong"
+        verdict = score.task.judge(trial, tuple(values), self)
+        if verdict.error is not None:
+            score.errors.append(verdict.error)
+        return "right" if verdict.right else "wrong"
 
     def advance(self, t_us: int) -> None:
         """Board time is now ``t_us`` (µs): trials whose window passed become misses."""
@@ -208,8 +202,7 @@ class TaskScoreboard:
     def summary(self) -> dict[str, dict[str, Any]]:
         """Per task name: counters, accuracy, error and latency percentiles (JSON-ready)."""
         out: dict[str, dict[str, Any]] = {}
-        minutes = self.board_us / 60e6
-        for task, s in self.tasks.items():
+        for s in self.tasks.values():
             matched = s.counts["right"] + s.counts["wrong"]
             scored = matched + s.matcher.misses
             d: dict[str, Any] = {
@@ -219,20 +212,16 @@ class TaskScoreboard:
                 "accuracy": s.counts["right"] / scored if scored else None,
                 "latency_ms": _percentiles([v * 1e-3 for v in s.latencies_us]),
             }
-            unit = {protocols.Task.LOCALISATION: "mm", protocols.Task.FORCE: "n",
-                    protocols.Task.VIBRATION: "hz"}.get(task)
+            unit = s.task.error_unit
             if unit is not None:
                 err = _percentiles(s.errors)
                 d[f"median_error_{unit}"] = err["p50"]
                 d[f"p90_error_{unit}"] = err["p90"]
-            if task == protocols.Task.SLIP:
-                d["false_alarms_per_min"] = (round(s.counts["false_alarms"] / minutes, 3)
-                                             if minutes > 0 else None)
-            if task == protocols.Task.VIBRATION:
-                d["classes_hz"] = self.classes_hz
-            out[task.name.lower()] = d
+            d.update(s.task.summary(s, self))
+            out[s.task.name] = d
         for code, n in sorted(self.not_posed.items()):
-            name = protocols.Task(code).name.lower()
+            known = registry.task(code)
+            name = known.name if known is not None else f"task_{code}"
             out.setdefault(name, {})["not_posed"] = n
         return out
 
@@ -248,11 +237,11 @@ def truth_lines(board_tasks: TaskScoreboard) -> list[str]:
     """One JSON line per trial of each task: its task, onset (µs), contact and truth (a
     touch's centroid and normal force :data:`SAMPLE_US` after its onset, or at its end)."""
     out = []
-    for task, score in board_tasks.tasks.items():
+    for score in board_tasks.tasks.values():
         for t in score.trials:
             x, y, n = t.sample if t.sample is not None else (t.x_mm, t.y_mm, t.normal_n)
             out.append(json.dumps({
-                "type": "trial", "task": task.name.lower(), "t_us": t.t0_us,
+                "type": "trial", "task": score.task.name, "t_us": t.t0_us,
                 "contact": t.contact, "x_mm": _num(x), "y_mm": _num(y),
                 "normal_n": _num(n), "frequency_hz": t.frequency_hz}))
     return out

@@ -1,0 +1,20 @@
+"""SLIP: the object slips now (no values): a matched answer is a detection, its latency the
+score; an answer matching no slip is a false alarm."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import protocols
+from skinhil.tasks.task import TaskDef, TrialKind
+
+
+def summary(score: Any, board: Any) -> dict[str, Any]:
+    """False alarms per minute of board time (None before any time passed)."""
+    minutes = board.board_us / 60e6
+    return {"false_alarms_per_min": (round(score.counts["false_alarms"] / minutes, 3)
+                                     if minutes > 0 else None)}
+
+
+TASK = TaskDef(layout=protocols.ANSWER_LAYOUTS[protocols.Task.SLIP], trials=TrialKind.SLIP,
+               summary=summary, reference="skinhil.receiver.task_decoders:slip_time_us")
