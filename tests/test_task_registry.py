@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from harness.host_link import host_beside_serve
 
 import protocols
 from skinhil.errors import ConfigError
@@ -111,6 +112,57 @@ def test_a_task_from_its_own_package_is_registered_encoded_and_scored(tmp_path: 
     assert got["in_dbc"]
     assert got["summary"]["trials"] == 1 and got["summary"]["right"] == 1
     assert got["summary"]["median_error_kpa"] == pytest.approx(0.1)
+
+
+SCENARIO = """
+[[indenter]]
+name = "ball"
+shape = "sphere"
+radius_mm = 5.0
+
+[[contact]]
+indenter = "ball"
+start_s = 0.3
+motion = "press"
+load_n = 0.3
+ramp_s = 0.03
+hold_s = 0.4
+"""
+"""One press: one touch trial of every touch task."""
+
+HOST = '''
+import os, select, sys, time
+import protocols
+fd = os.open(sys.argv[1], os.O_RDWR | os.O_NOCTTY)
+enc, token = protocols.SerialEncoder(), 0
+next_s = time.monotonic()
+while True:
+    if select.select([fd], [], [], 0.02)[0]:
+        os.read(fd, 65536)
+    if time.monotonic() >= next_s:
+        token += 1
+        os.write(fd, enc.command(protocols.Answer(token, 7, (0.3,))))
+        next_s += 0.1
+'''
+"""A scripted decoder under test: a pressure ANSWER every 0.1 s, whatever it hears."""
+
+
+def test_a_task_from_its_own_package_is_posed_answered_over_a_pty_and_scored(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    _write_package(tmp_path)
+    monkeypatch.setenv("PYTHONPATH", str(tmp_path))
+    (tmp_path / "press.toml").write_text(SCENARIO, encoding="utf-8")
+    (tmp_path / "host.py").write_text(HOST, encoding="utf-8")
+    score = tmp_path / "score.json"
+    board, _ = host_beside_serve(
+        tmp_path, [sys.executable, str(tmp_path / "host.py"), "{HOST}"],
+        ["--schedule", str(tmp_path / "press.toml"), "--duration", "1.2", "--snr-db", "inf",
+         "--response-window", "0.3", "--score", str(score)], timeout_s=240)
+    assert board.returncode == 0, board.stderr
+    pressure = json.loads(score.read_text(encoding="utf-8"))["tasks"]["pressure"]
+    assert pressure["trials"] == 1
+    assert pressure["answers"] > 1
+    assert pressure["right"] == 1 and pressure["matched"] == 1
 
 
 def _write_package(folder: Path) -> None:
