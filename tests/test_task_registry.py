@@ -122,29 +122,33 @@ radius_mm = 5.0
 
 [[contact]]
 indenter = "ball"
-start_s = 0.3
+start_s = 1.5
 motion = "press"
 load_n = 0.3
 ramp_s = 0.03
 hold_s = 0.4
 """
-"""One press: one touch trial of every touch task."""
+"""One press, late enough that the scripted host is answering by then: one touch trial of
+every touch task."""
 
 HOST = '''
 import os, select, sys, time
 import protocols
+import skinhil.tasks
+skinhil.tasks.tasks()  # the installed tasks' answer layouts, this one's among them
 fd = os.open(sys.argv[1], os.O_RDWR | os.O_NOCTTY)
 enc, token = protocols.SerialEncoder(), 0
-next_s = time.monotonic()
+next_s = None
 while True:
-    if select.select([fd], [], [], 0.02)[0]:
-        os.read(fd, 65536)
-    if time.monotonic() >= next_s:
+    if select.select([fd], [], [], 0.02)[0] and os.read(fd, 65536) and next_s is None:
+        next_s = time.monotonic()  # the board is up: answer from now on
+    if next_s is not None and time.monotonic() >= next_s:
         token += 1
         os.write(fd, enc.command(protocols.Answer(token, 7, (0.3,))))
         next_s += 0.1
 '''
-"""A scripted decoder under test: a pressure ANSWER every 0.1 s, whatever it hears."""
+"""A scripted decoder under test: from the board's first bytes on, a pressure ANSWER every
+0.1 s, whatever it hears."""
 
 
 def test_a_task_from_its_own_package_is_posed_answered_over_a_pty_and_scored(
@@ -154,15 +158,16 @@ def test_a_task_from_its_own_package_is_posed_answered_over_a_pty_and_scored(
     (tmp_path / "press.toml").write_text(SCENARIO, encoding="utf-8")
     (tmp_path / "host.py").write_text(HOST, encoding="utf-8")
     score = tmp_path / "score.json"
-    board, _ = host_beside_serve(
+    board, host = host_beside_serve(
         tmp_path, [sys.executable, str(tmp_path / "host.py"), "{HOST}"],
-        ["--schedule", str(tmp_path / "press.toml"), "--duration", "1.2", "--snr-db", "inf",
+        ["--schedule", str(tmp_path / "press.toml"), "--duration", "2.5", "--snr-db", "inf",
          "--response-window", "0.3", "--score", str(score)], timeout_s=240)
     assert board.returncode == 0, board.stderr
     pressure = json.loads(score.read_text(encoding="utf-8"))["tasks"]["pressure"]
     assert pressure["trials"] == 1
-    assert pressure["answers"] > 1
-    assert pressure["right"] == 1 and pressure["matched"] == 1
+    assert pressure["answers"] > 1, host.stderr[-2000:]
+    assert pressure["right"] == 1 and pressure["matched"] == 1, [
+        (v["t_us"], v["outcome"], v["trial_t_us"], v["error"]) for v in pressure["verdicts"]]
 
 
 def _write_package(folder: Path) -> None:

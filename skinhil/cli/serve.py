@@ -400,7 +400,8 @@ def write_score(path: Path, scoreboard: DecisionScoreboard,
                 tasks: dict[str, Any] | None = None,
                 extra: dict[str, Any] | None = None) -> None:
     """Write ``scoreboard`` with every decision to ``path`` (JSON), the ANSWERs' scores per
-    task under ``"tasks"`` and the keys of ``extra`` (``"grasp"``), whole or not at all."""
+    task under ``"tasks"`` (each answer's verdict with them) and the keys of ``extra``
+    (``"grasp"``), whole or not at all."""
     with atomic_path(path) as tmp:
         tmp.write_text(json.dumps({**scoreboard.summary(with_log=True), "tasks": tasks or {},
                                    **(extra or {})}, indent=1) + "\n", encoding="utf-8")
@@ -534,7 +535,9 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
     extra = ({"grasp": plant_scores(board.plant, board.truth)} if board.plant is not None
              else {})
     if score_path is not None:
-        write_score(score_path, board.scoreboard, summary.tasks, extra)
+        write_score(score_path, board.scoreboard,
+                    board.tasks.summary(with_verdicts=True) if board.tasks is not None else {},
+                    extra)
     if truth_path is not None:
         write_truth(truth_path, board)
     if args.json:

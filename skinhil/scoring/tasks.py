@@ -56,6 +56,10 @@ of the paper's skin (neighbouring nodes told apart)."""
 DEFAULT_TOLERANCE_N = 0.05
 """A force answer within this (N) of the normal force is right."""
 
+MAX_VERDICTS = 100_000
+"""Verdicts kept per task for the score file (about 15 MB of JSON); past them an answer is
+still counted, and ``verdicts_not_kept`` says how many were not written."""
+
 OUTCOMES = ("right", "wrong", "duplicates", "late", "false_alarms", "while_stopped")
 """The counters every answer of a task lands in, one each."""
 
@@ -89,6 +93,9 @@ class TaskScore:
     """Per matched answer: the error (mm, N or Hz; none for SLIP)."""
     latencies_us: list[int] = field(default_factory=list)
     """Per matched answer: onset → arrival (µs, board time)."""
+    verdicts: list[dict[str, Any]] = field(default_factory=list)
+    """Per answer, the first :data:`MAX_VERDICTS`: what it said, the trial it answered and
+    its outcome (:meth:`TaskScoreboard.answer`)."""
 
     def add_trial(self, trial: Trial) -> None:
         self.matcher.add_onset(trial.t0_us, len(self.trials))
@@ -172,26 +179,38 @@ class TaskScoreboard:
         """Score ``answer`` (:class:`protocols.Answer` of a posed task) arriving at board
         time ``t_us`` (µs); return (and count) its outcome, one of :data:`OUTCOMES`."""
         score = self.tasks[int(answer.task)]  # type: ignore[index]
+        trial_index: int | None = None
+        error: float | None = None
         if not running:
             outcome = "while_stopped"
         else:
             m = score.matcher.match(int(t_us))
+            if m.onset is not None:
+                trial_index = m.onset.stimulus_id
             if m.kind is MatchKind.MATCHED:
-                assert m.onset is not None
-                trial = score.trials[m.onset.stimulus_id]
+                assert trial_index is not None
+                trial = score.trials[trial_index]
                 score.latencies_us.append(int(t_us) - trial.t0_us)
-                outcome = self._verdict(score, trial, answer.values)
+                outcome, error = self._verdict(score, trial, answer.values)
             else:
                 outcome = {MatchKind.DUPLICATE: "duplicates", MatchKind.LATE: "late",
                            MatchKind.NO_STIMULUS: "false_alarms"}[m.kind]
         score.counts[outcome] += 1
+        if len(score.verdicts) < MAX_VERDICTS:
+            score.verdicts.append({
+                "t_us": int(t_us), "token": int(answer.token),
+                "values": [round(float(v), 6) for v in answer.values],
+                "trial": trial_index,
+                "trial_t_us": None if trial_index is None else score.trials[trial_index].t0_us,
+                "outcome": outcome, "error": None if error is None else round(error, 6)})
         return outcome
 
-    def _verdict(self, score: TaskScore, trial: Trial, values: tuple[float, ...]) -> str:
+    def _verdict(self, score: TaskScore, trial: Trial,
+                 values: tuple[float, ...]) -> tuple[str, float | None]:
         verdict = score.task.judge(trial, tuple(values), self)
         if verdict.error is not None:
             score.errors.append(verdict.error)
-        return "right" if verdict.right else "wrong"
+        return ("right" if verdict.right else "wrong"), verdict.error
 
     def advance(self, t_us: int) -> None:
         """Board time is now ``t_us`` (µs): trials whose window passed become misses."""
@@ -199,14 +218,23 @@ class TaskScoreboard:
         for score in self.tasks.values():
             score.matcher.resolve(int(t_us))
 
-    def summary(self) -> dict[str, dict[str, Any]]:
-        """Per task name: counters, accuracy, error and latency percentiles (JSON-ready)."""
+    def summary(self, with_verdicts: bool = False) -> dict[str, dict[str, Any]]:
+        """Per task name: the headline ``score``, counters, accuracy, error and latency
+        percentiles (JSON-ready); with ``with_verdicts``, every answer's verdict too.
+
+        ``score`` charges every answer (SPEC.md §3.5.4): the first answer to a trial is
+        judged, and every other answer (a second one to a trial, one that matches no trial,
+        a late one, one while stopped) counts against it: right / (trials + extra answers),
+        in [0, 1]; None before the first trial or answer."""
         out: dict[str, dict[str, Any]] = {}
         for s in self.tasks.values():
             matched = s.counts["right"] + s.counts["wrong"]
             scored = matched + s.matcher.misses
+            answers = sum(s.counts.values())
+            charged = s.matcher.onsets + answers - matched
             d: dict[str, Any] = {
-                "trials": s.matcher.onsets, "answers": sum(s.counts.values()),
+                "score": round(s.counts["right"] / charged, 6) if charged else None,
+                "trials": s.matcher.onsets, "answers": answers,
                 **{o: s.counts[o] for o in OUTCOMES},
                 "matched": matched, "misses": s.matcher.misses, "pending": s.matcher.pending,
                 "accuracy": s.counts["right"] / scored if scored else None,
@@ -218,6 +246,9 @@ class TaskScoreboard:
                 d[f"median_error_{unit}"] = err["p50"]
                 d[f"p90_error_{unit}"] = err["p90"]
             d.update(s.task.summary(s, self))
+            if with_verdicts:
+                d["verdicts"] = s.verdicts
+                d["verdicts_not_kept"] = answers - len(s.verdicts)
             out[s.task.name] = d
         for code, n in sorted(self.not_posed.items()):
             known = registry.task(code)
