@@ -100,7 +100,8 @@ class Board:
         self.timeline = Timeline(config.dt_s, file_schedule, config.seed, config.rest_s,
                                  config.schedule_mode, model.size)
         scoring = Scoring.posed_by(config.response_window_s,
-                                   lambda sid: sid in self.timeline.catalog, scene, self.plant)
+                                   lambda sid: sid in self.timeline.catalog, scene, self.plant,
+                                   config.tasks)
         self.scoreboard = scoring.scoreboard
         """The decoder under test's DECISIONs scored against the onsets the board sent."""
         self.tasks = scoring.tasks

@@ -86,6 +86,9 @@ class BoardConfig:
     """At the end, how long (s) the FIFO may take to drain onto the wire."""
     response_window_s: float = DEFAULT_RESPONSE_WINDOW_S
     """How long (s) after a stimulus onset a DECISION may arrive and still answer it."""
+    tasks: tuple[str, ...] | None = None
+    """The contact tasks the board poses, by name (a suite case's: only those whose value
+    varies in it); None: every task the scene's trials allow."""
     markers: bool = True
     """Send the ground-truth MARKERs on the link. False: the **blind link** (SPEC.md §3.4):
     no byte of truth reaches the decoder; the markers go to :attr:`Board.truth_markers`

@@ -28,14 +28,16 @@ class Scoring(Participant):
 
     @classmethod
     def posed_by(cls, response_window_s: float, known: Callable[[int], bool],
-                 scene: Scene | None, plant: HeldObject | None) -> Scoring:
+                 scene: Scene | None, plant: HeldObject | None,
+                 only: tuple[str, ...] | None = None) -> Scoring:
         """The scores of a board whose stimulus ids ``known`` says and whose scene poses
-        the contact tasks (a held object's lifts pose the grasp task alone)."""
+        the contact tasks (a held object's lifts pose the grasp task alone; ``only``: just
+        the tasks it names)."""
         tasks = None
         if scene is not None and plant is None:
             tasks = TaskScoreboard(
                 [c.trajectory.vibration_frequency_hz if c.trajectory.vibration_amplitude_m > 0
-                 else 0.0 for c in scene.contacts], response_window_s)
+                 else 0.0 for c in scene.contacts], response_window_s, only=only)
         return cls(DecisionScoreboard(response_window_s, known), tasks)
 
     def after_model(self, ctx: TickContext) -> None:

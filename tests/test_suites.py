@@ -5,12 +5,13 @@ by itself under ``serve --suite``, and ``skinhil suites`` lists it."""
 from __future__ import annotations
 
 import json
-import socket
 
 import numpy as np
 import pytest
+from harness.peers import UdpPeer
 from harness.serve import run_serve
 
+import protocols
 from skinhil.cli import main
 from skinhil.errors import ConfigError
 from skinhil.model.skin import SkinParams
@@ -25,6 +26,7 @@ from skinhil.suites.tactile_v1 import (
     STURDY_MASS_KG,
     TRAINING_SEEDS,
 )
+from skinhil.tasks import by_name, tasks_mask
 
 SUITE = SUITES["tactile-v1"]
 CASES = [c.name for c in SUITE.cases]
@@ -197,18 +199,25 @@ def test_skinhil_suites_lists_suites_cases_versions_and_tasks(capsys) -> None:
 
 @pytest.mark.parametrize("case", CASES)
 def test_serve_suite_case_ends_by_itself(case: str) -> None:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sink:
-        sink.bind(("127.0.0.1", 0))
-        port = sink.getsockname()[1]
+    peer = UdpPeer()
+    try:
         trials = suite_trials(f"tactile-v1:{case}", 11)
         done = run_serve("--suite", f"tactile-v1:{case}", "--seed", "11", "--udp",
-                         f"127.0.0.1:{port}", "--json", timeout_s=300)
-    assert done.returncode == 0, done.stderr
+                         f"127.0.0.1:{peer.port}", "--json", timeout_s=300)
+        assert done.returncode == 0, done.stderr
+        assert peer.wait_for(lambda p: len(p.of(protocols.RunEnd)) > 0, 10)
+        sessions = peer.of(protocols.Session)
+    finally:
+        peer.close()
     summary = next(json.loads(line) for line in done.stdout.splitlines()
                    if json.loads(line).get("type") == "summary")
     assert summary["ticks"] == int(round(trials.duration_s / 1e-3))
     if case == "grasp":
         assert summary["grasp"]["lifts"] == len(trials.scenario.scene.contacts)
+    # the SESSION announces exactly the tasks the case poses (classification always)
+    posed = {"classification", *(t.name for t in trials.tasks)}
+    assert sessions and sessions[0].tasks == tasks_mask(by_name(n).wire_id for n in posed)
+    assert set(summary["tasks"]) == posed - {"classification"}
 
 
 def test_a_case_plays_fewer_trials_when_asked_never_more() -> None:

@@ -4,6 +4,7 @@ UDP; its ready and summary lines are docs/process-output.md's."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import sys
@@ -466,6 +467,7 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
         trials = suite_trials(args.suite, args.seed, args.size)
         schedule, scene, grasp = trials.scenario.schedule, trials.scenario.scene, trials.grasp
         duration_s = trials.duration_s if duration_s is None else duration_s
+        config = dataclasses.replace(config, tasks=tuple(t.name for t in trials.tasks))
     tty = sys.stderr.isatty() and not args.quiet and not args.json
     where = describe_transport(args)
 

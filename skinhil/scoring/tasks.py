@@ -30,6 +30,7 @@ from __future__ import annotations
 import json
 import math
 from collections import Counter
+from collections.abc import Collection
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -106,14 +107,17 @@ class TaskScoreboard:
     """Scores ANSWERs of LOCALISATION, FORCE, SLIP and VIBRATION against the truth.
 
     ``frequencies_hz[c]`` is contact ``c``'s vibration frequency (0: none);
-    ``response_window_s`` as the DECISION scoreboard's. Call :meth:`observe` once per tick
+    ``response_window_s`` as the DECISION scoreboard's; ``only``: pose just the tasks it
+    names (a suite case poses those whose value varies in it), else every task the trials
+    allow. Call :meth:`observe` once per tick
     with the tick's truth rows, :meth:`answer` for each ANSWER, :meth:`advance` as board
     time moves on.
     """
 
     def __init__(self, frequencies_hz: list[float], response_window_s: float,
                  tolerance_mm: float = DEFAULT_TOLERANCE_MM,
-                 tolerance_n: float = DEFAULT_TOLERANCE_N) -> None:
+                 tolerance_n: float = DEFAULT_TOLERANCE_N,
+                 only: Collection[str] | None = None) -> None:
         self.frequencies_hz = [float(f) for f in frequencies_hz]
         self.classes_hz = sorted({f for f in self.frequencies_hz if f > 0})
         self.tolerance_mm = float(tolerance_mm)
@@ -123,7 +127,8 @@ class TaskScoreboard:
         if self.classes_hz:
             kinds.add(TrialKind.VIBRATING_TOUCH)
         self.tasks = {wire_id: TaskScore(t, OnsetMatcher(window_us))
-                      for wire_id, t in registry.tasks().items() if t.trials in kinds}
+                      for wire_id, t in registry.tasks().items()
+                      if t.trials in kinds and (only is None or t.name in only)}
         """Per posed task id (id order): its score."""
         n = len(self.frequencies_hz)
         self._touch_last = np.full(n, -10**12, dtype=np.int64)
