@@ -42,7 +42,6 @@ def _load() -> None:
     global _loaded
     if _loaded:
         return
-    _loaded = True
     for ep in sorted(entry_points(group=GROUP), key=lambda e: e.name):
         try:
             task = ep.load()
@@ -50,6 +49,7 @@ def _load() -> None:
             raise ConfigError(f"task entry point {ep.name} = {ep.value} does not load "
                               f"({exc}): fix or uninstall the package declaring it") from None
         register(task)
+    _loaded = True  # only once every entry point is in: a failed load fails every call
 
 
 def tasks() -> dict[int, TaskDef]:
