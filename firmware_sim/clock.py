@@ -18,6 +18,7 @@ import ctypes.util
 import logging
 import os
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -43,8 +44,10 @@ def request_realtime(priority: int = 10) -> str | None:
 
     Needs root or CAP_SYS_NICE (or ``ulimit -r``). The board sleeps between ticks, so it
     takes its share of one core first (``python benchmarks/bench_serve.py --realtime``
-    measures it) and leaves the rest to everything else; Linux's real-time throttling caps
-    it at 95 % should it ever spin.
+    measures it) and leaves the rest to everything else. Linux stops a real-time task that
+    runs longer than its share of every second (``/proc/sys/kernel/sched_rt_runtime_us``, 95 %
+    by default) for the rest of that second; :class:`TickClock` sleeps part of every tick so
+    the board never reaches it.
     """
     try:
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(int(priority)))
@@ -73,6 +76,26 @@ def pin_to_cores(cores: tuple[int, ...]) -> str | None:
     return None
 
 
+RT_SLEEP_MARGIN = 2.0
+"""A spinning clock sleeps this many times the share of each tick that Linux keeps from
+real-time tasks (:func:`realtime_idle_share`)."""
+
+
+def realtime_idle_share() -> float:
+    """The share of every period Linux keeps from real-time tasks (1 − runtime / period of
+    ``/proc/sys/kernel/sched_rt_*``; 0 where there is no limit, 5 % where it cannot be read):
+    a real-time task that runs longer is stopped for the rest of the period (1 s by
+    default), a stall of tens of ticks."""
+    try:
+        runtime = int(Path("/proc/sys/kernel/sched_rt_runtime_us").read_text())
+        period = int(Path("/proc/sys/kernel/sched_rt_period_us").read_text())
+    except (OSError, ValueError):
+        return 0.05
+    if runtime < 0 or period <= 0:
+        return 0.0
+    return max(0.0, 1.0 - runtime / period)
+
+
 class TickClock:
     """Fixed-period tick scheduler on ``time.monotonic`` with lateness statistics.
 
@@ -81,7 +104,9 @@ class TickClock:
     (after the tick's work). ``lateness_s`` keeps the last ``history`` latenesses (s).
     ``spin_s`` (s): the last part of each wait is spent polling the clock instead of
     sleeping, so a late wake-up from sleep (tens of µs typically, milliseconds now and then
-    on a virtual machine) costs no lateness; it costs that much CPU per tick.
+    on a virtual machine) costs no lateness; it costs that much CPU per tick. A spinning clock
+    still sleeps :attr:`min_sleep_s` of every wait (less spin when the tick's work leaves
+    less), so a real-time board never runs into Linux's real-time throttling.
     """
 
     def __init__(self, tick_s: float, history: int = 600_000, spin_s: float = 0.0) -> None:
@@ -91,6 +116,9 @@ class TickClock:
             raise ValueError(f"spin_s must lie in [0, tick_s), got {spin_s!r}")
         self.tick_s = float(tick_s)
         self.spin_s = float(spin_s)
+        self.min_sleep_s = (RT_SLEEP_MARGIN * realtime_idle_share() * self.tick_s
+                            if spin_s > 0 else 0.0)
+        """Sleep (s) every wait keeps before it spins (0 without spin)."""
         self.t0: float | None = None
         self.index = 0
         """Index of the next tick to run."""
@@ -110,13 +138,14 @@ class TickClock:
     def wait(self, stop_check_s: float = 0.05) -> int:
         """Sleep until the next tick is due; return its index and record its lateness."""
         due = self.due(self.index)
+        spin_s = min(self.spin_s, due - time.monotonic() - self.min_sleep_s)
         while True:
             now = time.monotonic()
             left = due - now
             if left <= 0:
                 break
-            if left > self.spin_s:
-                time.sleep(min(left - self.spin_s, stop_check_s))
+            if left > spin_s:
+                time.sleep(min(left - spin_s, stop_check_s))
         self._late.record(now - due)
         return self.index
 

@@ -28,11 +28,6 @@ PENDING_COMMANDS = 64
 """Host commands received and waiting for their turn at most: a burst (a decoder that fell
 behind and sends its decisions at once) is executed over the next ticks, each DECISION
 stamped with its arrival; a command that finds the queue full is refused BUSY."""
-RECORDS_PER_TICK = COMMANDS_PER_TICK
-"""Host units the link builds into records per tick at least (as many as the pending queue
-has room for, when more); the commands past them come as token and opcode only (a compiled
-pass, :class:`protocols.DecodeResult`): each QUERY_STATUS among them is executed, the others
-refused BUSY."""
 ANSWER_SHARE = 0.25
 """Share of the wire's time the board's answers (ACK, NACK) may take on average."""
 ANSWER_BURST = 16.0

@@ -19,7 +19,6 @@ import protocols
 from firmware_sim.command_budget import (
     ANSWER_BURST,
     PENDING_COMMANDS,
-    RECORDS_PER_TICK,
     CommandBudget,
 )
 from firmware_sim.link import BoardLink
@@ -27,6 +26,10 @@ from firmware_sim.tick import CommandHandler, Participant, TickContext
 from skinhil.errors import ConfigError
 
 log = logging.getLogger(__name__)
+
+
+_QUERY_STATUS = int(protocols.CommandCode.QUERY_STATUS)
+"""QUERY_STATUS's opcode as a plain int (compared with a whole array of opcodes)."""
 
 
 def _is_query(cmd: Any) -> bool:
@@ -101,19 +104,13 @@ class HostCommands(Participant):
         t_end_us = ctx.board_time_us()
         pending = self._pending
         room = PENDING_COMMANDS - len(pending)
-        commands, excess = link.poll_commands(max(RECORDS_PER_TICK, room))
+        commands, excess = link.poll_commands(room)  # the rest are refused: no record built
         ctx.counters.rx_errors += link.take_rx_errors()
         budget = self._budget
         budget.new_tick()
         self._statuses_owed = 0
-        for cmd in commands:
-            if len(pending) < PENDING_COMMANDS:
-                pending.append((cmd, t_end_us))  # a burst waits its turn, its arrival kept
-            elif _is_query(cmd):  # never refused: answered at once when the queue is full
-                self._answer_query(ctx, cmd)
-            else:
-                self._refuse_busy(ctx, [(cmd.token, int(cmd.opcode))], 1)
-        if excess.shape[0]:
+        pending.extend((cmd, t_end_us) for cmd in commands)  # a burst waits, its arrival kept
+        if excess.shape[0]:  # no room in the queue
             self._refuse_excess(ctx, excess)
         while pending:  # in arrival order: a QUERY_STATUS needs no budget, the others do
             cmd, arrival_us = pending[0]
@@ -161,9 +158,9 @@ class HostCommands(Participant):
             ctx.queue_status()
 
     def _refuse_excess(self, ctx: TickContext, excess: np.ndarray) -> None:
-        """The commands the link did not build into records (past :data:`RECORDS_PER_TICK`):
-        each QUERY_STATUS answered, the others refused BUSY."""
-        query = excess["opcode"] == protocols.CommandCode.QUERY_STATUS
+        """The commands the link did not build into records (the pending queue had no room for
+        them): each QUERY_STATUS answered, the others refused BUSY."""
+        query = excess["opcode"] == _QUERY_STATUS
         for token in excess["token"][query].tolist():
             self._answer_query(ctx, protocols.Command(token, protocols.CommandCode.QUERY_STATUS))
         rest = excess[~query]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import time
 
 import numpy as np
@@ -83,3 +84,44 @@ def test_recent_window_of_latenesses() -> None:
     assert np.array_equal(full[-3:], last3)
     assert clock.lateness_s(last=100).shape == (8,)
     assert clock.lateness_percentiles_ms(last=3)["p50"] == pytest.approx(last3[1] * 1e3)
+
+
+_BUSY_TICKS = r"""
+import os, sys, time
+from firmware_sim.clock import TickClock, pin_to_cores, request_realtime, tighten_timer_slack
+from firmware_sim.config import REALTIME_SPIN_S
+pin_to_cores((max(os.sched_getaffinity(0)),))
+tighten_timer_slack()
+why = request_realtime()
+if why:
+    print("skip", why)
+    sys.exit(0)
+clock = TickClock(1e-3, spin_s=REALTIME_SPIN_S)
+clock.start()
+for _ in range(3000):
+    clock.wait()
+    end = time.monotonic() + 8e-4  # a tick's work: 80 % of the period
+    while time.monotonic() < end:
+        pass
+    clock.done()
+print(clock.deadline_misses)
+"""
+
+
+def test_a_busy_real_time_board_never_runs_into_linux_real_time_throttling() -> None:
+    """A real-time board whose ticks take 80 % of the period and spin before the next one
+    would run more than Linux's real-time share (95 %) and be stopped for the rest of the
+    second: tens of ticks missed in a row, every second. The clock sleeps part of every
+    wait, so it misses next to none."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    repo = str(Path(__file__).resolve().parents[1])
+    out = subprocess.run([sys.executable, "-c", _BUSY_TICKS], capture_output=True, text=True,
+                         timeout=60, cwd=repo, env={**os.environ, "PYTHONPATH": repo})
+    assert out.returncode == 0, out.stderr
+    if out.stdout.startswith("skip"):
+        pytest.skip(out.stdout)
+    misses = int(out.stdout)
+    assert misses <= 30, f"{misses} of 3000 ticks missed"

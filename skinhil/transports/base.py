@@ -17,6 +17,7 @@ one-line message saying what to do.
 from __future__ import annotations
 
 import abc
+import errno
 import os
 import select
 import time
@@ -196,6 +197,26 @@ def check_bitrate(bitrate: int, what: str = "bitrate") -> int:
         raise TransportError(f"invalid CAN {what} {bitrate!r}: give an integer from 1000 to "
                              f"{MAX_CAN_BITRATE} bits/s, e.g. 1000000")
     return bitrate
+
+
+READ_CHUNK = 65536
+"""Bytes one :func:`read_fd` takes at most."""
+
+
+def read_fd(fd: int, timeout: float | None) -> bytes:
+    """What a non-blocking fd holds (at most :data:`READ_CHUNK` bytes), waiting at most
+    ``timeout`` s (None: for ever) for the first byte; b"" when nothing came. An fd that
+    reports data and gives none has lost its other end: :class:`OSError`."""
+    ready, _, _ = select.select([fd], [], [], timeout)
+    if not ready:
+        return b""
+    try:
+        data = os.read(fd, READ_CHUNK)
+    except BlockingIOError:
+        return b""
+    if not data:
+        raise OSError(errno.EIO, "the device reports data and gives none (disconnected?)")
+    return data
 
 
 def write_fd(fd: int, payload: bytes, deadline: Deadline) -> int:

@@ -12,18 +12,22 @@ from __future__ import annotations
 
 import logging
 import os
-import select
 import time
 import tty
 
 from skinhil.errors import TransportError
-from skinhil.transports.base import DEFAULT_BAUD, Deadline, Role, Transport, check_baud, write_fd
+from skinhil.transports.base import (
+    DEFAULT_BAUD,
+    Deadline,
+    Role,
+    Transport,
+    check_baud,
+    read_fd,
+    write_fd,
+)
 from skinhil.transports.url import LinkUrl, format_url
 
 log = logging.getLogger(__name__)
-
-READ_CHUNK = 65536
-"""Most bytes one :meth:`PtyMasterTransport.recv` returns."""
 
 
 class PtyMasterTransport(Transport[bytes]):
@@ -89,12 +93,7 @@ class PtyMasterTransport(Transport[bytes]):
     def recv(self, timeout: float | None = None) -> bytes:
         self._check_open()
         try:
-            ready, _, _ = select.select([self.fd], [], [], timeout)
-            if not ready:
-                return b""
-            return os.read(self.fd, READ_CHUNK)
-        except BlockingIOError:
-            return b""
+            return read_fd(self.fd, timeout)
         except OSError as exc:  # EIO: no process has the slave open (yet, or any more)
             if timeout:
                 time.sleep(min(timeout, 0.01))

@@ -13,7 +13,15 @@ import queue
 import sys
 
 from skinhil.errors import TransportError
-from skinhil.transports.base import DEFAULT_BAUD, Deadline, Role, Transport, check_baud, write_fd
+from skinhil.transports.base import (
+    DEFAULT_BAUD,
+    Deadline,
+    Role,
+    Transport,
+    check_baud,
+    read_fd,
+    write_fd,
+)
 from skinhil.transports.url import LinkUrl, format_url
 
 log = logging.getLogger(__name__)
@@ -158,8 +166,11 @@ class SerialTransport(Transport[bytes]):
         import serial
 
         self._check_open()
+        fd = getattr(self._ser, "fd", None)
         try:
-            self._set_timeout(timeout)
+            if isinstance(fd, int):  # a device: one select and one read
+                return read_fd(fd, timeout)
+            self._set_timeout(timeout)  # pyserial URL handlers (loop://, socket://, ...)
             first = self._ser.read(1)
             if not first:
                 return b""
