@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from harness.schemas import check_bench_out
 from harness.serve import REPO, RUN_DIR, serve_env
 from junitparser import Error, Failure, JUnitXml
 
@@ -63,6 +64,7 @@ def _finish(proc: subprocess.Popen[str], timeout_s: float = 300) -> tuple[int, s
 
 
 def _read(out: Path) -> tuple[dict[str, Any], JUnitXml]:
+    check_bench_out(out)  # the summary, score files and process lines match their schemas
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     return summary, JUnitXml.fromfile(str(out / "junit.xml"))
 

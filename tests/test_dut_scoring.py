@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 from harness.peers import PtyPeer
+from harness.schemas import check_file, check_lines, check_process_lines
 from harness.serve import ServeProcess, run_serve
 
 import protocols
@@ -107,7 +108,7 @@ def test_scripted_dut_lands_in_every_counter(pty_pair, tmp_path: Path) -> None:
     score = tmp_path / "score.json"
     serve = ServeProcess("--port", pty_pair.path, "--host-driven", "--snr", "inf",
                          "--response-window", str(window_s), "--score", str(score),
-                         "--markers", "--json")
+                         "--truth", str(tmp_path / "truth.jsonl"), "--markers", "--json")
     peer = PtyPeer(pty_pair.master)
     try:
         assert peer.wait_for(lambda p: p.of(protocols.Status) or serve.exited, 30)
@@ -139,7 +140,10 @@ def test_scripted_dut_lands_in_every_counter(pty_pair, tmp_path: Path) -> None:
     assert refused == {"unknown": protocols.NackReason.UNKNOWN_STIMULUS,
                        "stopped": protocols.NackReason.NOT_RUNNING}
     assert all(a.opcode == protocols.CommandCode.DECISION for a in acks.values())
-    written = json.loads(score.read_text())
+    written = check_file("score", score)  # every outcome, against the score file's schema
+    check_process_lines(serve.lines, "serve --json")
+    truth = check_lines("truth-line", tmp_path / "truth.jsonl")
+    assert [t["phase"] for t in truth if t["type"] == "marker"].count("onset") >= 1
     board = serve.summary()["scoreboard"]
     assert {k: v for k, v in written.items() if k not in ("log", "tasks")} == board
     assert written["tasks"] == {}  # no contacts: no contact task posed

@@ -4,7 +4,6 @@ counter of the board's score; on the blind link no byte of truth reaches it."""
 
 from __future__ import annotations
 
-import json
 import os
 import select
 import threading
@@ -12,6 +11,7 @@ import time
 from pathlib import Path
 
 import pytest
+from harness.schemas import check_lines
 
 import protocols
 from firmware_sim.board import Board, BoardConfig
@@ -182,7 +182,7 @@ def test_scripted_decoder_lands_in_every_counter_on_a_blind_link(pty_pair, tmp_p
     assert len(acks) == sum(len(v) for v in sent.values()) and all(a.ok for a in acks)
     # the operator's truth file: the markers and every trial, with its values
     write_truth(tmp_path / "truth.jsonl", board)
-    rows = [json.loads(line) for line in (tmp_path / "truth.jsonl").read_text().splitlines()]
+    rows = check_lines("truth-line", tmp_path / "truth.jsonl")  # against its schema
     assert [r["phase"] for r in rows if r["type"] == "marker"] == ["onset", "end"]
     trials = [r for r in rows if r["type"] == "trial"]
     assert sorted({r["task"] for r in trials}) == ["force", "localisation", "slip", "vibration"]

@@ -174,8 +174,8 @@ def schedule_from_doc(doc: Mapping[str, object], where: str, size: MeshSize = PA
     return Schedule(tuple(entries))
 
 
-def _read_bounded(p: Path, where: str) -> bytes:
-    """At most ``MAX_FILE_BYTES + 1`` bytes of ``p``; a FIFO or a device (not a regular file)
+def _read_bounded(p: Path, where: str, max_bytes: int = MAX_FILE_BYTES) -> bytes:
+    """At most ``max_bytes + 1`` bytes of ``p``; a FIFO or a device (not a regular file)
     is read without blocking for at most :data:`READ_TIMEOUT_S`, so a pipe nobody writes
     to cannot hang the command."""
     fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK)
@@ -183,11 +183,11 @@ def _read_bounded(p: Path, where: str) -> bytes:
         if stat.S_ISREG(os.fstat(fd).st_mode):
             os.set_blocking(fd, True)
             with os.fdopen(os.dup(fd), "rb") as fh:
-                return fh.read(MAX_FILE_BYTES + 1)
+                return fh.read(max_bytes + 1)
         chunks: list[bytes] = []
         size = 0
         deadline = time.monotonic() + READ_TIMEOUT_S
-        while size <= MAX_FILE_BYTES:
+        while size <= max_bytes:
             left = deadline - time.monotonic()
             if left <= 0 or not select.select([fd], [], [], left)[0]:
                 raise ConfigError(f"{where} gave no end of data within {READ_TIMEOUT_S:g} s "
@@ -217,22 +217,24 @@ def load_schedule(path: str | Path, size: MeshSize = PAPER_SIZE) -> Schedule:
     return parse_schedule(text, where, size)
 
 
-def read_schedule_text(path: str | Path, what: str = "schedule file") -> tuple[str, str]:
-    """The text of the TOML file ``path`` and its name for errors (``what`` and the path:
-    a schedule file, a campaign file), within :data:`MAX_FILE_BYTES`; :class:`ConfigError`
-    for a missing, unreadable, oversized or non-UTF-8 file."""
+def read_schedule_text(path: str | Path, what: str = "schedule file",
+                       max_bytes: int = MAX_FILE_BYTES,
+                       too_big: str = "split it into shorter schedules") -> tuple[str, str]:
+    """The text of the file ``path`` and its name for errors (``what`` and the path: a
+    schedule file, a campaign file, a campaign summary), within ``max_bytes`` (default
+    :data:`MAX_FILE_BYTES`; ``too_big`` says what to do past it); :class:`ConfigError` for a
+    missing, unreadable, oversized or non-UTF-8 file."""
     p = Path(path)
     where = f"{what} {str(p)!r}"
     try:
-        data = _read_bounded(p, where)
+        data = _read_bounded(p, where, max_bytes)
     except FileNotFoundError:
         raise ConfigError(f"{where} not found — check the path") from None
     except OSError as exc:
         raise ConfigError(f"{where} cannot be read: {exc.strerror or exc} — check the path "
                           "and its permissions") from None
-    if len(data) > MAX_FILE_BYTES:
-        raise ConfigError(f"{where} is larger than {MAX_FILE_BYTES // 2**20} MiB — split it "
-                          "into shorter schedules")
+    if len(data) > max_bytes:
+        raise ConfigError(f"{where} is larger than {max_bytes // 2**20} MiB — {too_big}")
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError:
