@@ -104,6 +104,7 @@ def run(args: argparse.Namespace) -> int:
         load_campaign,
         run_campaign,
     )
+    from skinhil.campaign.summary_file import load_summary
 
     check_transport_args(args)
     campaign = load_campaign(args.campaign)
@@ -117,6 +118,8 @@ def run(args: argparse.Namespace) -> int:
     if not args.resume and (out / SUMMARY_NAME).exists():
         raise ConfigError(f"'{out / SUMMARY_NAME}' holds an earlier run — add --resume to "
                           "continue it, or give another --out")
+    if args.resume:  # a summary that cannot be resumed is refused before any model loads
+        load_summary(out / SUMMARY_NAME, campaign)
     if link_args:
         link = BenchLink(link_args=tuple(link_args))
         link_text = describe_transport(args)

@@ -18,6 +18,7 @@ Schemas refer to each other by their ``$id`` (``urn:skinhil:schema:NAME``).
 from __future__ import annotations
 
 import functools
+import itertools
 import json
 import re
 from importlib import resources
@@ -30,6 +31,9 @@ ID_PREFIX = "urn:skinhil:schema:"
 SUFFIX = ".schema.json"
 MAX_SHOWN_CHARS = 80
 """Longest value quoted in an error line."""
+MAX_ERRORS = 100
+"""Errors looked at to choose the one reported (a hostile document may hold millions)."""
+_UNKNOWN_KEYS = ("additionalProperties", "unevaluatedProperties")
 _NO_VALUE = ("required", "additionalProperties", "unevaluatedProperties", "anyOf", "oneOf")
 """Failing keywords whose message does not quote the value (an object, named by its path)."""
 
@@ -103,7 +107,8 @@ def validate(name: str, document: object, where: str | None = None) -> None:
     from jsonschema.exceptions import best_match
 
     try:
-        error = best_match(_validator(name).iter_errors(document))
+        errors = list(itertools.islice(_validator(name).iter_errors(document), MAX_ERRORS))
+        error = best_match(errors)
     except RecursionError:
         raise ConfigError(f"{where or name}: nested too deeply to be a {name} document — "
                           "give the file skinhil wrote") from None
@@ -111,10 +116,14 @@ def validate(name: str, document: object, where: str | None = None) -> None:
         return
     got = "" if error.validator in _NO_VALUE else f" = {_short(error.instance)}"
     extra = ""
-    if error.validator in ("additionalProperties", "unevaluatedProperties"):
+    if error.validator in _UNKNOWN_KEYS:
         unknown = re.findall(r"'([^']*)'", error.message.split("(")[-1])
         extra = f" has unknown key(s) {', '.join(repr(k) for k in unknown[:5])}"
     elif error.validator == "required":
         extra = " lacks a key"
+        for other in errors:  # a renamed key: say the name it has too
+            if other.json_path == error.json_path and other.validator in _UNKNOWN_KEYS:
+                unknown = re.findall(r"'([^']*)'", other.message.split("(")[-1])
+                extra += f" and has unknown key(s) {', '.join(repr(k) for k in unknown[:5])}"
     raise ConfigError(f"{where or name}: {error.json_path}{got}{extra} — give {_give(error)}"
                       f" (schema {name})")
