@@ -18,6 +18,7 @@ from skinhil.model.skin import SkinParams
 from skinhil.plant import GraspParams, HeldObject
 from skinhil.plant.lifts import G_M_PER_S2, Lift, LiftScene, drawn_lift_scene
 from skinhil.plant.report import plant_scores
+from skinhil.schemas import validate
 from skinhil.suites import SUITES, case_ref, suite_trials
 from skinhil.suites.draws import inner_half_extent_m
 from skinhil.suites.tactile_v1 import (
@@ -175,6 +176,8 @@ def test_a_grip_above_the_break_force_breaks_the_object_and_fails_the_lift() -> 
     broken = _lift_run(1.0, break_n=0.9)
     assert broken["held"] == 1 and broken["broken"] == 1 and broken["score"] == 0.0
     assert broken["broken_lifts"] == [1]
+    for scores in (spared, broken):  # the score file's "grasp", against its schema
+        validate("score#/$defs/grasp", scores)
 
 
 def test_a_bad_suite_reference_says_what_to_give() -> None:

@@ -62,9 +62,13 @@ def _validator(name: str) -> Any:
     from jsonschema import Draft202012Validator
     from referencing import Registry, Resource
 
+    base, _, pointer = name.partition("#")
     registry: Registry[Any] = Registry().with_resources(
         (ID_PREFIX + n, Resource.from_contents(schema(n))) for n in names())
-    return Draft202012Validator(schema(name), registry=registry)
+    root = schema(base)
+    if pointer:  # a part of a document: a schema that refers to it
+        root = {"$schema": root["$schema"], "$ref": f"{ID_PREFIX}{base}#{pointer}"}
+    return Draft202012Validator(root, registry=registry)
 
 
 def _short(value: object) -> str:
@@ -101,9 +105,10 @@ def _give(error: Any) -> str:
 
 def validate(name: str, document: object, where: str | None = None) -> None:
     """Check ``document`` (parsed JSON, or TOML as ``tomllib`` gives it) against schema
-    ``name``; :class:`ConfigError` with one line naming the place in the document (a JSON
-    path such as ``$.cases[0].outcome``) and what to give. ``where`` names the document in
-    the message (default: the schema's name)."""
+    ``name`` (or a part of one: ``score#/$defs/grasp``, the score file's ``grasp``);
+    :class:`ConfigError` with one line naming the place in the document (a JSON path such as
+    ``$.cases[0].outcome``) and what to give. ``where`` names the document in the message
+    (default: the schema's name)."""
     from jsonschema.exceptions import best_match
 
     try:
