@@ -33,8 +33,8 @@ from skinhil.world import scenario_file
 
 EXAMPLES = REPO / "examples"
 SMOKE = EXAMPLES / "campaigns" / "smoke.toml"
-EXPECTED = {"campaign", "campaign-summary", "ready-line", "scenario", "score",
-            "serve-summary-line", "truth-line"}
+EXPECTED = {"campaign", "campaign-summary", "listen-summary-line", "ready-line", "scenario",
+            "score", "serve-summary-line", "truth-line"}
 
 
 def _resolve(node: dict[str, Any], root: dict[str, Any]) -> tuple[dict[str, Any],

@@ -27,16 +27,16 @@ def check_lines(name: str, path: Path) -> list[Any]:
 
 
 def check_process_lines(lines: list[dict[str, Any]], where: str) -> None:
-    """The ready line of ``lines`` (a process's JSON lines) and, of ``serve``, its summary
-    line, valid against their schemas; at least the ready line is there."""
+    """The ready line of ``lines`` (a process's JSON lines) and its summary line (of
+    ``listen``: on one board), valid against their schemas; at least the ready line is
+    there."""
     ready = [r for r in lines if r.get("type") == READY]
     assert ready, f"{where}: no ready line"
     for r in ready:
         validate("ready-line", r, where)
-    if ready[0]["command"] == "serve":
-        for r in lines:
-            if r.get("type") == SUMMARY:
-                validate("serve-summary-line", r, where)
+    for r in lines:
+        if r.get("type") == SUMMARY and "boards" not in r:  # one board
+            validate(f"{ready[0]['command']}-summary-line", r, where)
 
 
 def check_bench_out(out: Path) -> None:
