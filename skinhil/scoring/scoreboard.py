@@ -26,6 +26,7 @@ import numpy as np
 
 import protocols
 from skinhil.errors import ConfigError
+from skinhil.scoring.headline import HedgedTrials, headline
 from skinhil.scoring.matching import MatchKind, OnsetMatcher
 
 
@@ -90,6 +91,8 @@ class DecisionScoreboard:
         """(true stimulus id, decided stimulus id) → matched decisions."""
         self.latencies_us: list[int] = []
         """Onset → arrival (µs, board time) of every matched decision."""
+        self.hedges = HedgedTrials()
+        """The onsets (by time, µs) decided right and those decided more than once."""
         self.log: list[tuple[int, int, float | None, int | None, str, int | None,
                             int | None]] = []
         """Per decision: (arrival µs, stimulus id, confidence, token, outcome, onset µs,
@@ -117,10 +120,14 @@ class DecisionScoreboard:
             if m.kind is MatchKind.MATCHED:
                 assert m.onset is not None
                 outcome = Outcome.RIGHT if m.onset.stimulus_id == stimulus_id else Outcome.WRONG
+                if outcome is Outcome.RIGHT:
+                    self.hedges.right.add(m.onset.t_us)
                 self.confusion[(m.onset.stimulus_id, int(stimulus_id))] += 1
                 self.latencies_us.append(int(t_us) - m.onset.t_us)
             else:
                 outcome = _KIND_OUTCOME[m.kind]
+                if m.kind is MatchKind.DUPLICATE and m.onset is not None:
+                    self.hedges.again.add(m.onset.t_us)
         self.counts[outcome] += 1
         if len(self.log) < MAX_LOGGED_DECISIONS:
             self.log.append((int(t_us), int(stimulus_id), confidence, token, outcome.value,
@@ -155,11 +162,15 @@ class DecisionScoreboard:
         return {"p50": float(p50), "p99": float(p99)}
 
     def summary(self, with_log: bool = False) -> dict[str, Any]:
-        """The scoreboard as a plain dict (JSON-ready; nan as None): counters, accuracy,
+        """The scoreboard as a plain dict (JSON-ready; nan as None): the headline ``score``
+        (SPEC.md §3.5.4, the contact tasks' rule), counters, accuracy,
         latency (ms), the confusion as ``[true id, decided id, count]`` rows and, with
         ``with_log``, the per-decision log."""
         lat = self.latency_ms()
+        charged = self._matcher.onsets + self.decisions - self.matched
         out: dict[str, Any] = {
+            "score": headline(self.counts[Outcome.RIGHT], self.hedges, charged),
+            "hedged": self.hedges.voided,
             "response_window_s": self.response_window_s,
             "onsets": self._matcher.onsets, "decisions": self.decisions,
             **{o.value: self.counts[o] for o in Outcome},

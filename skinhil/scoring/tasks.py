@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from skinhil.scoring.headline import HedgedTrials, headline
 from skinhil.scoring.matching import MatchKind, OnsetMatcher
 from skinhil.tasks import TaskDef, TrialKind, registry
 from skinhil.world.truth import SLIP_STATES, T_NODES, T_NORMAL, T_SLIP, T_X, T_Y
@@ -97,6 +98,8 @@ class TaskScore:
     verdicts: list[dict[str, Any]] = field(default_factory=list)
     """Per answer, the first :data:`MAX_VERDICTS`: what it said, the trial it answered and
     its outcome (:meth:`TaskScoreboard.answer`)."""
+    hedges: HedgedTrials = field(default_factory=HedgedTrials)
+    """The trials answered right and those answered more than once (:func:`headline`)."""
 
     def add_trial(self, trial: Trial) -> None:
         self.matcher.add_onset(trial.t0_us, len(self.trials))
@@ -197,7 +200,11 @@ class TaskScoreboard:
                 trial = score.trials[trial_index]
                 score.latencies_us.append(int(t_us) - trial.t0_us)
                 outcome, error = self._verdict(score, trial, answer.values)
+                if outcome == "right":
+                    score.hedges.right.add(trial_index)
             else:
+                if m.kind is MatchKind.DUPLICATE and trial_index is not None:
+                    score.hedges.again.add(trial_index)
                 outcome = {MatchKind.DUPLICATE: "duplicates", MatchKind.LATE: "late",
                            MatchKind.NO_STIMULUS: "false_alarms"}[m.kind]
         score.counts[outcome] += 1
@@ -227,10 +234,8 @@ class TaskScoreboard:
         """Per task name: the headline ``score``, counters, accuracy, error and latency
         percentiles (JSON-ready); with ``with_verdicts``, every answer's verdict too.
 
-        ``score`` charges every answer (SPEC.md §3.5.4): the first answer to a trial is
-        judged, and every other answer (a second one to a trial, one that matches no trial,
-        a late one, one while stopped) counts against it: right / (trials + extra answers),
-        in [0, 1]; None before the first trial or answer."""
+        ``score`` charges every answer (SPEC.md §3.5.4, :func:`headline`); None before the
+        first trial or answer."""
         out: dict[str, dict[str, Any]] = {}
         for s in self.tasks.values():
             matched = s.counts["right"] + s.counts["wrong"]
@@ -238,10 +243,11 @@ class TaskScoreboard:
             answers = sum(s.counts.values())
             charged = s.matcher.onsets + answers - matched
             d: dict[str, Any] = {
-                "score": round(s.counts["right"] / charged, 6) if charged else None,
+                "score": headline(s.counts["right"], s.hedges, charged),
                 "trials": s.matcher.onsets, "answers": answers,
                 **{o: s.counts[o] for o in OUTCOMES},
                 "matched": matched, "misses": s.matcher.misses, "pending": s.matcher.pending,
+                "hedged": s.hedges.voided,
                 "accuracy": s.counts["right"] / scored if scored else None,
                 "latency_ms": _percentiles([v * 1e-3 for v in s.latencies_us]),
             }
