@@ -224,7 +224,17 @@ def print_link(link: dict[str, Any]) -> None:
           f"{link['late_events']} late events, {link.get('acks_lost', 0)} ACKs lost; board: "
           f"{link['board_generated']} generated, "
           f"{link['board_sent']} sent, {link['board_dropped']} dropped; "
-          f"{link['lost_on_link']} lost on the link")
+          f"{link['lost_on_link']} lost on the link"
+          + _joined_text(link.get("sent_before_join", 0)))
+
+
+def _joined_text(sent_before: int) -> str:
+    """The late-join note of the link line: what the board had sent before the receiver's
+    first STATUS and it never saw."""
+    if not sent_before:
+        return ""
+    return (f" (joined late: the board had sent {sent_before} events before the first "
+            "status received; those are not counted lost)")
 
 
 def bus_summary(bus: BusReceiver, wall_s: float) -> dict[str, Any]:

@@ -20,6 +20,7 @@ from firmware_sim.config import (
     BoardConfig,
     BoardSummary,
 )
+from firmware_sim.score import board_score, grasp_scores
 from protocols.versions import wire_version
 from skinhil.cli import signals
 from skinhil.cli.kernel_notice import announce_cold_cache
@@ -44,7 +45,7 @@ from skinhil.model.geometry import format_size, spring_count
 from skinhil.model.timeline import Timeline
 from skinhil.output_files import atomic_path, check_output_path
 from skinhil.plant import GraspParams, lift_scene
-from skinhil.plant.report import grasp_text, plant_scores
+from skinhil.plant.report import grasp_text
 from skinhil.plant.truth_file import HeldTruthWriter
 from skinhil.process_output import SUMMARY, line, ready_record
 from skinhil.recording import (
@@ -57,6 +58,7 @@ from skinhil.recording import (
     open_recording,
 )
 from skinhil.scoring import DecisionScoreboard, scoreboard_text, truth_lines
+from skinhil.scoring.score_file import score_record
 from skinhil.suites import suite_trials
 from skinhil.world.scene import MAX_CONTACTS as MAX_LIFTS
 
@@ -387,7 +389,7 @@ def run_replay(args: argparse.Namespace) -> int:
         with signals.stop_event() as stop:
             summary = replayer.run(stop)
     if score_path is not None:
-        write_score(score_path, scoreboard)
+        write_score(score_path, score_record(scoreboard))
     if args.json:
         print(json.dumps({"type": "replay", **summary.as_dict(),
                           "scoreboard": scoreboard.summary()}), flush=True)
@@ -397,15 +399,11 @@ def run_replay(args: argparse.Namespace) -> int:
     return 0
 
 
-def write_score(path: Path, scoreboard: DecisionScoreboard,
-                tasks: dict[str, Any] | None = None,
-                extra: dict[str, Any] | None = None) -> None:
-    """Write ``scoreboard`` with every decision to ``path`` (JSON), the ANSWERs' scores per
-    task under ``"tasks"`` (each answer's verdict with them) and the keys of ``extra``
-    (``"grasp"``), whole or not at all."""
+def write_score(path: Path, score: dict[str, Any]) -> None:
+    """Write ``score`` (:func:`firmware_sim.score.board_score`,
+    :func:`skinhil.scoring.score_file.score_record`) to ``path`` (JSON), whole or not at all."""
     with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps({**scoreboard.summary(with_log=True), "tasks": tasks or {},
-                                   **(extra or {})}, indent=1) + "\n", encoding="utf-8")
+        tmp.write_text(json.dumps(score, indent=1) + "\n", encoding="utf-8")
 
 
 def write_truth(path: Path, board: Board) -> None:
@@ -534,12 +532,9 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
             sys.stderr.write("\n")
         if truth_file is not None:
             truth_file.close()
-    extra = ({"grasp": plant_scores(board.plant, board.truth)} if board.plant is not None
-             else {})
+    extra = grasp_scores(board)
     if score_path is not None:
-        write_score(score_path, board.scoreboard,
-                    board.tasks.summary(with_verdicts=True) if board.tasks is not None else {},
-                    extra)
+        write_score(score_path, board_score(board))
     if truth_path is not None:
         write_truth(truth_path, board)
     if args.json:
