@@ -26,7 +26,7 @@ from skinhil.cli.demo_cache import board_warming, cache_dir
 from skinhil.cli.lab_outputs import LabOutputs, check_lab_outputs
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import PAPER_SIZE, spring_count
-from skinhil.plant import GraspParams
+from skinhil.plant import GraspParams, lifts_duration_s
 from skinhil.plant.report import grasp_text
 from skinhil.plant.truth_file import HeldTruthReader
 from skinhil.receiver.grip_loop import GripLoop
@@ -124,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
     score_dir = tempfile.TemporaryDirectory(prefix="skinhil-demo-")
     score = Path(score_dir.name) / "score.json"
     truth = Path(score_dir.name) / "truth.bin"
-    duration_s = round(args.lifts * params.period_s + 0.05, 3)
+    duration_s = lifts_duration_s(params, args.lifts)
     view_args = ["--grasp-truth", str(truth)] if args.view is not None else []
     cmd = serve_command(["--port", link.slave_path, "--baud", str(args.baud), "--grasp",
                          str(args.lifts), "--score", str(score), *view_args], duration_s,

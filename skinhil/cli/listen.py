@@ -35,6 +35,7 @@ from skinhil.cli.transport_args import (
     selected_link,
 )
 from skinhil.cli.values import MAX_DURATION_S, integer, real, udp_allow_value
+from skinhil.cli.written import say_written
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import build_mesh, format_size, spring_count
 from skinhil.model.skin import SkinParams
@@ -387,6 +388,7 @@ def run(args: argparse.Namespace) -> int:
             receiver.add_listener(recorder)
             info = listen_one(args, receiver, names, answerer, tasks)
             save_session(args, recorder, names, info, receiver)
+        say_written("listen", "the session", args.record)
     if args.json:
         print(json.dumps(info), flush=True)
     else:
