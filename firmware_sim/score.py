@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+import protocols
 from skinhil.plant.report import plant_scores
 from skinhil.scoring.score_file import score_record
 
@@ -14,10 +15,19 @@ if TYPE_CHECKING:
 
 
 def grasp_scores(board: Board) -> dict[str, Any]:
-    """``{"grasp": ...}``, the held object's scores, or {} for a board that holds none."""
+    """``{"grasp": ...}``, the held object's scores, or {} for a board that holds none.
+    Its ``"grips"`` count every GRIP the board received once: ``accepted`` (ACKed),
+    ``refused_*`` by the held object (NACKed with the reason), and ``refused_busy``: refused
+    for want of room in the command queue before reaching the object (NACKed BUSY while the
+    answer budget lasts, else unanswered; :mod:`firmware_sim.command_budget`). A GRIP still
+    waiting in the queue when the run ended is in none of them (never executed, never
+    answered)."""
     if board.plant is None:
         return {}
-    return {"grasp": plant_scores(board.plant, board.truth)}
+    scores = plant_scores(board.plant, board.truth)
+    busy = board.counters.busy_by_opcode.get(int(protocols.CommandCode.GRIP), 0)
+    scores["grips"] = {**scores["grips"], "refused_busy": busy}
+    return {"grasp": scores}
 
 
 def board_score(board: Board) -> dict[str, Any]:

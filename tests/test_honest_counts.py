@@ -49,3 +49,42 @@ def test_a_grasp_run_stopped_with_ctrl_c_scores_the_lifts_it_played(tmp_path: Pa
     started = int(played_s // params.period_s) + 1
     assert json.loads(score.read_text())["grasp"]["lifts"] == started >= 2
     assert f"wrote the score to {score.resolve()}" in board.stderr
+
+
+def test_the_boards_grip_counts_are_the_hosts_acks() -> None:
+    """A burst of GRIPs beyond the command queue, off the clock: every GRIP the board
+    received is counted once in its score (accepted, refused by the object or BUSY), the
+    accepted ones are the ACKs on the wire, and the NACKs on the wire are refusals."""
+    from harness.golden import GoldenLink
+
+    import protocols
+    from firmware_sim.board import Board, BoardConfig
+    from firmware_sim.score import grasp_scores
+    from skinhil.model.timeline import Timeline
+    from skinhil.plant import lift_scene
+
+    burst = 100
+    link = GoldenLink(frames=False)
+    enc, dec = link.codec_pair()
+    link.script = {5: [enc.command(protocols.Command(t, protocols.CommandCode.GRIP, 1.0))
+                       for t in range(1, burst + 1)]}
+    params = GraspParams()
+    board = Board(BoardConfig(seed=7, schedule_mode=Timeline.SCHEDULE_FILE), lambda: link,
+                  scene=lift_scene(params, 1), grasp=params)
+    board.warm_up()
+    board.queue_session(protocols.SessionReason.START)
+    for k in range(300):
+        link.tick = k
+        board.tick()
+    board.finish()
+    grips = grasp_scores(board)["grasp"]["grips"]
+    acks = [r for r in dec.feed(b"".join(link.units)).records
+            if isinstance(r, protocols.Ack) and r.opcode == protocols.CommandCode.GRIP]
+    refused = sum(v for k, v in grips.items() if k.startswith("refused_"))
+    assert grips["refused_busy"] > 0  # the burst overflowed the queue
+    assert grips["accepted"] + refused == burst
+    assert grips["accepted"] == sum(a.ok for a in acks)
+    nacks = [a for a in acks if not a.ok]
+    assert 0 < len(nacks) <= refused
+    assert {a.reason for a in nacks} <= {protocols.NackReason.BUSY,
+                                         protocols.NackReason.GRIP_LIMIT}

@@ -161,7 +161,7 @@ def run(args: argparse.Namespace) -> int:
     if controller is not None:
         c = controller.as_dict()
         print(f"controller: {c['sent']} GRIPs sent ({c['acked']} ACK, {c['nacked']} NACK, "
-              f"{c['unsent']} not sent)")
+              f"{c['unanswered']} unanswered), {c['unsent']} not sent (no room on the link)")
     print(f"demo: {args.lifts} lifts at {args.snr_db:g} dB, controller {args.controller}, "
           f"{time.monotonic() - t_start:.1f} s wall in all", flush=True)
     return 0
