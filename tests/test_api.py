@@ -87,3 +87,25 @@ def test_a_late_receiver_counts_what_the_board_sent_before_it_joined() -> None:
     assert status is not None and c.events_lost == 0
     assert c.events_before_join > 0
     assert c.events_before_join + c.events_decoded == status.events_sent
+
+
+def test_a_receiver_that_joins_a_running_board_late_says_what_it_missed() -> None:
+    """On UDP (datagrams sent before a receiver listens are gone): the events the board had
+    sent before the receiver's first status are counted apart, not as lost on the link."""
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    with skinhil.Board(snr_db=10, seed=4, link=f"udp:127.0.0.1:{port}"):
+        time.sleep(1.0)  # the board runs with nobody listening
+        with skinhil.Receiver(f"udp:{port}") as rx:
+            deadline = time.monotonic() + 10
+            while rx.status is None and time.monotonic() < deadline:
+                time.sleep(0.05)
+            time.sleep(0.5)
+            link = rx.link_report()
+    assert link["sent_before_join"] > 0
+    # every event the board sent up to its last status: missed before, decoded or lost after
+    assert (link["sent_before_join"] + link["events_decoded"] + link["lost_on_link"]
+            >= link["board_sent"] > link["events_decoded"])
