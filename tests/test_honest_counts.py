@@ -88,3 +88,29 @@ def test_the_boards_grip_counts_are_the_hosts_acks() -> None:
     assert 0 < len(nacks) <= refused
     assert {a.reason for a in nacks} <= {protocols.NackReason.BUSY,
                                          protocols.NackReason.GRIP_LIMIT}
+
+
+def test_the_grasp_demo_stopped_with_ctrl_c_prints_the_lifts_played() -> None:
+    """``demo --task grasp`` stopped: the board (in a session of its own) gets one SIGINT,
+    ends cleanly and scores the lifts it played; the demo prints them and exits 130."""
+    import re
+
+    lifts = 20
+    demo = ServeProcess("--task", "grasp", "--lifts", str(lifts), "--controller", "off",
+                        command="demo")
+    try:
+        end = time.monotonic() + 300
+        while not any(x.get("text", "").startswith("board:") for x in list(demo.lines)):
+            assert time.monotonic() < end and not demo.exited, demo.stderr
+            time.sleep(0.05)
+        time.sleep(8.0)  # the board starts (kernels warm: the tests above ran serve) and lifts
+        assert not demo.exited, demo.stderr
+        demo.interrupt()
+        status = demo.wait(120)
+    finally:
+        demo.kill()
+    text = "".join(x.get("text", "") for x in demo.lines)
+    assert status == 130, demo.stderr
+    found = re.search(r"grasp: score \S+; (\d+)/(\d+) lifts held", text)
+    assert found is not None, text + demo.stderr
+    assert 1 <= int(found.group(2)) < lifts

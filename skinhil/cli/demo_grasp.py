@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from protocols.kernel_cache import source_hash
+from skinhil.cli import signals
 from skinhil.cli.demo_cache import board_warming, cache_dir
 from skinhil.cli.lab_outputs import LabOutputs, check_lab_outputs
 from skinhil.errors import ConfigError
@@ -141,7 +142,10 @@ def run(args: argparse.Namespace) -> int:
         listeners.append(feed)
     tail = TruthTail(HeldTruthReader(truth), trace) if feed is not None else None
     try:
-        status, out, err = run_against_board(loop, cmd)
+        with signals.stop_event(lambda: "stopping: the board ends the lift under way and "
+                                        "scores the lifts it played; Ctrl-C again stops at "
+                                        "once") as stop:
+            status, out, err = run_against_board(loop, cmd, stop=stop)
     finally:
         link.shutdown()
         os.close(slave_fd)
@@ -151,7 +155,7 @@ def run(args: argparse.Namespace) -> int:
             outputs.close()
     with score_dir:
         board_score = json.loads(score.read_text(encoding="utf-8")) if score.exists() else None
-    if status != 0 or board_score is None:
+    if status not in (0, signals.exit_status(0)) or board_score is None:
         raise ConfigError(f"the board stopped with status {status}: "
                           f"{err.strip().splitlines()[-1] if err.strip() else 'no score'}")
     scores = board_score["grasp"]
