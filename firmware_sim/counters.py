@@ -44,6 +44,9 @@ class BoardCounters:
     busy: int = 0
     """Host commands refused as BUSY, beyond the tick's budget (also in ``nacks`` and
     ``rx_errors``; :mod:`firmware_sim.command_budget`)."""
+    busy_by_opcode: dict[int, int] = field(default_factory=dict)
+    """``busy`` by the refused commands' opcode (a GRIP refused BUSY never reached the held
+    object: the grasp score counts it as ``refused_busy``)."""
     markers_sent: int = 0
     """Ground-truth markers encoded into the transmit queue."""
     markers_dropped: int = 0

@@ -165,4 +165,7 @@ class HostCommands(Participant):
             self._answer_query(ctx, protocols.Command(token, protocols.CommandCode.QUERY_STATUS))
         rest = excess[~query]
         if rest.shape[0]:
+            by_opcode = ctx.counters.busy_by_opcode
+            for opcode in rest["opcode"].tolist():
+                by_opcode[int(opcode)] = by_opcode.get(int(opcode), 0) + 1
             self._refuse_busy(ctx, rest[:int(ANSWER_BURST)].tolist(), rest.shape[0])

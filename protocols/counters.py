@@ -46,6 +46,7 @@ class StatusTracker:
         self._last["link_events"] = link
         if self._base is None:
             self._base = (link, decoded)
+            counters.events_before_join = max(0, link - decoded)
         counters.events_lost = (link - self._base[0]) - (decoded - self._base[1])
         counters.events_lost_reported = values["events_dropped"]
         return dataclasses.replace(raw, **values)

@@ -10,7 +10,9 @@ them selects a fresh, empty cache directory, and every kernel compiles again fro
 current sources. ``<base>`` is ``$NUMBA_CACHE_DIR`` when set, else
 ``skinhil/__pycache__/numba`` next to the sources (``protocols/__pycache__/numba`` in a copy of
 ``protocols`` alone) (so a checkout, and a user-mode Linux guest
-that mounts it, find its cache without any environment). Only the
+that mounts it, find its cache without any environment); when that folder cannot be written
+(a read-only site-packages) the user's cache folder, ``$XDG_CACHE_HOME/skinhil/numba`` or
+``~/.cache/skinhil/numba``, and the log says which at INFO. Only the
 :data:`KEEP_VERSIONS` most recently used directories are kept.
 
 Importing this module configures the cache (:data:`CACHE_DIR`); ``protocols/__init__.py``
@@ -69,16 +71,42 @@ def cache_base() -> Path:
     return _ROOT / home / "__pycache__" / "numba"
 
 
-def configure() -> Path:
-    """Point numba's kernel cache at this source version's directory and return it."""
-    base = cache_base()
-    path = base / source_hash()
+def user_cache_base() -> Path:
+    """The user's cache folder for kernels: ``$XDG_CACHE_HOME/skinhil/numba`` or
+    ``~/.cache/skinhil/numba``."""
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "skinhil" / "numba"
+
+
+def _claim(base: Path, version: str) -> Path | None:
+    """``base/version`` made, marked most recently used and writable, the older versions
+    pruned; None when it cannot be written."""
+    path = base / version
     try:
         path.mkdir(parents=True, exist_ok=True)
         os.utime(path)  # marks it most recently used
+        if not os.access(path, os.W_OK | os.X_OK):
+            raise PermissionError(f"{path} is not writable")
         _prune(base, keep=path)
-    except OSError as exc:  # a read-only install: numba then compiles without caching
+    except OSError as exc:
         log.debug("kernel cache %s not writable: %s", path, exc)
+        return None
+    return path
+
+
+def configure() -> Path:
+    """Point numba's kernel cache at this source version's directory and return it: under
+    :func:`cache_base`, else under :func:`user_cache_base` when that cannot be written
+    (logged at INFO); when neither can, the first, and numba compiles without caching."""
+    version = source_hash()
+    path = _claim(cache_base(), version)
+    if path is None and not os.environ.get("NUMBA_CACHE_DIR"):
+        path = _claim(user_cache_base(), version)
+        if path is not None:
+            log.info("kernel cache: %s (the package folder %s cannot be written)", path,
+                     cache_base())
+    if path is None:  # numba then compiles without caching; skinhil compile says so
+        path = cache_base() / version
     numba.config.CACHE_DIR = str(path)  # type: ignore[attr-defined]  # set at run time
     return path
 

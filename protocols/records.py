@@ -333,6 +333,10 @@ class LinkCounters:
     the last status received (board count minus decoded count since the first status)."""
     events_lost_reported: int = 0
     """The board's own ``events_dropped`` from the last status received."""
+    events_before_join: int = 0
+    """Events the board put on the wire before the first status received that did not come
+    out of this decoder: what a receiver that joined a run late missed (not in
+    ``events_lost``, which counts from that status on)."""
     syncs: int = 0
     """SYNC (time base) frames received."""
     command_seq_gaps: int = 0

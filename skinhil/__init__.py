@@ -1,7 +1,9 @@
 """skinhil: real-time neuromorphic hardware-in-the-loop emulator of touch.
 
 The model (skin mechanics → spring forces → noisy Izhikevich neurons → spikes → PSP) is
-importable from here; see the submodules for the equations.
+importable from here; see the submodules for the equations. :class:`Board` and
+:class:`Receiver` are the notebook API (:mod:`skinhil.api`, docs/api.md): a board running
+in real time over a link and a receiver of its stream.
 
 The names below are imported on first use (PEP 562): ``import skinhil`` alone loads neither
 numpy nor numba, so the command line can install its signal handlers first of all
@@ -15,6 +17,7 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from skinhil.api import Board, Receiver
     from skinhil.events import EVENT_DTYPE, make_events
     from skinhil.model.neurons import (
         IzhikevichParams,
@@ -39,6 +42,8 @@ if TYPE_CHECKING:
     from skinhil.model.trials import simulate_trial_events, simulate_trials
 
 _EXPORTS: dict[str, str] = {
+    "Board": "skinhil.api",
+    "Receiver": "skinhil.api",
     "EVENT_DTYPE": "skinhil.events",
     "IzhikevichParams": "skinhil.model.neurons",
     "NeuronPopulation": "skinhil.model.neurons",
@@ -78,6 +83,8 @@ def __getattr__(name: str) -> Any:
 __version__ = "0.1.0"
 
 __all__ = [
+    "Board",
+    "Receiver",
     "EVENT_DTYPE",
     "IzhikevichParams",
     "NeuronPopulation",

@@ -47,6 +47,8 @@ def _run(argv: list[str]) -> int:
 
     command = next((a for a in argv if not a.startswith("-")), None)  # -v is the only option
     try:
+        if command is None and "--version" in argv:
+            command = ""  # the subcommands' names only: --version imports none of them
         args = build_parser(command).parse_args(argv)  # imports the subcommand's module
         signals.resume()  # start-up done: a Ctrl-C during the imports stops here
         level = logging.WARNING - 10 * min(args.verbose, 2)

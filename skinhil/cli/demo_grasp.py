@@ -22,11 +22,12 @@ from pathlib import Path
 from typing import Any
 
 from protocols.kernel_cache import source_hash
+from skinhil.cli import signals
 from skinhil.cli.demo_cache import board_warming, cache_dir
 from skinhil.cli.lab_outputs import LabOutputs, check_lab_outputs
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import PAPER_SIZE, spring_count
-from skinhil.plant import GraspParams
+from skinhil.plant import GraspParams, lifts_duration_s
 from skinhil.plant.report import grasp_text
 from skinhil.plant.truth_file import HeldTruthReader
 from skinhil.receiver.grip_loop import GripLoop
@@ -124,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
     score_dir = tempfile.TemporaryDirectory(prefix="skinhil-demo-")
     score = Path(score_dir.name) / "score.json"
     truth = Path(score_dir.name) / "truth.bin"
-    duration_s = round(args.lifts * params.period_s + 0.05, 3)
+    duration_s = lifts_duration_s(params, args.lifts)
     view_args = ["--grasp-truth", str(truth)] if args.view is not None else []
     cmd = serve_command(["--port", link.slave_path, "--baud", str(args.baud), "--grasp",
                          str(args.lifts), "--score", str(score), *view_args], duration_s,
@@ -141,7 +142,10 @@ def run(args: argparse.Namespace) -> int:
         listeners.append(feed)
     tail = TruthTail(HeldTruthReader(truth), trace) if feed is not None else None
     try:
-        status, out, err = run_against_board(loop, cmd)
+        with signals.stop_event(lambda: "stopping: the board ends the lift under way and "
+                                        "scores the lifts it played; Ctrl-C again stops at "
+                                        "once") as stop:
+            status, out, err = run_against_board(loop, cmd, stop=stop)
     finally:
         link.shutdown()
         os.close(slave_fd)
@@ -151,7 +155,7 @@ def run(args: argparse.Namespace) -> int:
             outputs.close()
     with score_dir:
         board_score = json.loads(score.read_text(encoding="utf-8")) if score.exists() else None
-    if status != 0 or board_score is None:
+    if status not in (0, signals.exit_status(0)) or board_score is None:
         raise ConfigError(f"the board stopped with status {status}: "
                           f"{err.strip().splitlines()[-1] if err.strip() else 'no score'}")
     scores = board_score["grasp"]
@@ -161,7 +165,7 @@ def run(args: argparse.Namespace) -> int:
     if controller is not None:
         c = controller.as_dict()
         print(f"controller: {c['sent']} GRIPs sent ({c['acked']} ACK, {c['nacked']} NACK, "
-              f"{c['unsent']} not sent)")
+              f"{c['unanswered']} unanswered), {c['unsent']} not sent (no room on the link)")
     print(f"demo: {args.lifts} lifts at {args.snr_db:g} dB, controller {args.controller}, "
           f"{time.monotonic() - t_start:.1f} s wall in all", flush=True)
     return 0

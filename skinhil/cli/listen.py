@@ -35,6 +35,7 @@ from skinhil.cli.transport_args import (
     selected_link,
 )
 from skinhil.cli.values import MAX_DURATION_S, integer, real, udp_allow_value
+from skinhil.cli.written import say_written
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import build_mesh, format_size, spring_count
 from skinhil.model.skin import SkinParams
@@ -224,7 +225,17 @@ def print_link(link: dict[str, Any]) -> None:
           f"{link['late_events']} late events, {link.get('acks_lost', 0)} ACKs lost; board: "
           f"{link['board_generated']} generated, "
           f"{link['board_sent']} sent, {link['board_dropped']} dropped; "
-          f"{link['lost_on_link']} lost on the link")
+          f"{link['lost_on_link']} lost on the link"
+          + _joined_text(link.get("sent_before_join", 0)))
+
+
+def _joined_text(sent_before: int) -> str:
+    """The late-join note of the link line: what the board had sent before the receiver's
+    first STATUS and it never saw."""
+    if not sent_before:
+        return ""
+    return (f" (joined late: the board had sent {sent_before} events before the first "
+            "status received; those are not counted lost)")
 
 
 def bus_summary(bus: BusReceiver, wall_s: float) -> dict[str, Any]:
@@ -377,6 +388,7 @@ def run(args: argparse.Namespace) -> int:
             receiver.add_listener(recorder)
             info = listen_one(args, receiver, names, answerer, tasks)
             save_session(args, recorder, names, info, receiver)
+        say_written("listen", "the session", args.record)
     if args.json:
         print(json.dumps(info), flush=True)
     else:

@@ -41,6 +41,30 @@ class ArgumentParser(argparse.ArgumentParser):
         sys.exit(ERROR_STATUS)
 
 
+def version_text() -> str:
+    """``skinhil --version``'s line: the package's version and the wire protocol versions
+    its board sends and its receiver reads (SPEC.md, "Versions")."""
+    from protocols.constants import KNOWN_VERSIONS
+    from skinhil import __version__
+
+    return (f"skinhil {__version__} (wire protocol versions "
+            f"{', '.join(str(v) for v in KNOWN_VERSIONS)})")
+
+
+class VersionAction(argparse.Action):
+    """``--version``: :func:`version_text` on stdout, exit status 0 (what it imports is
+    imported only then)."""
+
+    def __init__(self, option_strings: list[str], dest: str = argparse.SUPPRESS,
+                 default: str = argparse.SUPPRESS, help: str | None = None) -> None:
+        super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: object, option_string: str | None = None) -> NoReturn:
+        print(version_text(), flush=True)
+        parser.exit()
+
+
 def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """The top-level parser with every available subcommand registered, or only ``only``
     when it names one (each subcommand module imports what it runs on: a board start need
@@ -51,6 +75,8 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
         prog="skinhil",
         description="Real-time neuromorphic hardware-in-the-loop emulator of touch.")
     parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
+    parser.add_argument("--version", action=VersionAction,
+                        help="print skinhil's version and the wire versions it reads, and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=ArgumentParser)
     sub.required = True
     if only is not None and only not in SUBCOMMANDS:  # "invalid choice", from the names

@@ -20,6 +20,7 @@ from firmware_sim.config import (
     BoardConfig,
     BoardSummary,
 )
+from firmware_sim.score import board_score, grasp_scores
 from protocols.versions import wire_version
 from skinhil.cli import signals
 from skinhil.cli.kernel_notice import announce_cold_cache
@@ -39,12 +40,13 @@ from skinhil.cli.transport_args import (
     selected_link,
 )
 from skinhil.cli.values import MAX_DURATION_S, MAX_REST_S, cores_value, integer, real
+from skinhil.cli.written import say_written
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import format_size, spring_count
 from skinhil.model.timeline import Timeline
 from skinhil.output_files import atomic_path, check_output_path
-from skinhil.plant import GraspParams, lift_scene
-from skinhil.plant.report import grasp_text, plant_scores
+from skinhil.plant import GraspParams, lift_scene, lifts_duration_s
+from skinhil.plant.report import grasp_text
 from skinhil.plant.truth_file import HeldTruthWriter
 from skinhil.process_output import SUMMARY, line, ready_record
 from skinhil.recording import (
@@ -57,6 +59,7 @@ from skinhil.recording import (
     open_recording,
 )
 from skinhil.scoring import DecisionScoreboard, scoreboard_text, truth_lines
+from skinhil.scoring.score_file import score_record
 from skinhil.suites import suite_trials
 from skinhil.world.scene import MAX_CONTACTS as MAX_LIFTS
 
@@ -97,8 +100,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     src.add_argument("--grasp", type=integer(1, MAX_LIFTS, "lifts"), metavar="LIFTS",
                      help=f"a held object lifted LIFTS times, 1..{MAX_LIFTS} (docs/grasp.md): "
                           "the decoder under test grips it with GRIP commands; its scores go "
-                          "to --score "
-                          "under \"grasp\"")
+                          "to --score under \"grasp\"; the run ends after the lifts unless "
+                          "--duration says otherwise")
     src.add_argument("--suite", metavar="SUITE:CASE",
                      help="play a case of a task suite (skinhil suites lists them, "
                           "docs/suites.md), its trials drawn from --seed; the run ends with "
@@ -387,7 +390,8 @@ def run_replay(args: argparse.Namespace) -> int:
         with signals.stop_event() as stop:
             summary = replayer.run(stop)
     if score_path is not None:
-        write_score(score_path, scoreboard)
+        write_score(score_path, score_record(scoreboard))
+        say_written("serve", "the score", score_path, args.quiet)
     if args.json:
         print(json.dumps({"type": "replay", **summary.as_dict(),
                           "scoreboard": scoreboard.summary()}), flush=True)
@@ -397,15 +401,11 @@ def run_replay(args: argparse.Namespace) -> int:
     return 0
 
 
-def write_score(path: Path, scoreboard: DecisionScoreboard,
-                tasks: dict[str, Any] | None = None,
-                extra: dict[str, Any] | None = None) -> None:
-    """Write ``scoreboard`` with every decision to ``path`` (JSON), the ANSWERs' scores per
-    task under ``"tasks"`` (each answer's verdict with them) and the keys of ``extra``
-    (``"grasp"``), whole or not at all."""
+def write_score(path: Path, score: dict[str, Any]) -> None:
+    """Write ``score`` (:func:`firmware_sim.score.board_score`,
+    :func:`skinhil.scoring.score_file.score_record`) to ``path`` (JSON), whole or not at all."""
     with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps({**scoreboard.summary(with_log=True), "tasks": tasks or {},
-                                   **(extra or {})}, indent=1) + "\n", encoding="utf-8")
+        tmp.write_text(json.dumps(score, indent=1) + "\n", encoding="utf-8")
 
 
 def write_truth(path: Path, board: Board) -> None:
@@ -447,8 +447,10 @@ def run(args: argparse.Namespace) -> int:
         def board_time_us() -> int:
             return boards[0].board_time_us() if boards else 0
 
-        return run_board(args, lambda: RecordingTransport(open_transport(args), recorder,
-                                                          board_time_us), boards)
+        status = run_board(args, lambda: RecordingTransport(open_transport(args), recorder,
+                                                            board_time_us), boards)
+    say_written("serve", "the recording", args.record, args.quiet)
+    return status
 
 
 def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None = None
@@ -460,9 +462,11 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
     schedule = scenario.schedule if scenario is not None else None
     scene = scenario.scene if scenario is not None else None
     grasp = GraspParams() if args.grasp is not None else None
+    duration_s = args.duration_s
     if grasp is not None:
         scene = lift_scene(grasp, args.grasp)
-    duration_s = args.duration_s
+        if duration_s is None:  # the run ends after its lifts
+            duration_s = lifts_duration_s(grasp, args.grasp)
     if args.suite is not None:
         trials = suite_trials(args.suite, args.seed, args.size)
         schedule, scene, grasp = trials.scenario.schedule, trials.scenario.scene, trials.grasp
@@ -534,14 +538,14 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
             sys.stderr.write("\n")
         if truth_file is not None:
             truth_file.close()
-    extra = ({"grasp": plant_scores(board.plant, board.truth)} if board.plant is not None
-             else {})
+            say_written("serve", "the held object's truth", truth_file.path, args.quiet)
+    extra = grasp_scores(board)
     if score_path is not None:
-        write_score(score_path, board.scoreboard,
-                    board.tasks.summary(with_verdicts=True) if board.tasks is not None else {},
-                    extra)
+        write_score(score_path, board_score(board))
+        say_written("serve", "the score", score_path, args.quiet)
     if truth_path is not None:
         write_truth(truth_path, board)
+        say_written("serve", "the ground truth", truth_path, args.quiet)
     if args.json:
         print(line({"type": SUMMARY, **summary.as_dict(), **extra}), flush=True)
     elif not args.quiet:

@@ -233,6 +233,17 @@ def drawn_lift_scene(params: GraspParams, lifts: Sequence[Lift]) -> LiftScene:
                            for i, lift in enumerate(checked)), checked)
 
 
+LIFTS_TAIL_S = 0.05
+"""Board time (s) a run of lifts goes on after its last lift's period: the last spikes out."""
+
+
+def lifts_duration_s(params: GraspParams, lifts: int) -> float:
+    """Board time (s) a run of ``lifts`` lifts of :func:`lift_scene` lasts, every lift played:
+    ``lifts * params.period_s`` and :data:`LIFTS_TAIL_S` (``serve --grasp N`` and
+    ``demo --task grasp`` end there)."""
+    return round(lifts * params.period_s + LIFTS_TAIL_S, 3)
+
+
 def lift_scene(params: GraspParams, lifts: int) -> Scene:
     """``lifts`` lifts of the object, one every ``params.period_s`` from scene time 0."""
     if not (isinstance(lifts, int) and 1 <= lifts <= MAX_CONTACTS):

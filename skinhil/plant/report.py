@@ -40,4 +40,5 @@ def grasp_text(scores: dict[str, Any]) -> str:
             f"{_num(lat['median'], '.0f')} ms over {lat['count']}; slip distance median "
             f"{_num(scores['slip_distance_mm']['median'], '.3f')} mm; grip economy "
             f"(safety margin) median {_num(scores['grip_economy']['median'], '.2f')}; "
-            f"GRIPs {g['accepted']} accepted, {refused} refused")
+            f"GRIPs received {g['accepted'] + refused}: {g['accepted']} accepted, {refused} "
+            f"refused ({g.get('refused_busy', 0)} of them busy, before the object)")

@@ -68,9 +68,11 @@ class CommandSender(ReceiverListener):
             self.nacked += 1
 
     def as_dict(self) -> dict[str, int]:
-        """The counters: sent, unsent, acked, nacked."""
+        """The counters: sent, unsent, acked, nacked, and ``unanswered``: sent, with no ACK
+        or NACK received (the board never executed them: still queued when its run ended,
+        refused for want of room beyond its answer budget, or their ACK lost)."""
         return {"sent": self.sent, "unsent": self.unsent, "acked": self.acked,
-                "nacked": self.nacked}
+                "nacked": self.nacked, "unanswered": self.sent - self.acked - self.nacked}
 
 
 class DecisionAnswerer(CommandSender):

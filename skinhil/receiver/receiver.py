@@ -100,6 +100,10 @@ class LinkReport:
     link_errors: int
     acks_lost: int = 0
     """CAN: the board's ACKs missing by their ACK counter (``protocols.LinkCounters``)."""
+    sent_before_join: int = 0
+    """Events the board had sent before the first STATUS the receiver got and it never
+    decoded: a receiver that joined the run late (``protocols.LinkCounters.events_before_join``;
+    not in ``lost_on_link``)."""
 
     def as_dict(self) -> dict[str, int]:
         return dict(self.__dict__)
@@ -122,7 +126,8 @@ def link_report(counters: Any, status: Any, late_events: int = 0,
         board_dropped=g(st, "events_dropped"),
         lost_on_link=g(c, "events_lost"), untimed_events=g(c, "events_untimed"),
         malformed=g(c, "malformed"), late_events=late_events,
-        link_errors=link_errors, acks_lost=g(c, "acks_lost"))
+        link_errors=link_errors, acks_lost=g(c, "acks_lost"),
+        sent_before_join=g(c, "events_before_join"))
 
 
 LISTENER_CALLBACKS: dict[type, str] = {

@@ -7,8 +7,10 @@ quiet for ``idle_s``, then flush the last windows.
 
 from __future__ import annotations
 
+import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Sequence
 from typing import Any, Protocol
@@ -36,15 +38,24 @@ def serve_command(link_args: Sequence[str], duration_s: float, snr_db: float, se
 
 
 def run_against_board(receiver: StreamReader, command: Sequence[str], idle_s: float = 0.3,
-                      timeout_s: float = 600.0) -> tuple[int, str, str]:
+                      timeout_s: float = 600.0, stop: threading.Event | None = None
+                      ) -> tuple[int, str, str]:
     """Start ``command`` and feed ``receiver`` until the board's RUN_END record (or, if it
-    never comes, ``idle_s`` of silence after the board exited); (status, stdout, stderr)."""
+    never comes, ``idle_s`` of silence after the board exited); (status, stdout, stderr).
+
+    The board runs in a session of its own, so a Ctrl-C at the terminal reaches only this
+    process: once ``stop`` is set, the board gets one SIGINT and stops cleanly (its FIFO
+    drained, its score and RUN_END written), and it is fed until then."""
     board = subprocess.Popen(list(command), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, text=True)
+                             stderr=subprocess.PIPE, text=True, start_new_session=True)
     end = time.monotonic() + timeout_s
+    forwarded = False
     try:
         idle_since = None
         while time.monotonic() < end:
+            if stop is not None and stop.is_set() and not forwarded:
+                forwarded = True
+                board.send_signal(signal.SIGINT)
             try:
                 payload = receiver.transport.recv(0.02)
             except TransportError:
