@@ -3,9 +3,10 @@
 Each subcommand module exposes ``add_parser(subparsers)`` (a parser named like the module)
 and ``run(args) -> int``. Every refusal, argparse's own included, is one line on stderr,
 ``skinhil: error: <what> — <what to do>``, and exit status 2: errors raised on purpose
-(:class:`skinhil.errors.SkinhilError`) and bad options (:class:`ArgumentParser`). SIGINT and
-SIGTERM are handled from the first instruction of :func:`main` on
-(:mod:`skinhil.cli.signals`): exit status 130 or 143, child processes ended, no traceback.
+(:class:`skinhil.errors.SkinhilError`) and bad options (:class:`ArgumentParser`). SIGINT,
+SIGTERM and SIGHUP are handled from the first instruction of :func:`main` on
+(:mod:`skinhil.cli.signals`): exit status 130, 143 or 129, child processes ended, no
+traceback.
 
 This module imports nothing at its top but :mod:`skinhil.cli.signals` (standard library
 only), so that the signal handlers are in place before anything else is imported: the parser
@@ -22,7 +23,7 @@ from skinhil.cli import signals
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line (``argv``: the arguments, default ``sys.argv[1:]``); returns the
-    process exit status (0, 2 for a refusal, 130/143 when stopped by SIGINT/SIGTERM)."""
+    process exit status (0, 2 for a refusal, 130/143/129 when stopped by SIGINT/SIGTERM/SIGHUP)."""
     previous = signals.install()
     try:
         return _run(list(sys.argv[1:] if argv is None else argv))

@@ -13,6 +13,7 @@ import time
 from collections.abc import Sequence
 from typing import Any, Protocol
 
+from skinhil import child_processes
 from skinhil.errors import TransportError
 
 
@@ -39,7 +40,7 @@ def run_against_board(receiver: StreamReader, command: Sequence[str], idle_s: fl
                       timeout_s: float = 600.0) -> tuple[int, str, str]:
     """Start ``command`` and feed ``receiver`` until the board's RUN_END record (or, if it
     never comes, ``idle_s`` of silence after the board exited); (status, stdout, stderr)."""
-    board = subprocess.Popen(list(command), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+    board = child_processes.start(command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                              stderr=subprocess.PIPE, text=True)
     end = time.monotonic() + timeout_s
     try:
