@@ -26,7 +26,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     process exit status (0, 2 for a refusal, 130/143/129 when stopped by SIGINT/SIGTERM/SIGHUP)."""
     previous = signals.install()
     try:
-        return _run(list(sys.argv[1:] if argv is None else argv))
+        if sys.stdout is None:  # started with stdout closed (1>&-): its output would vanish
+            print("skinhil: error: standard output is closed — run it with stdout open "
+                  "(redirect it to /dev/null to discard it)", file=sys.stderr)
+            return 2
+        status = _run(list(sys.argv[1:] if argv is None else argv))
+        sys.stdout.flush()
+        return status
+    except OSError as exc:  # stdout on a full device or a closed pipe
+        if exc.errno not in _STDOUT_ERRNOS or exc.filename is not None:
+            raise
+        _stdout_to_devnull()  # what is still buffered goes nowhere, even at exit
+        print(f"skinhil: error: cannot write the output: {exc.strerror} — free some space "
+              "or redirect stdout elsewhere", file=sys.stderr)
+        return 1
     except signals.Stopped as exc:
         signals.end_children()
         print(f"skinhil: stopped by {exc}", file=sys.stderr, flush=True)
@@ -36,6 +49,18 @@ def main(argv: Sequence[str] | None = None) -> int:
             signals.restore(previous)  # program, they stay until the interpreter is gone,
         else:  # recording only
             signals.finish()
+
+
+_STDOUT_ERRNOS = (28, 32, 5)
+"""ENOSPC, EPIPE, EIO: errors of writing to stdout that end a command with one line."""
+
+
+def _stdout_to_devnull() -> None:
+    import os
+
+    null = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, sys.stdout.fileno() if hasattr(sys.stdout, "fileno") else 1)
+    os.close(null)
 
 
 def _run(argv: list[str]) -> int:
