@@ -315,3 +315,36 @@ def test_stdout_that_cannot_be_written_is_one_line(argv: list[str], redirect: st
     lines = [ln for ln in done.stderr.splitlines() if ln.strip()]
     assert done.returncode in (1, 2) and len(lines) == 1, done.stderr
     assert lines[0].startswith("skinhil: error: ")
+
+
+def test_a_stop_in_an_import_locks_callback_is_delivered_again() -> None:
+    """The import system's weakref callback (``cb`` in ``<frozen importlib._bootstrap>``)
+    loses an exception raised in it: a signal there is sent again instead."""
+    from skinhil.cli.signals import _in_native_callback
+
+    namespace: dict[str, object] = {"sys": sys}
+    exec(compile("def cb(ref=None):\n    return sys._getframe()\n",
+                 "<frozen importlib._bootstrap>", "exec"), namespace)
+    frame = namespace["cb"]()  # type: ignore[operator]
+    assert _in_native_callback(frame)
+    assert not _in_native_callback(sys._getframe())
+
+
+def test_a_stop_during_a_held_write_is_raised_after_it() -> None:
+    """Inside :func:`signals.held` a SIGTERM is only recorded; it raises as the write
+    ends."""
+    from skinhil.cli import signals
+
+    previous = signals.install()
+    try:
+        signals.resume()
+        done = []
+        with pytest.raises(signals.Stopped):
+            with signals.held():
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(0.05)
+                done.append(True)
+        assert done == [True]
+    finally:
+        signals.restore(previous)
+        signals._received.clear()
