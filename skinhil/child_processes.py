@@ -4,7 +4,8 @@ Every process skinhil starts (``bench``'s board and reference receiver, ``demo``
 board warming the kernel cache) is started by :func:`start`: on Linux the child asks the
 kernel for a parent-death signal (``prctl(PR_SET_PDEATHSIG, SIGTERM)``) before it runs its
 program, so a parent ended by SIGKILL, or by any signal it does not handle, still takes its
-children with it; a parent that stops cleanly ends them itself first. SIGTERM lets a child
+children with it (:mod:`skinhil.workers`' forked workers ask for the same with
+:func:`die_with_parent`); a parent that stops cleanly ends them itself first. SIGTERM lets a child
 that is a skinhil command stop as it does on a terminal's Ctrl-C (its temporary files
 removed, its own children ended). The request is kept across ``exec``; it is made from the
 thread that starts the child, which is the thread that waits for it here.
@@ -41,12 +42,18 @@ def _libc_prctl() -> Callable[..., int] | None:
 _PRCTL = _libc_prctl()
 
 
+def die_with_parent(parent: int) -> None:
+    """Ask for :data:`DEATH_SIGNAL` when this process's parent ends (a forked worker calls
+    it first thing); if the parent (``parent``: its pid) has already ended, exit at once."""
+    if _PRCTL is not None:
+        _PRCTL(PR_SET_PDEATHSIG, int(DEATH_SIGNAL), 0, 0, 0)
+    if os.getppid() != parent:  # the parent ended before the request was made
+        os._exit(1)
+
+
 def _die_with(parent: int) -> Callable[[], None]:
     def preexec() -> None:  # runs in the child, between fork and exec
-        if _PRCTL is not None:
-            _PRCTL(PR_SET_PDEATHSIG, int(DEATH_SIGNAL), 0, 0, 0)
-        if os.getppid() != parent:  # the parent ended before the request was made
-            os._exit(1)
+        die_with_parent(parent)
     return preexec
 
 
