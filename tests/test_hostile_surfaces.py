@@ -38,6 +38,9 @@ from skinhil.transports.faults import FaultParams
 PRESS = REPO / "examples" / "scenarios" / "press.toml"
 CONTACT_HEAD = '[[indenter]]\nname = "s"\nshape = "sphere"\nradius_mm = 2.0\n'
 
+STIMULUS = '[[stimulus]]\nname = "{}"\nforces = {{ 15 = [0, 0, -0.1] }}\n'
+EVENT = '[[event]]\nstart_s = 0\nstimulus = "p"\n'
+
 
 def _contact(body: str) -> str:
     return f'{CONTACT_HEAD}[[contact]]\nindenter = "s"\n{body}'
@@ -67,6 +70,10 @@ SCENARIOS: dict[str, tuple[str, str]] = {
     "key of another shape": ('[[indenter]]\nname = "s"\nshape = "sphere"\nradius_mm = 2.0\n'
                              'width_mm = 1.0\n[[contact]]\nindenter = "s"\nmotion = "press"\n'
                              'depth_mm = 0.2\n', "width_mm"),
+    "two stimuli of one name": (STIMULUS.format("p") + STIMULUS.format("p") + EVENT,
+                                "taken"),
+    "a stimulus named like a built-in": (STIMULUS.format("A") + EVENT.replace('"p"', '"A"'),
+                                         "built-in"),
     "path time 1e300 s": (_contact('motion = "path"\npath = [[0, 0, 0, 0.1], '
                                    '[1e300, 0, 0, 0.1]]\n'), "path times"),
 }
