@@ -126,13 +126,6 @@ def run(args: argparse.Namespace) -> int:
     out = args.out if args.out is not None else Path(f"bench-{campaign.name}")
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out '{out}' is not a folder — give a folder")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(f"--out '{out}' cannot be created: {exc.strerror or exc} — give "
-                          "a folder you can write") from None
-    if not os.access(out, os.W_OK | os.X_OK):
-        raise ConfigError(f"--out '{out}' is not writable — give a folder you can write")
     if not args.resume and (out / SUMMARY_NAME).exists():
         raise ConfigError(f"'{out / SUMMARY_NAME}' holds an earlier run — add --resume to "
                           "continue it, or give another --out")
@@ -146,6 +139,13 @@ def run(args: argparse.Namespace) -> int:
                      f"--answer, model {model})"
                      + ("" if args.faults is None else
                         f", faults {dataclasses.asdict(args.faults)}"))
+    try:  # every input checked: the folder is made now, or refused in one line
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"--out '{out}' cannot be created: {exc.strerror or exc} — give "
+                          "a folder you can write") from None
+    if not os.access(out, os.W_OK | os.X_OK):
+        raise ConfigError(f"--out '{out}' is not writable — give a folder you can write")
     n_cases = len(campaign.cases())
     bar = tqdm(total=n_cases, desc=campaign.name, unit="case", disable=args.quiet,
                file=sys.stderr)
