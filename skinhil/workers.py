@@ -21,6 +21,7 @@ from typing import TypeVar
 
 from threadpoolctl import threadpool_limits
 
+from skinhil.child_processes import die_with_parent
 from skinhil.errors import ConfigError
 
 T = TypeVar("T")
@@ -32,7 +33,8 @@ def one_blas_thread() -> None:
     threadpool_limits(1)
 
 
-def _local_worker() -> None:
+def _local_worker(parent: int) -> None:
+    die_with_parent(parent)  # a parent ended by SIGKILL takes its workers with it
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     one_blas_thread()
@@ -59,7 +61,8 @@ def process_map(fn: Callable[[T], R], tasks: Sequence[T], workers: int | None = 
             if on_result is not None:
                 on_result(out[-1])
         return out
-    pool = ProcessPoolExecutor(max_workers=n, initializer=_local_worker)
+    pool = ProcessPoolExecutor(max_workers=n, initializer=_local_worker,
+                               initargs=(os.getpid(),))
     try:
         chunk = max(1, len(tasks) // (8 * n))
         for res in pool.map(fn, tasks, chunksize=chunk):

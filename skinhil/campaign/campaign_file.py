@@ -62,11 +62,13 @@ MAX_REPETITIONS = 1000
 MAX_CASES = 10_000
 """Most cases (scenarios × parameter combinations × repetitions) a campaign holds."""
 MAX_NAME_CHARS = 64
+SEED_MAX = 2**63 - 1
+"""Largest board seed (``serve --seed``): a case's seed is its ``seed`` plus its repetition."""
 
 PARAMETERS: dict[str, tuple[str, Declaration]] = {
     "snr_db": ("--snr-db", [Interval(Real, MIN_SNR_DB, MAX_SNR_DB, closed="both", unit="dB",
                                      hint="as serve --snr-db"), Options([math.inf])]),
-    "seed": ("--seed", Interval(Integral, 0, 2**63 - 1, closed="both", hint="as serve --seed")),
+    "seed": ("--seed", Interval(Integral, 0, SEED_MAX, closed="both", hint="as serve --seed")),
     "duration_s": ("--duration", Interval(Real, 0.0, 86400.0, closed="right", unit="s",
                                           hint="as serve --duration")),
     "response_window_s": ("--response-window",
@@ -107,7 +109,9 @@ class Case:
 
     @property
     def id(self) -> str:
-        """A stable name: ``scenario[k=v,...]#repetition`` (1-based)."""
+        """A stable name, unique in its campaign: ``scenario[k=v,...]#repetition``
+        (1-based), each value as it is written shortest with its exact value (``1``,
+        ``1.0000001``)."""
         params = ",".join(f"{k}={_text(v)}" for k, v in sorted(self.parameters.items()))
         return f"{self.scenario.name}[{params}]#{self.repetition + 1}"
 
@@ -150,7 +154,12 @@ class Campaign:
 
 
 def _text(value: float | int | str) -> str:
-    return f"{value:g}" if isinstance(value, float) else str(value)
+    """``value`` in a case id: a float as ``:g`` gives it where that is its exact value,
+    else as ``repr`` (the shortest text that reads back as the same float)."""
+    if not isinstance(value, float):
+        return str(value)
+    short = f"{value:g}"
+    return short if float(short) == value else repr(value)
 
 
 def _criteria(value: object, where: str) -> tuple[Criterion, ...]:
@@ -184,7 +193,8 @@ def _parameters(table: object, where: str) -> dict[str, tuple[float | int | str,
     return out
 
 
-def _scenario(table: object, where: str, base: Path, sizes: tuple[str, ...]) -> Scenario:
+def _scenario(table: object, where: str, base: Path, sizes: tuple[str, ...],
+              checked: set[tuple[Path, str]]) -> Scenario:
     t = checked_table(table, SCENARIO_KEYS, where)
     file, builtin = t.get("file"), t.get("builtin")
     if (file is None) == (builtin is None):
@@ -199,9 +209,15 @@ def _scenario(table: object, where: str, base: Path, sizes: tuple[str, ...]) -> 
     else:
         if not isinstance(file, str) or not file:
             raise ConfigError(f"{where}: file = {file!r} — give the path in quotes")
-        path = (base / file).resolve()
-        for size in sizes:  # the board would refuse it later: refuse it now
-            load_scenario(path, parse_size(size))
+        try:
+            path = (base / file).resolve(strict=False)
+        except (OSError, RuntimeError) as exc:  # a symlink loop
+            raise ConfigError(f"{where}: file = {file!r} cannot be followed ({exc}) — give "
+                              "the path of a scenario file") from None
+        for size in sizes:  # the board would refuse it later: refuse it now, once a file
+            if (path, size) not in checked:
+                load_scenario(path, parse_size(size))
+                checked.add((path, size))
         default_name = path.stem
     name = t.get("name", default_name)
     if not (isinstance(name, str) and _NAME.match(name)):
@@ -225,12 +241,23 @@ def parse_campaign(text: str, where: str, path: Path) -> Campaign:
         raise ConfigError(f"{where}: repetitions = {reps!r} — give a whole number 1.."
                           f"{MAX_REPETITIONS}")
     params = _parameters(doc.get("parameters", {}), f"{where}: [parameters]")
+    top_seed = max((int(v) for v in params.get("seed", (DEFAULTS["seed"],))), default=1)
+    if top_seed + reps - 1 > SEED_MAX:
+        raise ConfigError(f"{where}: seed {top_seed} with repetitions = {reps} gives seeds up "
+                          f"to {top_seed + reps - 1}, past {SEED_MAX} — give seeds at most "
+                          f"{SEED_MAX - reps + 1}")
     sizes = tuple(str(v) for v in params.get("size", (format_size(PAPER_SIZE),)))
     tables = table_list(doc, "scenario", MAX_SCENARIOS, where)
     if not tables:
         raise ConfigError(f"{where} has no [[scenario]] — give at least one (builtin = "
                           "\"random\" or file = \"PATH\")")
-    scenarios = tuple(_scenario(t, f"{where}: [[scenario]] #{i + 1}", path.parent, sizes)
+    n_cases = len(tables) * reps * math.prod(len(v) for v in params.values())
+    if n_cases > MAX_CASES:  # counted before any scenario file is read
+        raise ConfigError(f"{where} makes {n_cases} cases — at most {MAX_CASES}; split the "
+                          "campaign")
+    checked: set[tuple[Path, str]] = set()
+    scenarios = tuple(_scenario(t, f"{where}: [[scenario]] #{i + 1}", path.parent, sizes,
+                                checked)
                       for i, t in enumerate(tables))
     names = [s.name for s in scenarios]
     if len(set(names)) != len(names):
@@ -239,10 +266,6 @@ def parse_campaign(text: str, where: str, path: Path) -> Campaign:
     campaign = Campaign(name, path, hashlib.sha256(text.encode()).hexdigest(), scenarios,
                         params, reps, _criteria(doc.get("criteria", []), where),
                         rig_bounds_from_table(doc.get("rig", {}), f"{where}: [rig]"))
-    n_cases = len(scenarios) * reps * math.prod(len(v) for v in params.values())
-    if n_cases > MAX_CASES:
-        raise ConfigError(f"{where} makes {n_cases} cases — at most {MAX_CASES}; split the "
-                          "campaign")
     return campaign
 
 

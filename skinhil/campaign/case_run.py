@@ -28,6 +28,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
+from skinhil import child_processes
 from skinhil.campaign.campaign_file import PARAMETERS, Case
 from skinhil.campaign.criteria import MissingKey
 from skinhil.campaign.relay import RelayLink
@@ -108,8 +109,8 @@ class _Process:
     def __init__(self, cmd: list[str], folder: Path, stem: str) -> None:
         self.out_path, self.err_path = folder / f"{stem}.out", folder / f"{stem}.err"
         self._files: list[IO[bytes]] = [open(self.out_path, "wb"), open(self.err_path, "wb")]
-        self.popen = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=self._files[0],
-                                      stderr=self._files[1])
+        self.popen = child_processes.start(cmd, stdin=subprocess.DEVNULL,
+                                           stdout=self._files[0], stderr=self._files[1])
         self.ended_by_us = False
 
     def end(self, grace_s: float = 5.0) -> None:

@@ -96,7 +96,8 @@ class RelayLink:
             f = self.faults.injected
             out["injected"] = {"units_seen": f.units_seen, "dropped": f.units_dropped,
                                "corrupted": f.corrupted_units, "duplicated": f.units_duplicated,
-                               "delayed": f.units_delayed}
+                               "delayed": f.units_delayed,
+                               "held_at_end": self.faults.held_units}
         return out
 
     def stop(self) -> None:

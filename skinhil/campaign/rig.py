@@ -109,9 +109,28 @@ def rig_faults(bounds: RigBounds, board: Mapping[str, Any] | None,
             faults.append(f"the link went away {board['link_losses']} times (bound "
                           f"{bounds.max_link_losses})")
     if tap is not None:
-        bad = sum(int(tap[k]) for k in TAP_ERRORS)
-        if bad > bounds.max_link_errors:
-            detail = ", ".join(f"{tap[k]} {k.replace('_', ' ')}" for k in TAP_ERRORS)
-            faults.append(f"the link damaged or lost {bad} frames on the way to the decoder "
-                          f"({detail}; bound {bounds.max_link_errors})")
+        faults += _tap_faults(bounds, tap)
+    return faults
+
+
+def _tap_faults(bounds: RigBounds, tap: Mapping[str, Any]) -> list[str]:
+    """The link tap's faults: frames damaged or missing by the sequence numbers, and with
+    injected faults (``tap["injected"]``) the frames dropped or held back past the run's
+    end, which no sequence gap shows when they are the last (or all) of the run."""
+    injected = tap.get("injected")
+    undelivered = (int(injected["dropped"]) + int(injected.get("held_at_end", 0))
+                   if injected else 0)
+    bad = (int(tap["crc_errors"]) + int(tap["malformed"])
+           + max(int(tap["frames_lost"]), undelivered))
+    faults = []
+    if injected and int(injected["units_seen"]) > 0 and int(tap["frames_ok"]) == 0:
+        faults.append(f"the decoder received nothing: the board sent {injected['units_seen']} "
+                      "frames and none reached it whole (injected faults)")
+    if bad > bounds.max_link_errors:
+        detail = ", ".join(f"{tap[k]} {k.replace('_', ' ')}" for k in TAP_ERRORS)
+        if injected:
+            detail += (f"; injected: {injected['dropped']} dropped, "
+                       f"{injected.get('held_at_end', 0)} delayed beyond the run")
+        faults.append(f"the link damaged or lost {bad} frames on the way to the decoder "
+                      f"({detail}; bound {bounds.max_link_errors})")
     return faults

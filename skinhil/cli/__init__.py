@@ -3,9 +3,10 @@
 Each subcommand module exposes ``add_parser(subparsers)`` (a parser named like the module)
 and ``run(args) -> int``. Every refusal, argparse's own included, is one line on stderr,
 ``skinhil: error: <what> — <what to do>``, and exit status 2: errors raised on purpose
-(:class:`skinhil.errors.SkinhilError`) and bad options (:class:`ArgumentParser`). SIGINT and
-SIGTERM are handled from the first instruction of :func:`main` on
-(:mod:`skinhil.cli.signals`): exit status 130 or 143, child processes ended, no traceback.
+(:class:`skinhil.errors.SkinhilError`) and bad options (:class:`ArgumentParser`). SIGINT,
+SIGTERM and SIGHUP are handled from the first instruction of :func:`main` on
+(:mod:`skinhil.cli.signals`): exit status 130, 143 or 129, child processes ended, no
+traceback.
 
 This module imports nothing at its top but :mod:`skinhil.cli.signals` (standard library
 only), so that the signal handlers are in place before anything else is imported: the parser
@@ -22,10 +23,23 @@ from skinhil.cli import signals
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line (``argv``: the arguments, default ``sys.argv[1:]``); returns the
-    process exit status (0, 2 for a refusal, 130/143 when stopped by SIGINT/SIGTERM)."""
+    process exit status (0, 2 for a refusal, 130/143/129 when stopped by SIGINT/SIGTERM/SIGHUP)."""
     previous = signals.install()
     try:
-        return _run(list(sys.argv[1:] if argv is None else argv))
+        if sys.stdout is None:  # started with stdout closed (1>&-): its output would vanish
+            print("skinhil: error: standard output is closed — run it with stdout open "
+                  "(redirect it to /dev/null to discard it)", file=sys.stderr)
+            return 2
+        status = _run(list(sys.argv[1:] if argv is None else argv))
+        sys.stdout.flush()
+        return status
+    except OSError as exc:  # stdout on a full device or a closed pipe
+        if exc.errno not in _STDOUT_ERRNOS or exc.filename is not None:
+            raise
+        _stdout_to_devnull()  # what is still buffered goes nowhere, even at exit
+        print(f"skinhil: error: cannot write the output: {exc.strerror} — free some space "
+              "or redirect stdout elsewhere", file=sys.stderr)
+        return 1
     except signals.Stopped as exc:
         signals.end_children()
         print(f"skinhil: stopped by {exc}", file=sys.stderr, flush=True)
@@ -35,6 +49,18 @@ def main(argv: Sequence[str] | None = None) -> int:
             signals.restore(previous)  # program, they stay until the interpreter is gone,
         else:  # recording only
             signals.finish()
+
+
+_STDOUT_ERRNOS = (28, 32, 5)
+"""ENOSPC, EPIPE, EIO: errors of writing to stdout that end a command with one line."""
+
+
+def _stdout_to_devnull() -> None:
+    import os
+
+    null = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, sys.stdout.fileno() if hasattr(sys.stdout, "fileno") else 1)
+    os.close(null)
 
 
 def _run(argv: list[str]) -> int:

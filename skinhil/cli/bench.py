@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -45,6 +46,17 @@ def faults_value(text: str) -> FaultParams:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+class _Once(argparse.Action):
+    """Store an option's value, refusing the option a second time (one would be lost)."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace,
+                 values: Any, option_string: str | None = None) -> None:
+        if getattr(namespace, self.dest, None) is not None:
+            raise argparse.ArgumentError(self, "given twice — give it once, with every "
+                                               "KEY=VALUE in it")
+        setattr(namespace, self.dest, values)
+
+
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
         "bench", help="play a test campaign against a decoder: JSON summary and JUnit XML",
@@ -70,7 +82,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--model", type=Path, metavar="NPZ",
                    help="the reference receiver's model (default: the demo's, trained and "
                         "cached on first use)")
-    p.add_argument("--faults", type=faults_value, metavar="KEY=VALUE[,...]",
+    p.add_argument("--faults", type=faults_value, metavar="KEY=VALUE[,...]", action=_Once,
                    help="damage the bench's own link on purpose, to check the rig reports "
                         f"it: {', '.join(FAULT_KEYS)} (skinhil.transports.faults)")
     p.add_argument("--quiet", action="store_true", help="no progress bar, only the totals")
@@ -130,6 +142,13 @@ def run(args: argparse.Namespace) -> int:
                      f"--answer, model {model})"
                      + ("" if args.faults is None else
                         f", faults {dataclasses.asdict(args.faults)}"))
+    try:  # every input checked: the folder is made now, or refused in one line
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"--out '{out}' cannot be created: {exc.strerror or exc} — give "
+                          "a folder you can write") from None
+    if not os.access(out, os.W_OK | os.X_OK):
+        raise ConfigError(f"--out '{out}' is not writable — give a folder you can write")
     n_cases = len(campaign.cases())
     bar = tqdm(total=n_cases, desc=campaign.name, unit="case", disable=args.quiet,
                file=sys.stderr)

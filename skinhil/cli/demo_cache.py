@@ -9,6 +9,7 @@ import subprocess
 from collections.abc import Iterator
 from pathlib import Path
 
+from skinhil import child_processes
 from skinhil.model.timeline import DEFAULT_REST_S
 from skinhil.receiver.session import serve_command
 from skinhil.transports import PtyMasterTransport
@@ -26,7 +27,7 @@ def board_warming(baud: int, snr_db: float, seed: int) -> Iterator[None]:
     compiles or loads the board's kernels in another process, on the other core: from a
     fresh clone that is ~15 s the demo's board then does not spend before its first tick."""
     link, slave_fd = PtyMasterTransport.open_pair(baud)
-    board = subprocess.Popen(
+    board = child_processes.start(
         serve_command(["--port", link.slave_path, "--baud", str(baud)], 0.001, snr_db, seed,
                       DEFAULT_REST_S), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL)

@@ -47,7 +47,7 @@ from skinhil.model.timeline import Timeline
 from skinhil.output_files import atomic_path, check_output_path
 from skinhil.plant import GraspParams, lift_scene, lifts_duration_s
 from skinhil.plant.report import grasp_text
-from skinhil.plant.truth_file import HeldTruthWriter
+from skinhil.plant.truth_file import HeldTruthWriter, check_truth_path
 from skinhil.process_output import SUMMARY, line, ready_record
 from skinhil.recording import (
     CAPTURE_SUFFIX,
@@ -178,7 +178,9 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     files.add_argument("--grasp-truth", type=Path, metavar="FILE",
                        help="with --grasp: append the held object's truth to FILE as the run "
                             "goes (one record a tick, skinhil.plant.HELD_DTYPE, written every "
-                            "50 ms; never on the link): what demo --task grasp --view plots")
+                            "50 ms; never on the link): what demo --task grasp --view plots. "
+                            "FILE is new or one this option wrote; any other file is "
+                            "refused, never overwritten")
     realtime = p.add_argument_group("real time")
     realtime.add_argument("--realtime", action="store_true",
                           help="run with real-time (FIFO) scheduling so other programs cannot "
@@ -486,7 +488,7 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
     if args.grasp_truth is not None and grasp is None:
         raise ConfigError("--grasp-truth writes a held object's truth: give --grasp LIFTS "
                           "(or --suite SUITE:grasp) too, or leave it out")
-    grasp_truth_path = (check_output_path(args.grasp_truth) if args.grasp_truth is not None
+    grasp_truth_path = (check_truth_path(args.grasp_truth) if args.grasp_truth is not None
                         else None)
     # the board's model compiles as it is built (the geometric mechanics' rest forces come
     # from its kernel): say so before, with the arguments checked

@@ -1,11 +1,15 @@
-"""How the command line stops: SIGINT (Ctrl-C) and SIGTERM, from the first instruction on.
+"""How the command line stops: SIGINT (Ctrl-C), SIGTERM and SIGHUP (the terminal closed),
+from the first instruction on.
 
 :func:`install` is the first thing :func:`skinhil.cli.main` does (before any heavy import):
-from then on either signal raises :class:`Stopped` (a ``KeyboardInterrupt``) in the main
+from then on each of them raises :class:`Stopped` (a ``KeyboardInterrupt``) in the main
 thread, so every ``finally`` runs (temporary output files are removed, links closed, worker
-processes ended) and :func:`skinhil.cli.main` exits with status 130 (SIGINT) or 143
-(SIGTERM) and one line, never a traceback. A command with a summary catches
-:class:`Stopped`, prints what it has and re-raises.
+processes ended) and :func:`skinhil.cli.main` exits with status 130 (SIGINT), 143
+(SIGTERM) or 129 (SIGHUP) and one line, never a traceback. A signal that lands where
+Python would lose the exception (a callback from native code, an import lock's weakref
+callback, a finalizer) is delivered again once back in Python's own code; a write that
+must not be torn (numpy's zip writer) runs inside :func:`held`, which delivers it after.
+A command with a summary catches :class:`Stopped`, prints what it has and re-raises.
 
 A command that stops cleanly on request (``serve``, ``listen``: they drain the link and print
 their totals) runs its loop inside :func:`stop_event`: the first signal only sets the event;
@@ -25,7 +29,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import FrameType
 
-STOP_SIGNALS: tuple[signal.Signals, ...] = (signal.SIGINT, signal.SIGTERM)
+STOP_SIGNALS: tuple[signal.Signals, ...] = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 """The signals that stop a command."""
 
 _received: list[int] = []
@@ -51,7 +55,8 @@ _FORK_HOOKS = (_fork_begins.__code__, _fork_ends.__code__)
 
 
 class Stopped(KeyboardInterrupt):
-    """Raised in the main thread by SIGINT or SIGTERM; ``signum`` says which."""
+    """Raised in the main thread by a stop signal (:data:`STOP_SIGNALS`); ``signum`` says
+    which."""
 
     def __init__(self, signum: int) -> None:
         super().__init__(signal.Signals(signum).name)
@@ -59,7 +64,8 @@ class Stopped(KeyboardInterrupt):
 
     @property
     def exit_status(self) -> int:
-        """The shell's convention: 128 + the signal number (130 SIGINT, 143 SIGTERM)."""
+        """The shell's convention: 128 + the signal number (130 SIGINT, 143 SIGTERM, 129
+        SIGHUP)."""
         return 128 + self.signum
 
 
@@ -70,6 +76,9 @@ whose exceptions are printed as "Exception ignored" and lost, and numba's unpick
 compiled function calls as it returns an array (its dtype), whose exception the compiled
 code does not check (a Ctrl-C there ended ``simulate`` with "SystemError: CPUDispatcher(...)
 returned a result with an exception set")."""
+IMPORT_CALLBACKS: tuple[str, ...] = ("<frozen importlib._bootstrap>",)
+"""Where the import system's weakref callbacks live (a module lock's ``cb``): an exception
+raised in one is printed as "Exception ignored" and lost, and the import goes on."""
 RESEND_S = 0.02
 """How soon (s) a signal that arrived inside such a callback is delivered again."""
 
@@ -84,6 +93,8 @@ def _in_native_callback(frame: FrameType | None) -> bool:
         code = frame.f_code
         if code.co_name == "__del__" or any(place in code.co_filename
                                             for place in NATIVE_CALLBACKS):
+            return True
+        if code.co_name == "cb" and code.co_filename in IMPORT_CALLBACKS:
             return True
         frame = frame.f_back
     return False
@@ -104,7 +115,7 @@ Handlers = dict[signal.Signals, object]
 
 
 def install() -> Handlers:
-    """Make SIGINT and SIGTERM raise :class:`Stopped` in the main thread, once
+    """Make the stop signals (:data:`STOP_SIGNALS`) raise :class:`Stopped` in the main thread, once
     :func:`resume` is called: until then (the start-up's imports) they are only recorded,
     since an exception inside an extension module's import (numpy's) turns into an
     ImportError with pages of advice instead of a clean stop. Returns the handlers it
@@ -135,6 +146,22 @@ def finish() -> None:
     _deferred[0] = True
 
 
+@contextlib.contextmanager
+def held() -> Iterator[None]:
+    """While the body runs (a write a stop must not tear, such as numpy's zip writer, whose
+    own clean-up on an exception raises again), a stop signal is only recorded; it raises
+    :class:`Stopped` as the body ends, whether the body ended cleanly or not (its
+    ``finally`` has run: a temporary file is removed)."""
+    before = _deferred[0]
+    _deferred[0] = True
+    try:
+        yield
+    finally:
+        _deferred[0] = before
+        if not before and _received:
+            raise Stopped(_received[0])
+
+
 def received() -> int | None:
     """The first stop signal received so far (None: none)."""
     return _received[0] if _received else None
@@ -150,7 +177,7 @@ def exit_status(status: int) -> int:
 @contextlib.contextmanager
 def stop_event(on_first: Callable[[], str | None] | None = None,
                on_second: Callable[[], str | None] | None = None) -> Iterator[threading.Event]:
-    """While the body runs, the first SIGINT/SIGTERM sets the yielded event (the body stops
+    """While the body runs, the first stop signal sets the yielded event (the body stops
     cleanly: drains, prints totals) and prints ``on_first()``'s line, if any (say what the
     clean stop will wait for); a second one prints ``on_second()``'s line (what is left
     undrained) and raises :class:`Stopped` at once. The previous handlers come back after."""

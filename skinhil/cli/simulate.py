@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 from tqdm.auto import tqdm
 
+from skinhil.cli import signals
 from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.nwb_options import add_nwb_args, nwb_metadata
 from skinhil.cli.options import (
@@ -146,7 +147,9 @@ def run(args: argparse.Namespace) -> int:
                          start=started, meta=nwb_meta, truth=truth_rec,
                          n_contacts=len(scene.contacts) if scene else 0)
     else:
-        with atomic_path(out) as tmp, tmp.open("wb") as fh:
+        # a stop waits for numpy's zip writer (whose own clean-up raises again when
+        # interrupted) and then removes the partial file
+        with atomic_path(out) as tmp, signals.held(), tmp.open("wb") as fh:
             np.savez_compressed(fh, forces_n=forces, events=ev, markers=markers,
                                 truth=truth_rec, meta=np.array(json.dumps(meta)))
     rate = len(ev) / (n_steps * args.dt_s) / model.n_springs

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 import protocols
-from skinhil.cli.options import SCHEDULE_HELP, add_size_option, read_schedule
+from skinhil.cli.options import SCHEDULE_HELP, add_size_option, read_scenario
 from skinhil.model.stimuli import PAPER_STIMULUS_ID_BASE, USER_STIMULUS_ID_BASE, Stimulus
 from skinhil.model.stimulus_table import catalog, stimulus_table
 
@@ -41,7 +41,10 @@ def _row(sid: int, s: Stimulus) -> dict[str, Any]:
 
 
 def run(args: argparse.Namespace) -> int:
-    schedule = read_schedule(args.schedule, args.size) if args.schedule is not None else None
+    scenario = read_scenario(args.schedule, args.size) if args.schedule is not None else None
+    schedule = scenario.schedule if scenario is not None else None
+    contacts = ([c.name for c in scenario.scene.contacts]
+                if scenario is not None and scenario.scene is not None else [])
     stimuli = catalog(args.size, schedule)
     table = stimulus_table(stimuli)
     rows = [_row(sid, stimuli[sid]) for sid in sorted(stimuli)]
@@ -51,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
     digest = protocols.table_digest(table)
     if args.json:
         print(json.dumps({"stimuli": rows, "schedule": timeline, "n_stimuli": len(table),
-                          "table_digest": digest}))
+                          "table_digest": digest, "contacts": contacts}))
         return 0
     print(f"{'id':>5}  {'name':<16} {'source':<29} {'indentation':>11}  masses")
     for r in rows:
@@ -62,5 +65,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"\nschedule {args.schedule}: {len(timeline)} events")
         for e in timeline:
             print(f"{e['start_s']:>10.3f} s  id {e['id']:>5}  {e['name']}")
+    if contacts:
+        print(f"\nschedule {args.schedule}: {len(contacts)} contact(s), no stimulus id (the "
+              f"board's contact truth, never on the link): {', '.join(contacts)}")
     print(f"\n{len(table)} stimuli; table digest 0x{digest:08X} (the SESSION record's)")
     return 0

@@ -152,7 +152,13 @@ def schedule_from_doc(doc: Mapping[str, object], where: str, size: MeshSize = PA
                           f"{', '.join(f'[[{s}]]' for s in sections)}")
     catalog = builtin_catalog(size)
     for i, table in enumerate(table_list(doc, "stimulus", MAX_STIMULI, where)):
-        stim = _stimulus(table, f"{where}: [[stimulus]] #{i + 1}", size)
+        at = f"{where}: [[stimulus]] #{i + 1}"
+        stim = _stimulus(table, at, size)
+        if stim.name in catalog:  # one name would play two stimuli
+            taken = ("an earlier [[stimulus]]" if catalog[stim.name][0] >= USER_STIMULUS_ID_BASE
+                     else "a built-in stimulus")
+            raise ConfigError(f"{at}: name = {stim.name!r} is taken by {taken} — give it "
+                              "another name")
         catalog[stim.name] = (USER_STIMULUS_ID_BASE + i, stim)
     events = table_list(doc, "event", MAX_EVENTS, where)
     if not events and events_required:

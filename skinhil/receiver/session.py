@@ -15,6 +15,7 @@ import time
 from collections.abc import Sequence
 from typing import Any, Protocol
 
+from skinhil import child_processes
 from skinhil.errors import TransportError
 
 
@@ -46,8 +47,8 @@ def run_against_board(receiver: StreamReader, command: Sequence[str], idle_s: fl
     The board runs in a session of its own, so a Ctrl-C at the terminal reaches only this
     process: once ``stop`` is set, the board gets one SIGINT and stops cleanly (its FIFO
     drained, its score and RUN_END written), and it is fed until then."""
-    board = subprocess.Popen(list(command), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, text=True, start_new_session=True)
+    board = child_processes.start(command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                                 stderr=subprocess.PIPE, text=True, start_new_session=True)
     end = time.monotonic() + timeout_s
     forwarded = False
     try:

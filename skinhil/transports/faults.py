@@ -116,6 +116,11 @@ class FaultyTransport(WrappedTransport[Any]):
     def name(self) -> str:
         return f"faulty({self.inner.name})"
 
+    @property
+    def held_units(self) -> int:
+        """Units delayed and not yet passed on (at the end of a run: delayed beyond it)."""
+        return len(self._held)
+
     # -- faults -------------------------------------------------------------------------
     def _corrupt(self, data: bytes, keep_last: bool = False) -> bytes:
         p = self.params.corrupt_byte_p

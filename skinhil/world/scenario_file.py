@@ -27,7 +27,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
-from numbers import Real
+from numbers import Integral, Real
 from pathlib import Path
 
 import numpy as np
@@ -41,12 +41,15 @@ from skinhil.model.schedule_file import (
     schedule_from_doc,
     table_list,
 )
+from skinhil.model.skin import SkinParams
 from skinhil.model.stimuli import Schedule
 from skinhil.validation import Interval, check_param
 from skinhil.world.indenters import SHAPES, Indenter
 from skinhil.world.scene import MAX_CONTACTS, Contact, Scene
 from skinhil.world.trajectory import AXES, MAX_KEYFRAMES, Trajectory
 
+DEFAULT_SPACING_M = SkinParams().spacing_m
+"""The skin's mass spacing (m) a scenario is checked against."""
 MAX_INDENTERS = 64
 """Most ``[[indenter]]`` tables."""
 MAX_DEPTH_MM = 2.0
@@ -54,6 +57,16 @@ MAX_DEPTH_MM = 2.0
 tens of percent; deeper presses stretch springs by hundreds of percent."""
 MAX_LOAD_N = 2.0
 """Largest normal load (N): four times the paper's 0.5 N."""
+MAX_TAPS = MAX_KEYFRAMES // 3
+"""Most taps of one ``tap`` contact: three keyframes each fill one trajectory."""
+MAX_PATH_S = 1e5
+"""Latest keyframe time (s) of a ``path`` contact (as ``hold_s``)."""
+SHAPE_KEYS: dict[str, tuple[str, ...]] = {
+    "sphere": ("radius_mm",), "flat": ("radius_mm",),
+    "edge": ("radius_mm", "width_mm", "angle_deg"),
+    "pins": ("radius_mm", "pitch_mm", "pin_radius_mm"),
+}
+"""The number keys each indenter shape uses (docs/contact.md); another is refused."""
 
 INDENTER_LIMITS: dict[str, tuple[float, float]] = {
     "radius_mm": (0.05, 100.0), "width_mm": (0.05, 100.0), "angle_deg": (-360.0, 360.0),
@@ -65,7 +78,7 @@ CONTACT_LIMITS: dict[str, tuple[float, float]] = {
     "to_x_mm": (-100.0, 100.0), "to_y_mm": (-100.0, 100.0),
     "depth_mm": (0.0, MAX_DEPTH_MM), "load_n": (0.0, MAX_LOAD_N),
     "ramp_s": (0.0, 10.0), "hold_s": (0.0, 1e5), "dwell_s": (0.0, 1e5),
-    "speed_mm_per_s": (0.01, 1000.0), "taps": (1, 10_000), "period_s": (1e-3, 1e4),
+    "speed_mm_per_s": (0.01, 1000.0), "taps": (1, MAX_TAPS), "period_s": (1e-3, 1e4),
     "contact_s": (1e-3, 1e4), "vibration_mm": (0.0, 0.5), "vibration_hz": (0.0, 1000.0),
     "mu_static": (0.0, 5.0), "mu_kinetic": (0.0, 5.0),
 }
@@ -122,6 +135,10 @@ def _indenter(table: object, where: str) -> tuple[str, Indenter]:
     shape = t.get("shape")
     if shape not in SHAPES:
         raise ConfigError(f"{where}: shape = {shape!r} — give one of {', '.join(SHAPES)}")
+    unused = [k for k in INDENTER_LIMITS if k in t and k not in SHAPE_KEYS[str(shape)]]
+    if unused:
+        raise ConfigError(f"{where}: a {shape} has no {', '.join(unused)} — give "
+                          f"{' and '.join(SHAPE_KEYS[str(shape)])} only")
     mm = {k: _number(t, k, where, INDENTER_LIMITS) * 1e-3
           for k in ("radius_mm", "width_mm", "pitch_mm", "pin_radius_mm") if k in t}
     kwargs = {k.replace("_mm", "_m"): v for k, v in mm.items()}
@@ -141,8 +158,9 @@ def _path(value: object, where: str) -> np.ndarray:
         raise ConfigError(f"{where}: path — give 1..{MAX_KEYFRAMES} keyframes "
                           "[t_s, x_mm, y_mm, depth_mm (or load_n)]")
     k = np.array(value, dtype=float)
-    if np.any(np.diff(k[:, 0]) < 0) or k[0, 0] < 0:
-        raise ConfigError(f"{where}: path times must start >= 0 and not decrease")
+    if np.any(np.diff(k[:, 0]) < 0) or k[0, 0] < 0 or k[-1, 0] > MAX_PATH_S:
+        raise ConfigError(f"{where}: path times must start >= 0, not decrease and end by "
+                          f"{MAX_PATH_S:g} s")
     if np.any(np.abs(k[:, 1:3]) > 100) or np.any(k[:, 3] < 0) or np.any(k[:, 3] > MAX_DEPTH_MM):
         raise ConfigError(f"{where}: path x_mm, y_mm within ±100, depth within "
                           f"0..{MAX_DEPTH_MM:g} mm")
@@ -183,6 +201,9 @@ def _contact(table: object, where: str, indenters: Mapping[str, Indenter],
                                     num("speed_mm_per_s") * 1e-3, value, num("ramp_s", 0.02),
                                     num("dwell_s", 0.05), load=force)
         elif motion == "tap":
+            if "taps" in t:
+                check_param("taps", t["taps"], Interval(Integral, *CONTACT_LIMITS["taps"],
+                                                        closed="both", hint="a whole number"))
             traj = Trajectory.taps(mm("x_mm", 0.0), mm("y_mm", 0.0), value, int(num("taps")),
                                    num("period_s"), num("contact_s"))
         else:
@@ -202,18 +223,44 @@ def _contact(table: object, where: str, indenters: Mapping[str, Indenter],
         raise ConfigError(text if text.startswith(where) else f"{where}: {text}") from None
 
 
-def parse_scenario(text: str, where: str, size: MeshSize = PAPER_SIZE) -> Scenario:
-    """The scenario of TOML ``text`` (named ``where`` in errors) for a skin of ``size``."""
+def _check_touches(contact: Contact, where: str, size: MeshSize, spacing_m: float) -> None:
+    """Refuse a contact whose indenter never comes over the skin's top layer (``size``
+    masses ``spacing_m`` apart, centred on the origin): it would touch nothing."""
+    traj = contact.trajectory
+    if traj.tangential == "force":  # moved by a load: where it goes is not known here
+        return
+    rows, cols = size
+    half_x, half_y = (cols - 1) / 2 * spacing_m, (rows - 1) / 2 * spacing_m
+    reach = contact.indenter.reach_m + traj.vibration_amplitude_m
+    xy = traj.keyframes[:, 1:3]
+    if (xy[:, 0].max() < -half_x - reach or xy[:, 0].min() > half_x + reach
+            or xy[:, 1].max() < -half_y - reach or xy[:, 1].min() > half_y + reach):
+        raise ConfigError(
+            f"{where}: the indenter never comes over the skin (x and y within "
+            f"±{half_x * 1e3:g} mm and ±{half_y * 1e3:g} mm on a {size[0]}x{size[1]} skin, "
+            f"plus its reach {reach * 1e3:g} mm): it would touch nothing — move it onto "
+            "the skin")
+
+
+def parse_scenario(text: str, where: str, size: MeshSize = PAPER_SIZE,
+                   spacing_m: float = DEFAULT_SPACING_M) -> Scenario:
+    """The scenario of TOML ``text`` (named ``where`` in errors) for a skin of ``size``
+    (top-layer masses ``spacing_m`` apart)."""
     doc = parse_toml(text, where)
     contacts_in = table_list(doc, "contact", MAX_CONTACTS, where)
     indenters: dict[str, Indenter] = {}
     for i, table in enumerate(table_list(doc, "indenter", MAX_INDENTERS, where)):
         name, ind = _indenter(table, f"{where}: [[indenter]] #{i + 1}")
+        if name in indenters:
+            raise ConfigError(f"{where}: [[indenter]] #{i + 1}: name = {name!r} is taken by "
+                              "an earlier [[indenter]] — give each a distinct name")
         indenters[name] = ind
     schedule = schedule_from_doc(doc, where, size, ("indenter", "contact"),
                                  events_required=not contacts_in)
     contacts = tuple(_contact(t, f"{where}: [[contact]] #{i + 1}", indenters, i)
                      for i, t in enumerate(contacts_in))
+    for i, contact in enumerate(contacts):
+        _check_touches(contact, f"{where}: [[contact]] #{i + 1}", size, spacing_m)
     return Scenario(schedule, Scene(contacts) if contacts else None)
 
 

@@ -1,0 +1,357 @@
+"""The surfaces a hostile user tried (issue 43): grip truth files, campaigns, injected faults,
+hang-ups, scenario files, stdout that cannot be written.
+
+Each row of :func:`_refusals` is one input of a class, refused with one ``skinhil: error:``
+line and exit status 2 (run through :func:`skinhil.cli.main` in this process: none needs a
+board). The files a refusal protects are checked byte for byte. The bench's run-time
+findings run as a user runs them: ``--faults drop_p=1`` is the rig's error with its reason in
+the summary and the JUnit XML; SIGHUP and SIGKILL of ``bench`` mid-case leave no process
+behind.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+from harness.serve import REPO, RUN_DIR, serve_env
+
+from skinhil.campaign import campaign_file
+from skinhil.campaign.campaign_file import load_campaign
+from skinhil.campaign.relay import RelayLink
+from skinhil.campaign.rig import RigBounds, rig_faults
+from skinhil.cli import main
+from skinhil.cli.signals import STOP_SIGNALS, _descendants
+from skinhil.errors import ConfigError
+from skinhil.plant import HELD_DTYPE
+from skinhil.plant.truth_file import MAGIC, HeldTruthReader, HeldTruthWriter
+from skinhil.transports.faults import FaultParams
+
+PRESS = REPO / "examples" / "scenarios" / "press.toml"
+CONTACT_HEAD = '[[indenter]]\nname = "s"\nshape = "sphere"\nradius_mm = 2.0\n'
+
+STIMULUS = '[[stimulus]]\nname = "{}"\nforces = {{ 15 = [0, 0, -0.1] }}\n'
+EVENT = '[[event]]\nstart_s = 0\nstimulus = "p"\n'
+
+
+def _contact(body: str) -> str:
+    return f'{CONTACT_HEAD}[[contact]]\nindenter = "s"\n{body}'
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    argv: tuple[str, ...]
+    word: str
+    """A word the error line says (case-insensitive)."""
+
+
+SCENARIOS: dict[str, tuple[str, str]] = {
+    # name: (scenario text, a word of the refusal)
+    "two indenters of one name": (CONTACT_HEAD + CONTACT_HEAD + _contact(
+        'motion = "press"\ndepth_mm = 0.2\n')[len(CONTACT_HEAD):], "distinct"),
+    "taps not whole": (_contact('motion = "tap"\ndepth_mm = 0.05\ntaps = 2.5\n'
+                                'period_s = 0.1\ncontact_s = 0.03\n'), "taps"),
+    "taps past a trajectory": (_contact('motion = "tap"\ndepth_mm = 0.05\ntaps = 5000\n'
+                                        'period_s = 0.1\ncontact_s = 0.03\n'), "taps"),
+    "press off the skin": (_contact('motion = "press"\nx_mm = 50.0\ny_mm = -50.0\n'
+                                    'depth_mm = 0.2\n'), "never"),
+    "slide beside the skin": (_contact('motion = "slide"\nx_mm = -90.0\ny_mm = 40.0\n'
+                                       'to_x_mm = 90.0\nto_y_mm = 40.0\n'
+                                       'speed_mm_per_s = 50.0\ndepth_mm = 0.2\n'), "never"),
+    "key of another shape": ('[[indenter]]\nname = "s"\nshape = "sphere"\nradius_mm = 2.0\n'
+                             'width_mm = 1.0\n[[contact]]\nindenter = "s"\nmotion = "press"\n'
+                             'depth_mm = 0.2\n', "width_mm"),
+    "two stimuli of one name": (STIMULUS.format("p") + STIMULUS.format("p") + EVENT,
+                                "taken"),
+    "a stimulus named like a built-in": (STIMULUS.format("A") + EVENT.replace('"p"', '"A"'),
+                                         "built-in"),
+    "path time 1e300 s": (_contact('motion = "path"\npath = [[0, 0, 0, 0.1], '
+                                   '[1e300, 0, 0, 0.1]]\n'), "path times"),
+}
+
+CAMPAIGNS: dict[str, tuple[str, str]] = {
+    "seed past the top with repetitions": (
+        'name = "c"\nrepetitions = 2\n[parameters]\nseed = 9223372036854775807\n'
+        '[[scenario]]\nbuiltin = "random"\n', "seed"),
+    "scenario a symlink loop": ('name = "c"\n[[scenario]]\nfile = "loop.toml"\n', "loop"),
+}
+
+
+def _refusals(tmp: Path) -> list[Case]:
+    os.symlink("loop.toml", tmp / "loop.toml")
+    cases = []
+    for name, (text, word) in SCENARIOS.items():
+        path = tmp / f"{len(cases)}.toml"
+        path.write_text(text, encoding="utf-8")
+        cases.append(Case(f"scenario: {name}", ("stimuli", "--schedule", str(path)), word))
+    for name, (text, word) in CAMPAIGNS.items():
+        path = tmp / f"campaign{len(cases)}.toml"
+        path.write_text(text, encoding="utf-8")
+        cases.append(Case(f"campaign: {name}", ("bench", str(path), "--out",
+                                                str(tmp / "out")), word))
+    smoke = str(REPO / "examples" / "campaigns" / "smoke.toml")
+    cases += [
+        Case("bench --faults twice", ("bench", smoke, "--faults", "drop_p=1", "--faults",
+                                      "drop_p=0"), "twice"),
+        Case("bench --faults seed=-1", ("bench", smoke, "--faults", "seed=-1", "--out",
+                                        str(tmp / "seed")), "seed"),
+        Case("bench --out uncreatable", ("bench", smoke, "--model", str(_model(tmp)), "--out",
+                                         "/proc/self/nope/out"), "cannot be created"),
+        Case("serve --grasp-truth a foreign file",
+             ("serve", "--link", "pty:", "--grasp", "1", "--grasp-truth",
+              str(tmp / "decoder.npz")), "not a held-object truth file"),
+    ]
+    return cases
+
+
+def test_hostile_inputs_refused_in_one_line(tmp_path: Path, capsys) -> None:
+    foreign = tmp_path / "decoder.npz"
+    foreign.write_bytes(b"PK\x03\x04" + bytes(range(256)) * 64)
+    before = foreign.read_bytes()
+    failures = []
+    for case in _refusals(tmp_path):
+        capsys.readouterr()
+        try:
+            status = main(list(case.argv))
+        except SystemExit as exc:  # argparse's refusals exit
+            status = exc.code
+        err = capsys.readouterr().err
+        lines = [ln for ln in err.splitlines() if ln.strip()]
+        if not (status == 2 and len(lines) == 1 and lines[0].startswith("skinhil: error: ")
+                and case.word.lower() in lines[0].lower()):
+            failures.append(f"{case.name}: status {status}, stderr {err[-500:]!r}")
+    assert not failures, "\n".join(failures)
+    assert foreign.read_bytes() == before  # refused, never truncated
+    assert not (tmp_path / "seed").exists() and not (tmp_path / "out" / "cases").exists()
+
+
+def test_stimuli_schedule_takes_a_scenario_file_and_names_its_contacts(capsys) -> None:
+    assert main(["stimuli", "--schedule", str(PRESS), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["contacts"] == ["contact0"] and out["n_stimuli"] >= 1
+
+
+def _records(n: int, t0: int) -> np.ndarray:
+    r = np.zeros(n, dtype=HELD_DTYPE)
+    r["t_us"] = t0 + np.arange(n) * 1000
+    r["grip_n"] = 0.3
+    return r
+
+
+def test_grasp_truth_appends_to_its_own_file_and_refuses_others(tmp_path: Path) -> None:
+    """A second run appends to the first run's file (nothing of it lost), a torn end is cut
+    to whole records, a read-only truth file and a foreign file are refused in one line."""
+    path = tmp_path / "held.bin"
+    for t0 in (0, 10_000_000):
+        writer = HeldTruthWriter(path)
+        for row in _records(120, t0):
+            writer.add(row[None])
+        writer.close()
+    got = HeldTruthReader(path).read()
+    assert path.read_bytes()[:len(MAGIC)] == MAGIC
+    assert np.array_equal(got, np.concatenate([_records(120, 0), _records(120, 10_000_000)]))
+    with path.open("ab") as f:  # a run ended inside a write
+        f.write(b"\x01" * 7)
+    HeldTruthWriter(path).close()
+    assert len(HeldTruthReader(path).read()) == 240
+    path.chmod(0o444)
+    try:
+        if os.geteuid() != 0:
+            with pytest.raises(ConfigError, match="read-only"):
+                HeldTruthWriter(path)
+    finally:
+        path.chmod(0o644)
+    foreign = tmp_path / "notes.txt"
+    foreign.write_text("my notes\n")
+    with pytest.raises(ConfigError, match="not a held-object truth file"):
+        HeldTruthWriter(foreign)
+    assert foreign.read_text() == "my notes\n"
+
+
+def test_case_ids_keep_exact_values_and_scenarios_load_once(tmp_path: Path,
+                                                           monkeypatch) -> None:
+    """Values that differ past 6 digits give two ids; a campaign of 10,000 cases over one
+    scenario file 100 times reads the file once per skin size, not once per scenario."""
+    path = tmp_path / "c.toml"
+    path.write_text('name = "c"\n[parameters]\nduration_s = [1.0, 1.0000001]\n'
+                    '[[scenario]]\nbuiltin = "random"\n', encoding="utf-8")
+    ids = [c.id for c in load_campaign(path).cases()]
+    assert len(set(ids)) == 2 and ids[0] == "random[duration_s=1]#1", ids
+    reads = []
+    real = campaign_file.load_scenario
+    monkeypatch.setattr(campaign_file, "load_scenario",
+                        lambda *a: reads.append(a) or real(*a))
+    scenarios = "".join(f'[[scenario]]\nname = "s{i}"\nfile = "{PRESS}"\n' for i in range(100))
+    path.write_text('name = "c"\n[parameters]\nduration_s = ['
+                    + ", ".join(f"{0.5 + i / 100:g}" for i in range(100)) + "]\n" + scenarios,
+                    encoding="utf-8")
+    assert len(load_campaign(path).cases()) == 10_000
+    assert len(reads) == 1
+
+
+@pytest.mark.parametrize("faults", [FaultParams(drop_p=1.0),
+                                    FaultParams(delay_p=1.0, delay_s=1e9)],
+                         ids=["drop_p=1", "delay_s=1e9"])
+def test_injected_faults_the_decoder_never_sees_are_the_rigs_error(
+        faults: FaultParams) -> None:
+    """Frames the relay dropped or held past the run show no sequence gap to the tap (they
+    are the last ones): the rig still counts them, and says the decoder received nothing."""
+    relay = RelayLink(921_600, faults)
+    with relay:
+        fd = os.open(relay.board_path, os.O_RDWR | os.O_NOCTTY)
+        try:
+            os.write(fd, b"\x05\x01\x02\x03\x00" * 20)
+            end = time.monotonic() + 5
+            while relay.counters()["injected"]["units_seen"] < 20 and time.monotonic() < end:
+                time.sleep(0.02)
+        finally:
+            os.close(fd)
+    tap = relay.counters()
+    assert tap["injected"]["units_seen"] == 20 and tap["frames_ok"] == 0
+    faults_seen = rig_faults(RigBounds(), None, tap)
+    assert any("received nothing" in f for f in faults_seen), faults_seen
+    assert any("20 frames" in f for f in faults_seen), faults_seen
+
+
+def _model(tmp: Path) -> Path:
+    from skinhil.decoding.classifier import DirectionDecoder
+    from skinhil.decoding.model_file import save_decoder
+    from skinhil.receiver.training import feature_spec
+
+    spec = feature_spec()
+    rng = np.random.default_rng(0)
+    x, y = rng.normal(size=(36, spec.n_features)), np.repeat(np.arange(9), 4)
+    path = tmp / "model.npz"
+    save_decoder(DirectionDecoder(spec).fit(x, y), path)
+    return path
+
+
+def _campaign(tmp: Path, duration_s: float) -> Path:
+    path = tmp / "one.toml"
+    path.write_text(f'name = "one"\ncriteria = ["decisions >= 0"]\n[parameters]\n'
+                    f'duration_s = {duration_s}\n[[scenario]]\nbuiltin = "random"\n'
+                    '[rig]\nmax_lateness_ms = 5000.0\n', encoding="utf-8")
+    return path
+
+
+def _bench(tmp: Path, duration_s: float, *args: str) -> subprocess.Popen[str]:
+    return subprocess.Popen([sys.executable, "-m", "skinhil", "bench",
+                             str(_campaign(tmp, duration_s)), "--quiet", "--model",
+                             str(_model(tmp)), "--out", str(tmp / "out"), *args],
+                            cwd=RUN_DIR, env=serve_env(), text=True, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, stdin=subprocess.DEVNULL)
+
+
+def test_bench_with_drop_p_1_is_the_rigs_error_with_its_reason(tmp_path: Path) -> None:
+    proc = _bench(tmp_path, 0.5, "--faults", "drop_p=1")
+    out, err = proc.communicate(timeout=300)
+    assert proc.returncode == 1, err
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text(encoding="utf-8"))
+    (case,) = summary["cases"]
+    assert case["outcome"] == "error" and "received nothing" in case["message"], case
+    junit = (tmp_path / "out" / "junit.xml").read_text(encoding="utf-8")
+    assert "<error" in junit and "received nothing" in junit
+
+
+def _case_started(proc: subprocess.Popen[str], timeout_s: float = 240) -> list[int]:
+    """Wait until bench runs its board (a case under way); its descendants then."""
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end and proc.poll() is None:
+        kids = _descendants(proc.pid)
+        for pid in kids:
+            try:
+                cmd = Path(f"/proc/{pid}/cmdline").read_bytes()
+            except OSError:
+                continue
+            if b"serve" in cmd.split(b"\x00"):
+                time.sleep(0.5)  # the board past its start
+                return _descendants(proc.pid)
+        time.sleep(0.1)
+    pytest.fail(f"bench started no board: {proc.poll()}")
+
+
+def _gone(pids: list[int], timeout_s: float = 15) -> list[int]:
+    end = time.monotonic() + timeout_s
+    alive = pids
+    while alive and time.monotonic() < end:
+        alive = [p for p in alive if _running(p)]
+        time.sleep(0.1)
+    return alive
+
+
+def _running(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        return False
+    return state[state.rfind(")") + 2:][:1] not in ("Z", "X")
+
+
+@pytest.mark.parametrize("signum", [signal.SIGHUP, signal.SIGKILL], ids=["SIGHUP", "SIGKILL"])
+def test_a_signal_to_bench_mid_case_leaves_no_process(tmp_path: Path, signum: int) -> None:
+    assert signal.SIGHUP in STOP_SIGNALS
+    proc = _bench(tmp_path, 30.0)
+    try:
+        kids = _case_started(proc)
+        assert kids
+        os.kill(proc.pid, signum)
+        proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == (129 if signum == signal.SIGHUP else -signal.SIGKILL)
+    assert _gone(kids) == []
+
+
+@pytest.mark.parametrize("argv,redirect", [(["stimuli"], "> /dev/full"),
+                                           (["pty"], "1>&-")], ids=["full", "closed"])
+def test_stdout_that_cannot_be_written_is_one_line(argv: list[str], redirect: str) -> None:
+    cmd = " ".join([sys.executable, "-m", "skinhil", *argv]) + " " + redirect
+    done = subprocess.run(cmd, shell=True, cwd=RUN_DIR, env=serve_env(), text=True,
+                          stderr=subprocess.PIPE, timeout=60, stdin=subprocess.DEVNULL)
+    lines = [ln for ln in done.stderr.splitlines() if ln.strip()]
+    assert done.returncode in (1, 2) and len(lines) == 1, done.stderr
+    assert lines[0].startswith("skinhil: error: ")
+
+
+def test_a_stop_in_an_import_locks_callback_is_delivered_again() -> None:
+    """The import system's weakref callback (``cb`` in ``<frozen importlib._bootstrap>``)
+    loses an exception raised in it: a signal there is sent again instead."""
+    from skinhil.cli.signals import _in_native_callback
+
+    namespace: dict[str, object] = {"sys": sys}
+    exec(compile("def cb(ref=None):\n    return sys._getframe()\n",
+                 "<frozen importlib._bootstrap>", "exec"), namespace)
+    frame = namespace["cb"]()  # type: ignore[operator]
+    assert _in_native_callback(frame)
+    assert not _in_native_callback(sys._getframe())
+
+
+def test_a_stop_during_a_held_write_is_raised_after_it() -> None:
+    """Inside :func:`signals.held` a SIGTERM is only recorded; it raises as the write
+    ends."""
+    from skinhil.cli import signals
+
+    previous = signals.install()
+    try:
+        signals.resume()
+        done = []
+        with pytest.raises(signals.Stopped):
+            with signals.held():
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(0.05)
+                done.append(True)
+        assert done == [True]
+    finally:
+        signals.restore(previous)
+        signals._received.clear()
