@@ -29,6 +29,7 @@ from skinhil.errors import ConfigError
 from skinhil.schemas import names, schema, validate
 from skinhil.schemas.render import PAGE, render
 from skinhil.scoring import DecisionScoreboard
+from skinhil.scoring.score_file import score_record
 from skinhil.world import scenario_file
 
 EXAMPLES = REPO / "examples"
@@ -139,7 +140,7 @@ def _score(tmp_path: Path) -> dict[str, Any]:
     board.decision(2, 12_000, running=False)
     board.advance(10_000_000)
     board.decision(1, 10_000_001)
-    write_score(tmp_path / "score.json", board)
+    write_score(tmp_path / "score.json", score_record(board))
     out: dict[str, Any] = json.loads((tmp_path / "score.json").read_text())
     return out
 
