@@ -57,7 +57,11 @@ def host_beside_serve(folder: Path, host_argv: Sequence[str], serve_args: Sequen
                 host.wait(timeout=own_end_s)
             except subprocess.TimeoutExpired:
                 host.send_signal(signal.SIGINT)
-            out, err = host.communicate(timeout=30)
+            try:
+                out, err = host.communicate(timeout=30)
+            except subprocess.TimeoutExpired:  # a scripted host blocked on a link gone quiet
+                host.kill()
+                out, err = host.communicate()
         finally:
             if host.poll() is None:
                 host.kill()
