@@ -32,7 +32,7 @@ from skinhil.scoring.tasks import Trial
 from skinhil.suites import Trials
 from skinhil.tasks import TrialKind
 from skinhil.world import TouchSensor
-from skinhil.world.truth import TRUTH_PERIOD_S
+from skinhil.world.truth import TRUTH_DTYPE, TRUTH_PERIOD_S
 
 BLOCK_S = 0.05
 """Board time (s) simulated per compiled call."""
@@ -67,11 +67,13 @@ class Sample:
 @dataclass(frozen=True)
 class Run:
     """A case's run simulated offline: every spike (``t`` µs, ``addr``), the stimulus
-    onsets (µs, stimulus id), the task scoreboard's trials and the run's length (µs)."""
+    onsets (µs, stimulus id), the task scoreboard's trials, the contacts' truth per 1 ms tick
+    (:data:`~skinhil.world.truth.TRUTH_DTYPE`) and the run's length (µs)."""
 
     events: np.ndarray
     onsets: list[tuple[int, int]]
     scoreboard: TaskScoreboard | None
+    truth: np.ndarray
     end_us: int
 
 
@@ -106,6 +108,7 @@ def simulate(trials: Trials, snr_db: float, dt_s: float = 1e-4,
     block = every * max(1, int(round(BLOCK_S / dt_s / every)))
     n_total = int(round((trials.duration_s + response_window_s) / dt_s))
     events = []
+    truth = [np.zeros(0, dtype=TRUTH_DTYPE)]
     onsets: list[tuple[int, int]] = []
     for first in range(0, n_total, block):
         n = min(block, n_total - first)
@@ -117,12 +120,14 @@ def simulate(trials: Trials, snr_db: float, dt_s: float = 1e-4,
             assert board is not None
             for k in range((-first) % every, n, every):
                 board.observe((first + k) * dt_us, raw[k])
+            truth.append(touch.truth_at(raw, first, every))
         events.append(sensor.events(spikes, first))
         onsets += [(m.t_us, m.stimulus_id) for m in timeline.markers_before((first + n) * dt_us)
                    if m.phase == "onset"]
     if board is not None:
         board.advance(n_total * dt_us)
-    return Run(np.concatenate(events), onsets, board, n_total * dt_us)
+    return Run(np.concatenate(events), onsets, board, np.concatenate(truth),
+               n_total * dt_us)
 
 
 def case_samples(trials: Trials, snr_db: float, dt_s: float = 1e-4,
