@@ -1,16 +1,16 @@
-"""Measures the reference receiver's touch-down/release rule (skinhil/receiver/touch_kind.py)
-and chooses its burst length KIND_S: on calibration runs of the task scenarios
-(examples/scenarios/task_*.toml), what the rule calls each onset the receiver's onset rule
-finds, by what the truth says it is (a touch-down, a release, other: noise or activity
-within a touch), for burst lengths of 15, 25 and 40 ms.
+"""Measures the reference receiver's touch-down/release rule (skinhil/receiver/touch_kind.py) and
+chooses its burst length KIND_S: on calibration runs of the suite's cases on training seeds
+(task_calibration.py), what the rule calls each onset the receiver's onset rule finds, by what
+the truth says it is (a touch-down, a release, other: noise or activity within a touch), for
+burst lengths of 15, 25 and 40 ms.
 
-Each calibration run is ``skinhil simulate`` (offline, no link) at the given SNR and one of the
-seeds; the onsets are the receiver's (skinhil/receiver/onset.py, default parameters), their
-windows start 3 ms before the detection, as the receiver's. The length chosen is the one
-that calls the most touch-downs touch-downs and releases releases (their mean share):
+Each calibration run is simulated offline at the given SNR for one of the seeds; the onsets are
+the receiver's (skinhil/receiver/onset.py, default parameters), their windows start 3 ms before
+the detection, as the receiver's. The length chosen is the one that calls the most touch-downs
+touch-downs and releases releases (their mean share):
 
-    python benchmarks/fit_touch_kind.py --snr-db 10 --seeds 1,2,3,4,5,6
-    python benchmarks/fit_touch_kind.py --smoke     # the force scenario, one seed, 8 s only
+    python benchmarks/fit_touch_kind.py --snr-db 10 --seeds 1-20
+    python benchmarks/fit_touch_kind.py --smoke     # the force case, one seed, two trials only
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ CALLED = (TOUCH_DOWN, RELEASE, None)
 
 
 def main() -> None:
-    snr_db, seeds, duration = calibration_args(__doc__ or "", "1,2,3,4,5,6")
+    snr_db, seeds, duration = calibration_args(__doc__ or "")
     tasks = ("force",) if duration else TASKS
     mask = in_layer((6, 6))
     tally: dict[float, Counter[tuple[str, str, str | None]]] = {k: Counter() for k in KINDS_S}

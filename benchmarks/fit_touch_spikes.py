@@ -1,16 +1,16 @@
-"""Chooses the reference decoders' touch spikes (skinhil/receiver/task_decoders.py,
-TOUCH_SPIKES_S and TOUCH_RADIUS_MM): the window's first so many ms, within so many mm of their
-trimmed centroid, whichever pair locates most detected touches within 0.5 mm of the contact's
-centroid, on calibration runs of examples/scenarios/task_localisation.toml.
+"""Chooses the reference decoders' touch spikes (skinhil/receiver/task_decoders.py, TOUCH_SPIKES_S
+and TOUCH_RADIUS_MM): the window's first so many ms, within so many mm of their trimmed
+centroid, whichever pair locates most detected touches within 0.5 mm of the contact's centroid,
+on calibration runs of the suite's localisation case on training seeds (task_calibration.py).
 
-Each calibration run is ``skinhil simulate`` (offline, no link) at the given SNR and one of the
-seeds; the touches are found by the receiver's own onset rule (skinhil/receiver/onset.py,
-default parameters) and called touch-downs by its skinhil/receiver/touch_kind.py, an onset more
-than 50 ms after the latest touch-down left out, and their windows are the receiver's (from 3
-ms before the detection, 50 ms long):
+Each calibration run is simulated offline at the given SNR for one of the seeds; the touches
+are found by the receiver's own onset rule (skinhil/receiver/onset.py, default parameters) and
+called touch-downs by its skinhil/receiver/touch_kind.py, an onset more than 50 ms after the
+latest touch-down left out, and their windows are the receiver's (from 3 ms before the
+detection, 50 ms long):
 
-    python benchmarks/fit_touch_spikes.py --snr-db 10 --seeds 1,2,3,4,5,6
-    python benchmarks/fit_touch_spikes.py --smoke     # one seed, the first 8 s only
+    python benchmarks/fit_touch_spikes.py --snr-db 10 --seeds 1-20
+    python benchmarks/fit_touch_spikes.py --smoke     # one seed, two trials only
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ RIGHT_MM = 0.5
 
 
 def main() -> None:
-    snr_db, seeds, duration = calibration_args(__doc__ or "", "1,2,3,4,5,6")
+    snr_db, seeds, duration = calibration_args(__doc__ or "")
     xy_mm = sensor_xy_mm((6, 6))
     windows = []
     for seed in seeds:

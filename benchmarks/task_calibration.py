@@ -1,13 +1,16 @@
 """What the reference task decoders' fits share (fit_force_line.py, fit_vibration_classes.py,
-fit_slip_channels.py): their command line, the calibration runs (``skinhil simulate`` of a task
-scenario, offline, no link) and the touches the receiver's own onset rule finds in them."""
+fit_slip_channels.py, fit_reference_answerers.py): their command line, the calibration runs
+and the touches the receiver's own onset rule finds in them.
+
+A calibration run is a case of the suite :data:`SUITE` on a training seed, simulated offline
+exactly as ``skinhil serve --suite SUITE:CASE --seed N`` plays it
+(:func:`skinhil.dataset.simulate`): the fits never see an evaluation seed's trials, and a
+seed outside the training range is refused."""
 
 from __future__ import annotations
 
 import argparse
-import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -15,9 +18,16 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
+from skinhil.dataset import check_training, parse_seeds, simulate  # noqa: E402
 from skinhil.receiver.onset import OnsetDetector  # noqa: E402
 from skinhil.receiver.params import OnsetParams  # noqa: E402
 from skinhil.receiver.touch_kind import TOUCH_DOWN, in_layer, touch_kind  # noqa: E402
+from skinhil.suites import Trials, suite  # noqa: E402
+
+SUITE = "tactile-v1"
+"""The suite whose cases calibrate the reference decoders."""
+SEEDS = "1-20"
+"""The fits' default training seeds."""
 
 STEP_US = 100
 """The receiver's step (µs) the onsets are found on."""
@@ -26,44 +36,47 @@ MATCH_US = 50_000
 and noise, are left out)."""
 RELEASE_US = (-20_000, 60_000)
 """An onset within this (µs) of a touch's last touching tick is its release's."""
-SMOKE_DURATION_S = 8.0
-"""--smoke: board time (s) simulated, the scenario's first trials."""
+SMOKE_TRIALS = 2
+"""--smoke: trials of a case played (its first)."""
 
 
-def calibration_args(doc: str, seeds: str) -> tuple[float, list[int], list[str]]:
-    """The command line of a fit: its SNR (dB), seeds and ``simulate``'s duration options."""
+def calibration_args(doc: str, seeds: str = SEEDS) -> tuple[float, list[int], int | None]:
+    """The command line of a fit: its SNR (dB), training seeds and trials per case (None:
+    all of them)."""
     ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--snr-db", type=float, default=10.0)
-    ap.add_argument("--seeds", default=seeds, help="the calibration runs' board seeds")
+    ap.add_argument("--seeds", default=seeds,
+                    help=f"the calibration runs' training seeds of {SUITE}, e.g. 1-20")
     ap.add_argument("--smoke", action="store_true",
-                    help=f"one seed, the first {SMOKE_DURATION_S:g} s of board time only (a "
-                         "check that the script runs, not a fit to use)")
+                    help=f"one seed, the first {SMOKE_TRIALS} trials of a case only (a check "
+                         "that the script runs, not a fit to use)")
     args = ap.parse_args()
-    chosen = [int(s) for s in args.seeds.split(",") if s]
+    chosen = parse_seeds(args.seeds)
+    check_training(suite(SUITE), chosen)
     if args.smoke:
-        return args.snr_db, chosen[:1], ["--duration", str(SMOKE_DURATION_S)]
-    return args.snr_db, chosen, []
+        return args.snr_db, chosen[:1], SMOKE_TRIALS
+    return args.snr_db, chosen, None
 
 
-def calibration_run(task: str, snr_db: float, seed: int,
-                    duration: list[str]) -> tuple[np.ndarray, np.ndarray]:
-    """The events and the contact truth of ``examples/scenarios/task_<task>.toml`` simulated
-    at ``snr_db`` with ``seed``."""
-    scenario = REPO / "examples" / "scenarios" / f"task_{task}.toml"
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "cal.npz"
-        subprocess.run([sys.executable, "-m", "skinhil", "simulate", "--schedule",
-                        str(scenario), "--out", str(out), "--no-progress", "--no-forces",
-                        "--snr-db", str(snr_db), "--seed", str(seed), *duration],
-                       check=True, capture_output=True)
-        z = np.load(out)
-        return z["events"], z["truth"]
+def case_trials(case: str, seed: int, trials: int | None = None) -> Trials:
+    """The trials of :data:`SUITE`'s ``case`` for training seed ``seed`` (its first
+    ``trials``; None: all)."""
+    s = suite(SUITE)
+    return s.case(case).generate(s.id, seed, trials=trials)
+
+
+def calibration_run(case: str, snr_db: float, seed: int,
+                    trials: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The events and the contact truth of :data:`SUITE`'s ``case`` for training seed
+    ``seed``, simulated offline at ``snr_db`` as the board plays it."""
+    run = simulate(case_trials(case, seed, trials), snr_db)
+    return run.events, run.truth
 
 
 def truth_onsets(ev: np.ndarray, truth: np.ndarray) -> list[tuple[int, int, str]]:
     """(decision window start µs, contact, what it is) of each onset the receiver's rule
     (skinhil/receiver/onset.py, default parameters) finds: ``touch-down`` at most
-    :data:`MATCH_US` after a contact's touch-down (each contact of a task scenario touches
+    :data:`MATCH_US` after a contact's touch-down (each contact of a suite case touches
     once), ``release`` within :data:`RELEASE_US` of a contact's last touching tick, else
     ``other`` (noise, or activity within a touch; contact -1)."""
     touching = truth[truth["nodes"] > 0]

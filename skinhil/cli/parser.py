@@ -21,6 +21,7 @@ SUBCOMMANDS: tuple[str, ...] = (
     "compile",
     "bench",
     "suites",
+    "dataset",
 )
 
 ERROR_STATUS = 2

@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from skinhil.model.geometry import MeshSize, build_mesh, sensor_positions
+from skinhil.receiver.reference_fit import reference_fit
 
 SPACING_M = 1e-3
 """The skin's node spacing (m) the positions assume (:class:`skinhil.model.skin.SkinParams`)."""
@@ -50,17 +51,18 @@ with :data:`TOUCH_SPIKES_S`)."""
 TRIM_ROUNDS = 3
 """LOCALISATION, FORCE: the trimmed centroid moves this many times to the mean of the spikes
 within :data:`TOUCH_RADIUS_MM` of it."""
-FORCE_OFFSET_N = 0.2018
+FIT = reference_fit()
+"""The fitted parameters below and their provenance: ``skinhil/data/reference_fit.json``,
+fitted on training seeds of the suite it names only (``python
+benchmarks/fit_reference_answerers.py``), so no evaluation seed's trials were seen."""
+FORCE_OFFSET_N: float = FIT["force"]["offset_n"]
 """FORCE: the line's offset (N); with :data:`FORCE_N_PER_SPIKE`, the least-squares fit of
 the normal force at the end of each detected touch's decision window on the count of the
-touch's spikes (:func:`touch_spikes`), over the presses of
-``examples/scenarios/task_force.toml`` simulated at the paper's 10 dB with seeds 1-6, on the
-default skin, their onsets called touch-downs (:mod:`skinhil.receiver.touch_kind`):
-``python benchmarks/fit_force_line.py --snr-db 10 --seeds 1,2,3,4,5,6`` (124 touches
-detected of 216, correlation 0.82, median |error| 0.045 N; 52 % within 0.05 N, where the
-line through all the 50 ms window's spikes has 48 %). Another SNR or skin needs its own
-fit; the README's runs use another seed."""
-FORCE_N_PER_SPIKE = 0.0216
+touch's spikes (:func:`touch_spikes`), over the presses of the suite's ``force`` case at the
+fit's SNR on the default skin, their onsets called touch-downs
+(:mod:`skinhil.receiver.touch_kind`): ``benchmarks/fit_force_line.py``. Another SNR or skin
+needs its own fit."""
+FORCE_N_PER_SPIKE: float = FIT["force"]["n_per_spike"]
 """FORCE: newtons per spike of the touch (the fit above)."""
 VIBRATION_BAND_HZ = (40.0, 500.0)
 """VIBRATION: the band (Hz) of the frequencies asked (the random answerer draws from it)."""
@@ -71,33 +73,24 @@ VIBRATION_CHANNELS = 20
 """VIBRATION: the phase locking is read on the window's this many most active channels (the
 touched sensors; the noise spreads over all of them)."""
 VIBRATION_CLASSES_HZ = (50.0, 100.0, 200.0, 300.0)
-"""VIBRATION: the frequencies (Hz) of the calibration scenario
-(``examples/scenarios/task_vibration.toml``), the answers the decoder gives."""
-VIBRATION_MEANS = (
-    (158.58, 31.65, 5.89, 0.86, 1.05),
-    (149.36, 1.03, 8.32, 1.58, 0.95),
-    (147.90, 1.31, 0.71, 1.10, 1.01),
-    (164.23, 1.05, 1.24, 0.95, 1.07),
-)
+"""VIBRATION: the frequencies (Hz) of the calibration case (the suite's ``vibration``), the
+answers the decoder gives."""
+VIBRATION_MEANS: tuple[tuple[float, ...], ...] = tuple(
+    tuple(row) for row in FIT["vibration"]["means"])
 """VIBRATION: per class of :data:`VIBRATION_CLASSES_HZ`, the mean of
-:func:`vibration_features` over the calibration touches, their onsets called touch-downs
-(:mod:`skinhil.receiver.touch_kind`): ``python benchmarks/fit_vibration_classes.py --snr-db
-10 --seeds 1,2,3,4,5,6`` on the default skin (157 touches detected of 192; 85 % of them
-classed right on their own fit). Another SNR, skin or set of frequencies needs its own fit;
-the README's runs use another seed."""
-VIBRATION_SPREAD = (9.20, 2.94, 2.59, 1.08, 0.99)
+:func:`vibration_features` over the calibration touches of the suite's ``vibration`` case,
+their onsets called touch-downs (:mod:`skinhil.receiver.touch_kind`):
+``benchmarks/fit_vibration_classes.py``. Another SNR, skin or set of frequencies needs its
+own fit."""
+VIBRATION_SPREAD: tuple[float, ...] = tuple(FIT["vibration"]["spread"])
 """VIBRATION: the within-class standard deviation of each feature (the fit above)."""
 TOUCH_S = 0.5
 """An onset this soon (s) after a touch's onset belongs to that touch."""
-SLIP_CHANNELS = (11, 12, 16, 17, 33, 38, 39, 71, 72, 77, 81, 91, 95, 99, 113, 118, 131, 135, 197,
-                 200, 207, 209, 218, 220, 222, 224, 227, 229, 245, 247, 248, 249)
+SLIP_CHANNELS: tuple[int, ...] = tuple(FIT["slip"]["channels"])
 """SLIP: the channels near silent while a held contact sticks (at most 0.5 spikes in 70 ms)
 that fire at least 0.5 spikes more in the 70 ms after it slips, on average over the slides
-of ``examples/scenarios/task_slip.toml`` simulated at the paper's 10 dB with seeds 1-4 on the
-default skin (96 slides: 2.4 spikes of the 32 channels in 70 ms while sticking, 36.0 once
-slipping):
-``python benchmarks/fit_slip_channels.py --snr-db 10 --seeds 1,2,3,4``. Another SNR, skin,
-place or direction of slip needs its own fit; the README's runs use another seed."""
+of the suite's ``slip`` case: ``benchmarks/fit_slip_channels.py``. Another SNR, skin, place
+or direction of slip needs its own fit."""
 SLIP_WINDOW_S = 0.15
 """SLIP: the spikes of the slip channels are counted over this long (s)."""
 SLIP_SPIKES = 10
