@@ -9,32 +9,13 @@ import json
 import os
 from typing import Any
 
+from doc_tables import table
 from docutils import nodes
 from docutils.parsers.rst import Directive
 from sphinx.application import Sphinx
 
 RESULTS = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(
     os.path.abspath(__file__)))), "benchmarks", "results")
-
-
-def _table(header: list[str], rows: list[list[str]]) -> nodes.table:
-    table = nodes.table()
-    group = nodes.tgroup(cols=len(header))
-    table += group
-    for _ in header:
-        group += nodes.colspec(colwidth=1)
-    head = nodes.thead()
-    group += head
-    body = nodes.tbody()
-    group += body
-    for cells, parent in [(header, head)] + [(r, body) for r in rows]:
-        row = nodes.row()
-        for cell in cells:
-            entry = nodes.entry()
-            entry += nodes.paragraph(text=cell)
-            row += entry
-        parent += row
-    return table
 
 
 def _value(fig: dict[str, Any]) -> str:
@@ -72,7 +53,7 @@ class BenchmarkResults(Directive):
                      f"{load}; {result['date']}")
             section += nodes.paragraph(text=about)
             section += nodes.literal_block(result["command"], result["command"])
-            section += _table(["figure", "measured", "target"],
+            section += table(["figure", "measured", "target"],
                               [[f["name"], _value(f), f.get("target", "")]
                                for f in result["figures"]])
             out.append(section)

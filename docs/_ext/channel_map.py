@@ -5,11 +5,10 @@ so it is the map the board streams."""
 
 from __future__ import annotations
 
+from doc_tables import table
 from docutils import nodes
 from docutils.parsers.rst import Directive
 from sphinx.application import Sphinx
-
-from benchmark_results import _table
 
 LAYERS = {1: "1", 2: "2", 3: "3", 12: "1–2", 23: "2–3"}
 """``Mesh.layer_of_spring`` codes: the layer a spring lies in, or the two it joins."""
@@ -30,7 +29,7 @@ class ChannelMap(Directive):
                  LAYERS.get(int(mesh.layer_of_spring[a]), "?"),
                  f"{where[a, 0]:.2f}", f"{where[a, 1]:.2f}", f"{where[a, 2]:.2f}"]
                 for a, (i, j) in enumerate(mesh.springs)]
-        return [_table(["address", "spring", "layer", "x (mm)", "y (mm)", "z (mm)"], rows)]
+        return [table(["address", "spring", "layer", "x (mm)", "y (mm)", "z (mm)"], rows)]
 
 
 def setup(app: Sphinx) -> dict[str, object]:
