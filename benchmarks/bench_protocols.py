@@ -23,6 +23,7 @@ from collections.abc import Callable
 
 sys.path.insert(0, os.path.dirname(__file__))
 from machine import describe, pin_one_core  # noqa: E402
+from results import figure, save  # noqa: E402
 
 pin_one_core()
 
@@ -88,7 +89,7 @@ def best(fn: Callable[[], object]) -> float:
     return min(times)
 
 
-def serial_report(rate: float) -> None:
+def serial_report(rate: float) -> list[dict]:
     ev = poisson_events(rate, DURATION_S)
     parts = chunks(ev, DURATION_S)
     data = b"".join(stream(SerialEncoder(), parts))
@@ -112,9 +113,16 @@ def serial_report(rate: float) -> None:
     print(f"         encode {n / t_enc / 1e6:.2f} M ev/s (1 ms calls), "
           f"{n / t_bulk / 1e6:.2f} M ev/s (one call); decode {n / t_dec / 1e6:.2f} M ev/s "
           f"(256-byte reads), {n / t_dec_bulk / 1e6:.2f} M ev/s (one read)")
+    k = f"{rate / 1e3:.0f}k ev/s"
+    return [figure(f"serial bytes per event at {k}", round(len(data) / n, 3), "B/event",
+                   "≤ 2.5" if rate <= 20_000 else "≤ 2.2"),
+            figure(f"serial encode at {k}, 1 ms calls", round(n / t_enc / 1e6, 2), "M ev/s",
+                   "≥ 1"),
+            figure(f"serial decode at {k}, 256-byte reads", round(n / t_dec / 1e6, 2),
+                   "M ev/s", "≥ 1")]
 
 
-def can_report(rate: float, fd: bool) -> None:
+def can_report(rate: float, fd: bool) -> list[dict]:
     ev = poisson_events(rate, DURATION_S)
     parts = chunks(ev, DURATION_S)
     frames = [f for out in stream(CanEncoder(fd=fd), parts) for f in out]
@@ -141,13 +149,23 @@ def can_report(rate: float, fd: bool) -> None:
     print(f"         encode {n / t_enc / 1e6:.2f} M ev/s (1 ms calls), "
           f"{n / t_bulk / 1e6:.2f} M ev/s (one call); decode {n / t_dec / 1e6:.2f} M ev/s "
           f"(64-frame batches), {n / t_dec_bulk / 1e6:.2f} M ev/s (one batch)")
+    k = f"{name.strip()} at {rate / 1e3:.0f}k ev/s"
+    return [figure(f"{k}: events per events frame", round(n / len(ev_frames), 2), "",
+                   "≥ 28" if fd else "≥ 3"),
+            figure(f"{k}: bus load", round(bus_s / DURATION_S, 3), "", ""),
+            figure(f"{k}: encode, 1 ms calls", round(n / t_enc / 1e6, 2), "M ev/s", "≥ 1"),
+            figure(f"{k}: decode, 64-frame batches", round(n / t_dec / 1e6, 2), "M ev/s",
+                   "≥ 1")]
 
 
 def main() -> None:
     global DURATION_S, REPEATS
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--smoke", action="store_true", help="0.05 s, one run each: the script runs")
-    if ap.parse_args().smoke:
+    ap.add_argument("--no-save", action="store_true",
+                    help="print only; do not write benchmarks/results/protocols.json")
+    args = ap.parse_args()
+    if args.smoke:
         DURATION_S, REPEATS = 0.05, 1
     print(describe())
     print(f"Poisson spikes over 338 channels, {STEP_US} µs steps, flush every {FLUSH_US} µs, "
@@ -157,12 +175,16 @@ def main() -> None:
     SerialDecoder().feed(SerialEncoder().events(small, 10_000))
     for fd in (False, True):
         CanDecoder(fd=fd).feed(CanEncoder(fd=fd).events(small, 10_000))
+    figures = []
     for rate in (20_000, 100_000):
-        serial_report(rate)
+        figures += serial_report(rate)
     for rate in (20_000, 30_000, 100_000):
-        can_report(rate, fd=False)
+        figures += can_report(rate, fd=False)
     for rate in (20_000, 100_000):
-        can_report(rate, fd=True)
+        figures += can_report(rate, fd=True)
+    if not (args.smoke or args.no_save):
+        print("written:", save("protocols", "Wire protocols: compactness and codec speed",
+                               figures))
 
 
 if __name__ == "__main__":

@@ -1,6 +1,6 @@
 """``skinhil bench CAMPAIGN``: play a test campaign against a decoder under test and report
 each case as passed, failed (the decoder's) or error (the rig's) in a JSON summary and JUnit
-XML (docs/campaigns.md)."""
+XML (docs: Test campaigns)."""
 
 from __future__ import annotations
 
@@ -61,7 +61,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
         "bench", help="play a test campaign against a decoder: JSON summary and JUnit XML",
         description="Play each case of a campaign file (scenarios x parameters x "
-                    "repetitions, docs/campaigns.md) on a board started for it, against "
+                    "repetitions, docs: Test campaigns) on a board started for it, against "
                     "the decoder under test on the link given, or, with no link, against "
                     "the reference receiver (skinhil listen --answer) on a pty pair of the "
                     "bench's own. Each case passes, fails (a criterion on the board's score "

@@ -95,7 +95,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--task", choices=("directions", "grasp"), default="directions",
                    help="directions: decide the 9 direction conditions (default); grasp: the "
                         "board holds an object through --lifts lifts and the reference grip "
-                        "controller grips it from the spikes (docs/grasp.md)")
+                        "controller grips it from the spikes (docs: Grasp)")
     p.add_argument("--lifts", type=integer(1, MAX_LIFTS, "lifts"), default=DEFAULT_LIFTS,
                    metavar="N", help=f"--task grasp: lifts to play, 1..{MAX_LIFTS} (default: "
                                      f"{DEFAULT_LIFTS}, about {DEFAULT_LIFTS * 1.2:g} s)")

@@ -5,7 +5,7 @@ The board runs as ``skinhil serve --grasp LIFTS`` in a subprocess; the controlle
 (:mod:`skinhil.receiver.grip_reflex`, its load readout fitted on first use at the demo's SNR
 and cached beside the demo's model) reads the pty master and sends GRIPs; ``--controller
 off`` sends none, so the hand keeps its constant low grip. The board scores every lift
-(docs/grasp.md) into its score file, which the demo prints. With ``--view`` the live view
+(docs: Grasp) into its score file, which the demo prints. With ``--view`` the live view
 shows the stream and plots the held object's truth, which the board appends to a file of the
 demo's (``serve --grasp-truth``: the operator's side channel, not the decoder's link).
 """

@@ -77,7 +77,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="stop after this many seconds (default: until Ctrl-C)")
     p.add_argument("--json", action="store_true",
                    help="one JSON object per line: the ready line first, decisions, link "
-                        "counters, the summary line last (docs/process-output.md)")
+                        "counters, the summary line last (docs: Process output)")
     add_ready_option(p)
     p.add_argument("--record", type=Path, metavar="FILE",
                    help="save events (tonic-compatible), markers and decisions to this .npz, "

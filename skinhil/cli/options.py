@@ -93,7 +93,7 @@ def model_from_args(args: argparse.Namespace) -> SkinModel:
 
 
 SCHEDULE_HELP = ("schedule or scenario file (TOML: stimuli and contacts; format and limits: "
-                 "docs/schedule.md, docs/contact.md)")
+                 "docs: Schedule files, docs: Contact)")
 """The help text of every option that takes a schedule file."""
 SCHEDULE_NOTICE_BYTES = 1 << 20
 """Schedule files from this size (1 MiB, ~0.3 s to read) on are announced before reading."""

@@ -22,7 +22,7 @@ def add_ready_option(parser: argparse.ArgumentParser | argparse._ArgumentGroup) 
     parser.add_argument("--ready-fd", type=integer(3, MAX_FD, "file descriptor"),
                         metavar="N",
                         help="once the link is open and the run starts, write the ready line "
-                             "(one JSON object, docs/process-output.md) to the inherited "
+                             "(one JSON object, docs: Process output) to the inherited "
                              "file descriptor N and close it; with --json it is on stdout "
                              "as well")
 

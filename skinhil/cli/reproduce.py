@@ -24,7 +24,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory")
     p.add_argument("--quick", action="store_true",
                    help="small grids, few repeats, the paper's amplitude only (a check, "
-                        "for tests; docs/reproduce.md gives its time)")
+                        "for tests; docs: Reproduce the paper)")
     p.add_argument("--workers", type=integer(1, 256, "worker count"), metavar="N",
                    help="local worker processes for sweeps and cross-validation "
                         "(default: all cores)")

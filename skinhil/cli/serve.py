@@ -1,5 +1,5 @@
 """``skinhil serve``: run the emulated sensor board in real time over a serial port, CAN or
-UDP; its ready and summary lines are docs/process-output.md's."""
+UDP; its ready and summary lines: docs, Process output."""
 
 from __future__ import annotations
 
@@ -89,7 +89,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "it plays a seeded random sequence of the 9 direction conditions with rests, "
                     "each announced by a ground-truth marker. Ctrl-C stops it cleanly. A "
                     "program driving it reads its ready line and summary line "
-                    "(--json, --ready-fd; docs/process-output.md).")
+                    "(--json, --ready-fd; docs: Process output).")
     add_transport_args(p)
     plays = p.add_argument_group("what the board plays (schedule, scenario, grasp or replay)")
     src = plays.add_mutually_exclusive_group()
@@ -98,13 +98,13 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     src.add_argument("--host-driven", action="store_true",
                      help="no schedule: stimuli only on host commands")
     src.add_argument("--grasp", type=integer(1, MAX_LIFTS, "lifts"), metavar="LIFTS",
-                     help=f"a held object lifted LIFTS times, 1..{MAX_LIFTS} (docs/grasp.md): "
+                     help=f"a held object lifted LIFTS times, 1..{MAX_LIFTS} (docs: Grasp): "
                           "the decoder under test grips it with GRIP commands; its scores go "
                           "to --score under \"grasp\"; the run ends after the lifts unless "
                           "--duration says otherwise")
     src.add_argument("--suite", metavar="SUITE:CASE",
                      help="play a case of a task suite (skinhil suites lists them, "
-                          "docs/suites.md), its trials drawn from --seed; the run ends with "
+                          "docs: Suites), its trials drawn from --seed; the run ends with "
                           "the case unless --duration says otherwise")
     src.add_argument("--replay", type=Path, metavar="FILE",
                      help="play this recording (serve --record) onto the link instead of "
@@ -192,7 +192,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                                "core to itself): with the receiver or the decoder under test "
                                "on another core, no other program takes turns on the "
                                "board's; as many cores as --threads")
-    output = p.add_argument_group("output (docs/process-output.md)")
+    output = p.add_argument_group("output (docs: Process output)")
     out = output.add_mutually_exclusive_group()
     out.add_argument("--quiet", action="store_true", help="print nothing but errors")
     out.add_argument("--json", action="store_true",

@@ -47,7 +47,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
         description="Simulate the skin and its neurons offline and write an .npz file with "
                     "spring forces (N, float32, n_steps x n_springs, 338 at 6x6), spike "
                     "events (t µs, addr, p), the stimulus markers and, for a scenario with "
-                    "contacts, their ground truth per 1 ms tick (truth: docs/contact.md); "
+                    "contacts, their ground truth per 1 ms tick (the truth: docs, Contact); "
                     "it prints the skin's max strain; numpy reads it with "
                     "np.load(path). An --out ending in .nwb writes an NWB file instead "
                     "(pynwb: pip install \"skinhil[nwb]\"): one unit per sensor, the "

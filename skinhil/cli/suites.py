@@ -1,5 +1,5 @@
 """``skinhil suites``: the suites shipped, their versions, cases, the tasks each case poses
-and the seed ranges (docs/suites.md)."""
+and the seed ranges (docs: Suites)."""
 
 from __future__ import annotations
 

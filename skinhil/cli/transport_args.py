@@ -1,6 +1,6 @@
 """Link options shared by the subcommands that talk over a link (serve, listen, bench).
 
-``--link URL`` selects any registered link (docs/links.md: ``serial:``, ``can:``, ``udp:``,
+``--link URL`` selects any registered link (docs: Links: ``serial:``, ``can:``, ``udp:``,
 ``pty:`` and the schemes packages add). The shorthands build that URL: ``--port PORT``
 (serial: a device path or a pyserial URL, with ``--baud``), ``--can CHANNEL`` (python-can,
 with ``--interface``, ``--fd``, ``--bitrate``, ``--data-bitrate``) and ``--udp [HOST:]PORT``
@@ -60,7 +60,7 @@ def add_transport_args(parser: argparse.ArgumentParser, udp_listen: bool = False
     which.add_argument("--link", metavar="URL",
                        help="the link as a URL: serial:/dev/ttyUSB0?baud=921600, "
                             "can:vcan0?interface=socketcan&fd=1, udp:127.0.0.1:9000, pty: "
-                            "(docs/links.md)")
+                            "(docs: Links)")
     which.add_argument("--port", metavar="PORT",
                        help="serial port: device path (/dev/ttyUSB0, /dev/pts/3) or pyserial "
                             "URL (loop://, socket://host:port); short for --link serial:PORT")

@@ -40,14 +40,13 @@ Defaults and their reasoning (the paper gives the structure, not SI values):
   readout: 2); the geometric is the one that stays a faithful model at the paper's forces:
   1E-F, which only the dynamics change, fails on the linear dynamics with either readout,
   and there the mesh moves 4-5 rest lengths, far outside the small displacements its
-  stiffness matrix assumes (REPORT.md, "Regime"). Budget: the geometric mechanics costs
-  ~20-26 ns per spring and step (RK4, spring by spring, the springs between fixed masses
-  skipped: 6.8, 15.3, 27.8 and 48.2 µs per 0.1 ms step at 6x6, 8x8, 10x10 and 12x12, one
-  core, this process's CPU time at load ~10), the linear one 4-7 ns; with the neurons
-  (~3 ns per channel) the geometric skin takes about a third of a core at 10x10, so the
-  board keeps real time there with room for its encoder and link, and above it the linear
-  mechanics (exact, then leapfrog) carries the board beyond a whole hand's 17,000 sensors on
-  one core (34x34, 17,866, at 1.4x real time; ``benchmarks/bench_size.py``, README).
+  stiffness matrix assumes (REPORT.md, "Regime"). Budget: the geometric mechanics costs a
+  few times the linear one per spring and step (RK4, spring by spring, the springs between
+  fixed masses skipped); with the neurons
+  the geometric skin takes about a third of a core at 10x10, so the board keeps real time
+  there with room for its encoder and link, and above it the linear mechanics (exact, then
+  leapfrog) carries the board beyond a whole hand's 17,000 sensors on one core
+  (``benchmarks/bench_size.py``; the figures on the docs' Benchmarks page).
   ``"linear"`` and ``"geometric"`` force one; the geometric one refuses steps above its
   stability limit (~0.14 ms at the defaults).
 - ``readout = "length"``: every spring reports ``k·(|L0·e + q_j − q_i| − L0)``, its length
