@@ -4,8 +4,9 @@
  *
  * It reads the serial packet stream (§2-§4, §9) from a tty or from UDP datagrams (§10),
  * checks every CRC and sequence number, decodes every packet type, keeps the counters of
- * §6-§7, reads the SESSION record (§3.7: channel count, stimulus table) and stops at the
- * RUN_END record. It answers with DECISIONs (§3.5.1): a 5 ms bin holding more than
+ * §6-§7, reads the SESSION record (§3.7: channel count, stimulus table; the SUITE and TASK
+ * records that announce the suite case and its tasks' terms are checked and, with --stdin,
+ * printed) and stops at the RUN_END record. It answers with DECISIONs (§3.5.1): a 5 ms bin holding more than
  * 3 x baseline + 5 events is an onset; each channel's events in the next 30 ms, scaled to
  * unit length, are compared with the average of earlier stimuli of each id (the nearest
  * wins); a ground-truth MARKER up to 50 ms before the onset then teaches that id (the rule
@@ -47,7 +48,7 @@
 #define MAX_TIME_US (1ULL << 62)     /* §6 rule 5 */
 
 enum { T_EVENTS, T_SYNC, T_STATUS, T_MARKER, T_COMMAND, T_ACK, T_WIDE, T_SESSION };
-enum { K_SESSION, K_STIMULUS, K_RUN_END };          /* §3.7: type 7 kinds */
+enum { K_SESSION, K_STIMULUS, K_RUN_END, K_SUITE, K_TASK };  /* §3.7: type 7 kinds */
 static const int BODY_LEN[8] = {-1, 11, 60, 13, 9, 6, -1, -1};
 
 /* §7: the counters a decoder keeps */
@@ -132,7 +133,19 @@ static int session_ok(const unsigned char *d, int m) {
     }
     if (kind == K_STIMULUS) return m >= 8 && d[6] >= 1 && d[6] <= 64 && m == 7 + d[6];
     if (kind == K_RUN_END) return m == 9 && d[8] <= 3;
-    return 0;                                   /* kinds 3..31 reserved: malformed */
+    if (kind == K_SUITE) {                      /* §3.7: version, n_tasks, n, m, names */
+        if (m < 7 || d[5] > 32 || d[6] > 32 || (d[5] == 0) != (d[6] == 0)) return 0;
+        if (d[5] == 0 && le(d + 2, 2) != 0) return 0;
+        return m == 7 + d[5] + d[6];
+    }
+    if (kind == K_TASK) {                       /* §3.7: task, k, tolerance, u, unit, classes */
+        if (m < 9 || d[2] > 15 || d[3] > 24 || d[8] > 8 || m != 9 + d[8] + 4 * d[3]) return 0;
+        if (le(d + 4, 4) >= 0x7F800000u) return 0;         /* tolerance finite and >= 0 */
+        for (int c = 9 + d[8]; c < m; c += 4)
+            if (((uint32_t)le(d + c, 4) & 0x7FFFFFFFu) > 0x7F800000u) return 0;  /* NaN */
+        return 1;
+    }
+    return 0;                                   /* kinds 5..31 reserved: malformed */
 }
 
 static long check_body(const unsigned char *d, int m) {
@@ -199,9 +212,32 @@ static void dut_event(long long t_us, unsigned addr);
 static void dut_marker(long long t_us, unsigned sid, int phase);
 static void dut_session(unsigned n_channels, unsigned n_stimuli);
 
-static void print_float(float f) {
-    if (isinf(f)) printf("\"%sinf\"", f < 0 ? "-" : "");
-    else printf("%.9g", (double)f);
+static void print_float(float f) {             /* the shortest decimal that reads back as f */
+    char buf[32];
+    if (isinf(f)) { printf("\"%sinf\"", f < 0 ? "-" : ""); return; }
+    for (int p = 1; p <= 9; p++) {
+        snprintf(buf, sizeof buf, "%.*g", p, (double)f);
+        if (strtof(buf, NULL) == f) break;
+    }
+    printf("%s", buf);
+}
+
+static float float_at(const unsigned char *p) {   /* an IEEE-754 binary32, little-endian */
+    float f;
+    uint32_t bits = (uint32_t)le(p, 4);
+    memcpy(&f, &bits, 4);
+    return f;
+}
+
+static void print_text(const unsigned char *p, int n) {   /* UTF-8 bytes as a JSON string */
+    putchar('"');
+    for (int i = 0; i < n; i++) {
+        unsigned char ch = p[i];
+        if (ch == '"' || ch == '\\') printf("\\%c", ch);
+        else if (ch < 0x20) printf("\\u%04x", ch);
+        else putchar(ch);
+    }
+    putchar('"');
 }
 
 static void emit_event(decoder_t *D, long long t, unsigned a) {
@@ -297,22 +333,41 @@ static void take_record(decoder_t *D, const unsigned char *d, int m) {
                    p[26], (unsigned)le(p + 11, 2), (unsigned)le(p + 14, 4));
             print_float(snr);
             printf(",\"response_window_us\":%u,\"n_stimuli\":%u,\"table_digest\":%u,"
-                   "\"tasks\":%u,\"blind\":%d}}\n", (unsigned)le(p + 28, 4), D->n_stimuli,
-                   D->table_digest, (unsigned)le(p + 32, 2), (p[27] >> 1) & 1);
+                   "\"tasks\":%u,\"blind\":%d,\"held_object\":%d}}\n",
+                   (unsigned)le(p + 28, 4), D->n_stimuli, D->table_digest,
+                   (unsigned)le(p + 32, 2), (p[27] >> 1) & 1, (p[27] >> 2) & 1);
         } else {
             dut_session(D->n_channels, D->n_stimuli);
         }
     } else if (low == K_STIMULUS) {
         if (json_out) {
-            printf("{\"record\":{\"type\":\"STIMULUS\",\"stimulus_id\":%u,\"name\":\"",
+            printf("{\"record\":{\"type\":\"STIMULUS\",\"stimulus_id\":%u,\"name\":",
                    (unsigned)le(p, 4));
-            for (int i = 0; i < p[4]; i++) {     /* JSON-escape the UTF-8 name */
-                unsigned char ch = p[5 + i];
-                if (ch == '"' || ch == '\\') printf("\\%c", ch);
-                else if (ch < 0x20) printf("\\u%04x", ch);
-                else putchar(ch);
+            print_text(p + 5, p[4]);
+            printf("}}\n");
+        }
+    } else if (low == K_SUITE) {
+        if (json_out) {
+            printf("{\"record\":{\"type\":\"SUITE\",\"name\":");
+            print_text(p + 5, p[3]);
+            printf(",\"version\":%u,\"case\":", (unsigned)le(p, 2));
+            print_text(p + 5 + p[3], p[4]);
+            printf(",\"n_tasks\":%u}}\n", p[2]);
+        }
+    } else if (low == K_TASK) {
+        if (json_out) {
+            float tol = float_at(p + 2);
+            printf("{\"record\":{\"type\":\"TASK\",\"task\":%u,\"tolerance\":", p[0]);
+            if (tol == 0) printf("null");
+            else print_float(tol);
+            printf(",\"unit\":");
+            print_text(p + 7, p[6]);
+            printf(",\"classes\":[");
+            for (int i = 0; i < p[1]; i++) {
+                if (i) putchar(',');
+                print_float(float_at(p + 7 + p[6] + 4 * i));
             }
-            printf("\"}}\n");
+            printf("]}}\n");
         }
     } else {                                     /* K_RUN_END */
         D->run_ended = 1;

@@ -116,7 +116,9 @@ class Board:
         self.world = StimulusWorld(self.timeline, model, self.touch)
         self.model = model_for(self.sensor, self.timeline, self.touch, self.truth,
                                config.threads)
-        self.status_reporter = StatusReporter(model, self.timeline, scoring.posed_tasks)
+        self.status_reporter = StatusReporter(
+            model, self.timeline, scoring.posed_tasks,
+            held_object=self.plant is not None and self.touch is not None)
         self.link_keeper = LinkKeeper(open_link, model.n_springs,
                                       on_link or (lambda msg: log.warning("%s", msg)))
         held = ([HeldObjectStage(self.plant, self.touch, self.truth)]

@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 from numbers import Integral, Real
 from typing import Any, ClassVar
 
+import protocols
+from protocols.session_layout import MAX_SUITE_NAME_BYTES
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import PAPER_SIZE, MeshSize
 from skinhil.model.neurons import MAX_SNR_DB, MIN_SNR_DB, NoiseParams, check_threads
@@ -18,11 +20,17 @@ from skinhil.validation import (
     InstanceOf,
     Interval,
     Options,
+    Predicate,
     StrOptions,
     non_negative,
     positive,
     validate_params,
 )
+
+_WIRE_NAME = Predicate(
+    lambda v: isinstance(v, str) and len(v.encode("utf-8")) <= MAX_SUITE_NAME_BYTES,
+    f"a text of at most {MAX_SUITE_NAME_BYTES} UTF-8 bytes")
+"""A suite's or a case's name as the SUITE record carries it (SPEC.md §3.7)."""
 
 REALTIME_SPIN_S = 3e-4
 """Spin before each tick under ``serve --realtime`` (s): a wake-up from sleep delayed by the
@@ -89,6 +97,17 @@ class BoardConfig:
     tasks: tuple[str, ...] | None = None
     """The contact tasks the board poses, by name (a suite case's: only those whose value
     varies in it); None: every task the scene's trials allow."""
+    suite_name: str = ""
+    """The suite whose case the board plays, announced in its SUITE record (SPEC.md §3.7; a
+    name of at most 32 UTF-8 bytes, e.g. ``tactile``); empty: no suite. The command line
+    hands it over: the board never knows suites."""
+    suite_version: int = 0
+    """The suite's version (0..65535; 0 without a suite)."""
+    suite_case: str = ""
+    """The case of the suite the board plays (e.g. ``force``); empty exactly without a suite."""
+    task_terms: tuple[protocols.TaskEntry, ...] = ()
+    """The terms of each task the case poses (tolerance with its unit, classes), announced
+    as TASK records after the SUITE (at most 255)."""
     markers: bool = True
     """Send the ground-truth MARKERs on the link. False: the **blind link** (SPEC.md §3.4):
     no byte of truth reaches the decoder; the markers go to :attr:`Board.truth_markers`
@@ -120,6 +139,13 @@ class BoardConfig:
         "reconnect_period_s": positive("s"),
         "drain_timeout_s": non_negative("s"),
         "response_window_s": positive("s", "the response window (--response-window), e.g. 0.5"),
+        "suite_name": _WIRE_NAME,
+        "suite_version": Interval(Integral, 0, 0xFFFF, closed="both"),
+        "suite_case": _WIRE_NAME,
+        "task_terms": Predicate(
+            lambda v: isinstance(v, tuple) and len(v) <= 0xFF
+            and all(isinstance(t, protocols.TaskEntry) for t in v),
+            "a tuple of at most 255 protocols.TaskEntry"),
     }
 
     def check(self) -> BoardConfig:
@@ -136,6 +162,11 @@ class BoardConfig:
         if not self.spin_s < self.tick_s:
             raise ConfigError(f"spin {self.spin_s!r} s must lie in [0, tick {self.tick_s!r} s)")
         check_threads(self.threads)
+        if (not self.suite_name) != (not self.suite_case) or (
+                not self.suite_name and (self.suite_version or self.task_terms)):
+            raise ConfigError(f"board: suite {self.suite_name!r} case {self.suite_case!r} "
+                              f"version {self.suite_version}: give a suite name, case and "
+                              "version (and the tasks' terms), or none of them")
         return self
 
 

@@ -120,14 +120,15 @@ class BoardLink:
 
     def queue_record(self, record: Any) -> None:
         """Encode and queue a Status, Marker, Ack or session record (Session,
-        StimulusEntry, RunEnd)."""
+        StimulusEntry, SuiteEntry, TaskEntry, RunEnd)."""
         if isinstance(record, protocols.Status):
             self._queue(self.encoder.status(record))
         elif isinstance(record, protocols.Marker):
             self._queue(self.encoder.marker(record))
         elif isinstance(record, protocols.Ack):
             self._queue(self.encoder.ack(record))
-        elif isinstance(record, (protocols.Session, protocols.StimulusEntry, protocols.RunEnd)):
+        elif isinstance(record, (protocols.Session, protocols.StimulusEntry,
+                                 protocols.SuiteEntry, protocols.TaskEntry, protocols.RunEnd)):
             self._queue(self.encoder.session_record(record))
         else:
             raise TypeError(f"cannot send a {type(record).__name__}")

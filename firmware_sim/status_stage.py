@@ -1,6 +1,6 @@
 """The board's status and session: a STATUS record every ``status_period_s`` (the
-heartbeat, which waits while the link is saturated), the SESSION record and the stimulus
-table (SPEC.md §3.7), and the queries that ask for them."""
+heartbeat, which waits while the link is saturated), the SESSION record, the stimulus table,
+the SUITE and its TASK records (SPEC.md §3.7), and the queries that ask for them."""
 
 from __future__ import annotations
 
@@ -18,13 +18,17 @@ from skinhil.model.timeline import Timeline
 
 class StatusReporter(Participant):
     """STATUS and SESSION records of a board whose skin is ``model``, whose stimuli are
-    ``timeline``'s and whose posed tasks ``posed_tasks()`` says."""
+    ``timeline``'s, whose posed tasks ``posed_tasks()`` says and which holds an object
+    (``held_object``) or not. The suite case and its tasks' terms it announces are the
+    board's configuration's (``suite_name``, ``suite_version``, ``suite_case``,
+    ``task_terms``)."""
 
     def __init__(self, model: SkinModel, timeline: Timeline,
-                 posed_tasks: Callable[[], int]) -> None:
+                 posed_tasks: Callable[[], int], held_object: bool = False) -> None:
         self.skin = model
         self.timeline = timeline
         self.posed_tasks = posed_tasks
+        self.held_object = held_object
         self._next_status_us = 0
         self._link: BoardLink | None = None
         """The link the heartbeat was timed on: a new link has its first STATUS at once."""
@@ -79,12 +83,20 @@ class StatusReporter(Participant):
             snr_db=ctx.snr_db,
             response_window_us=int(round(cfg.response_window_s * 1e6)),
             n_stimuli=len(table), table_digest=protocols.table_digest(table),
-            tasks=self.posed_tasks(), blind=not cfg.markers)
+            tasks=self.posed_tasks(), blind=not cfg.markers, held_object=self.held_object)
+
+    def suite_records(self, ctx: TickContext) -> list[Any]:
+        """The SUITE record (no suite: empty names) and the TASK records of the terms it
+        announces (:class:`protocols.SuiteEntry`, :class:`protocols.TaskEntry`)."""
+        cfg = ctx.config
+        return [protocols.SuiteEntry(cfg.suite_name, cfg.suite_version, cfg.suite_case,
+                                     len(cfg.task_terms)), *cfg.task_terms]
 
     def queue_session(self, ctx: TickContext, reason: Any) -> None:
-        """Queue a SESSION record and the stimulus table's STIMULUS records (SPEC.md §3.7)."""
+        """Queue a SESSION record, the stimulus table's STIMULUS records, the SUITE and its
+        TASK records (SPEC.md §3.7)."""
         ctx.queue_record(self.session(ctx, reason))
-        for entry in self.stimulus_table():
+        for entry in (*self.stimulus_table(), *self.suite_records(ctx)):
             ctx.queue_record(entry)
 
     def commands(self) -> dict[int, CommandHandler]:

@@ -4,8 +4,9 @@
 - CAN and CAN FD: :class:`CanEncoder` / :class:`CanDecoder` over :class:`CanFrame`.
 - Records: :class:`Status`, :class:`Marker`, :class:`Command`, :class:`Decision` and
   :class:`Answer` (the decoder under test's answers to a task), :class:`Ack`; the session
-  records :class:`Session`, :class:`StimulusEntry` (one row of the stimulus table) and
-  :class:`RunEnd`.
+  records :class:`Session`, :class:`StimulusEntry` (one row of the stimulus table),
+  :class:`SuiteEntry` and :class:`TaskEntry` (the suite case and the terms of each task it
+  poses) and :class:`RunEnd`.
 - Wire time: :func:`serial_seconds`, :func:`can_frame_seconds`.
 
 The normative layout is ``protocols/SPEC.md``; the CAN databases are ``protocols/skinhil.dbc``
@@ -41,9 +42,12 @@ from protocols.records import (
     RunEndReason,
     Session,
     SessionReason,
+    SessionRecord,
     Status,
     StimulusEntry,
+    SuiteEntry,
     Task,
+    TaskEntry,
 )
 from protocols.serial_codec import MAX_PACKET_BYTES, SerialDecoder, SerialEncoder
 from protocols.session_layout import table_digest
@@ -64,7 +68,8 @@ must output."""
 __all__ = [
     "CONFORMANCE_PATH", "DBC_FD_PATH", "DBC_PATH", "N_CHANNELS", "SPEC_PATH", "Ack",
     "CanDecoder", "CanEncoder", "CanFrame", "RunEnd", "RunEndReason", "Session",
-    "SessionReason", "StimulusEntry", "table_digest",
+    "SessionReason", "SessionRecord", "StimulusEntry", "SuiteEntry", "TaskEntry",
+    "table_digest",
     "Command", "CommandCode", "DecodeResult", "Decision", "LinkCounters", "Marker", "MarkerPhase",
     "MAX_PACKET_BYTES", "NackReason", "Record", "SerialDecoder", "SerialEncoder", "Status",
     "ANSWER_LAYOUTS", "ANSWER_SCALE", "ANSWER_UNITS", "Answer", "AnswerLayout", "Task",

@@ -45,10 +45,8 @@ from protocols.records import (
     MarkerPhase,
     NackReason,
     Record,
-    RunEnd,
-    Session,
+    SessionRecord,
     Status,
-    StimulusEntry,
 )
 from protocols.session_layout import CLASS_OF_KIND, Reassembly, chunks, payload_of
 from protocols.status_layout import (
@@ -241,7 +239,7 @@ class CanEncoder:
         data = _COMMAND.pack(seq, opcode, token, arg)
         return [CanFrame(self._ids[k.CLS_COMMAND], data, self.fd)]
 
-    def session_record(self, record: Session | StimulusEntry | RunEnd) -> list[CanFrame]:
+    def session_record(self, record: SessionRecord) -> list[CanFrame]:
         """The frames of a session record (SPEC.md §5.8): its payload in chunks, one per
         frame with consecutive sequence numbers (classic: chunk index in byte 0 bits 7..4)."""
         kind, payload = payload_of(record)

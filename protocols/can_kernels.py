@@ -47,9 +47,9 @@ from protocols.versions import MAX_CHANNELS
 CLS_COMMAND, CLS_ACK, CLS_SYNC, CLS_STATUS, CLS_MARKER, CLS_EVENTS, CLS_WIDE = range(1, 8)
 """Frame classes: the 11-bit ID is ``class << 4 | board_id``. CLS_WIDE (wide events) belongs
 to a board only once it announced version 4 (a version-4 SYNC)."""
-CLS_SESSION, CLS_STIMULUS, CLS_RUN_END = 8, 9, 10
+CLS_SESSION, CLS_STIMULUS, CLS_RUN_END, CLS_SUITE, CLS_TASK = 8, 9, 10, 11, 12
 """Session-record classes (SPEC.md §5.8): each record's payload in chunks, one per frame;
-classes 11..15 are reserved for future records (foreign frames here)."""
+classes 13..15 are reserved for future records (foreign frames here)."""
 MAX_CHUNKS = 16
 """Most frames of one session record (the classic chunk index has 4 bits)."""
 

@@ -31,6 +31,6 @@ DEFAULT_SYNC_US = 50_000
 BITMAP_BYTES = 43
 """Bytes of a per-step channel bitmap (338 bits, LSB first, 6 zero padding bits)."""
 
-MAX_CAN_CLASS = 10
+MAX_CAN_CLASS = 12
 """Highest CAN frame class a board sends or reads (ID = class << 4 | board id, SPEC.md §5.1):
-1..7 the stream, 8..10 the session records; 11..15 are reserved for future records."""
+1..7 the stream, 8..12 the session records; 13..15 are reserved for future records."""

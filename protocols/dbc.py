@@ -32,11 +32,19 @@ from protocols.records import (
 )
 from protocols.session_layout import (
     CLASSIC_CHUNK,
+    FD_CHUNK,
     FD_FRAME_BYTES,
+    MAX_CLASSES,
     MAX_NAME_BYTES,
+    MAX_SUITE_NAME_BYTES,
+    MAX_UNIT_BYTES,
     RUN_END_FIELDS,
     SESSION_FIELDS,
     STIMULUS_HEAD,
+    SUITE_FIELDS,
+    SUITE_HEAD,
+    TASK_FIELDS,
+    TASK_HEAD,
 )
 from protocols.status_layout import CLASSIC_STATUS_MUX, STATUS_WORDS
 
@@ -126,17 +134,34 @@ def _payload_signals(fields: tuple[tuple[str, int, int], ...], fd: bool,
     chunk bytes); classic in the chunk (mux value) holding each field, from bit 8."""
     out = []
     for name, off, n in fields:
-        choices = reasons if name == "Reason" else ()
+        choices = reasons if name in ("Reason", "Task") else ()
         start = 16 + 8 * off if fd else 8 + 8 * (off % CLASSIC_CHUNK)
         out.append(Signal(name, start, 8 * n, mux="m0" if fd else f"m{off // CLASSIC_CHUNK}",
-                          choices=choices, float32=name == "SnrDb"))
+                          choices=choices, float32=name in ("SnrDb", "Tolerance")))
+    return out
+
+
+def _tail_bytes(name: str, head: int, longest: int, fd: bool) -> list[Signal]:
+    """Raw bytes (``name``0 in chunk 0, ``name`` in the chunks after) of a session record's
+    variable part after its ``head`` fixed bytes, for payloads up to ``longest`` bytes: a DBC
+    has no string or array signals."""
+    size = FD_CHUNK if fd else CLASSIC_CHUNK
+    last = -(-longest // size) - 1
+    first_bits = min((size - head) * 8, 64)
+    out = []
+    if first_bits > 0:
+        out.append(Signal(f"{name}0", 16 + 8 * head if fd else 8 + 8 * head, first_bits,
+                          mux="m0"))
+    out.append(Signal(name, 16 if fd else 8, 64 if fd else 8 * CLASSIC_CHUNK, mux="m1",
+                      mux_range=(1, last)))
     return out
 
 
 def _session_messages(fd: bool, seq: Signal) -> tuple[Message, ...]:
-    """SKIN_SESSION, SKIN_STIMULUS and SKIN_RUN_END (SPEC.md §5.8): a session record's
-    payload in chunks, multiplexed by ``Chunk`` (classic byte 0 bits 7..4, FD byte 1). A
-    name's bytes are shown raw (``NameBytes``): a DBC has no string signals."""
+    """SKIN_SESSION, SKIN_STIMULUS, SKIN_RUN_END, SKIN_SUITE and SKIN_TASK (SPEC.md §5.8): a
+    session record's payload in chunks, multiplexed by ``Chunk`` (classic byte 0 bits 7..4,
+    FD byte 1). A name's bytes are shown raw (``NameBytes``), and a TASK's unit and classes
+    (``TailBytes``): a DBC has no string or array signals."""
     length = FD_FRAME_BYTES if fd else 8
     chunk = Signal("Chunk", 8, 8, mux="M") if fd else Signal("Chunk", 4, 4, mux="M")
     session = Message(k.CLS_SESSION, "SKIN_SESSION", length, BOARD, (
@@ -144,16 +169,18 @@ def _session_messages(fd: bool, seq: Signal) -> tuple[Message, ...]:
     run_end = Message(k.CLS_RUN_END, "SKIN_RUN_END", length, BOARD, (
         seq, chunk, *_payload_signals(RUN_END_FIELDS, fd, _enum_choices(RunEndReason))))
     head = _payload_signals((("StimulusId", 0, 4), ("NameLength", 4, 1)), fd, ())
-
-    last = -(-(STIMULUS_HEAD + MAX_NAME_BYTES) // (62 if fd else CLASSIC_CHUNK)) - 1
-    first_bits = (62 - STIMULUS_HEAD) * 8 if fd else (CLASSIC_CHUNK - STIMULUS_HEAD) * 8
-    names = [Signal("NameBytes0", 16 + 8 * STIMULUS_HEAD if fd else 8 + 8 * STIMULUS_HEAD,
-                    min(first_bits, 64), mux="m0"),
-             Signal("NameBytes", 16 if fd else 8, 64 if fd else 8 * CLASSIC_CHUNK, mux="m1",
-                    mux_range=(1, last))]
     stimulus = Message(k.CLS_STIMULUS, "SKIN_STIMULUS", length, BOARD, (
-        seq, chunk, *head, *names))
-    return session, stimulus, run_end
+        seq, chunk, *head,
+        *_tail_bytes("NameBytes", STIMULUS_HEAD, STIMULUS_HEAD + MAX_NAME_BYTES, fd)))
+    suite = Message(k.CLS_SUITE, "SKIN_SUITE", length, BOARD, (
+        seq, chunk, *_payload_signals(SUITE_FIELDS, fd, ()),
+        *_tail_bytes("NameBytes", SUITE_HEAD, SUITE_HEAD + 2 * MAX_SUITE_NAME_BYTES, fd)))
+    task = Message(k.CLS_TASK, "SKIN_TASK", length, BOARD, (
+        seq, chunk, *_payload_signals(TASK_FIELDS, fd, tuple(
+            (t, ANSWER_LAYOUTS[t].name.upper()) for t in sorted(ANSWER_LAYOUTS))),
+        *_tail_bytes("TailBytes", TASK_HEAD, TASK_HEAD + MAX_UNIT_BYTES + 4 * MAX_CLASSES,
+                     fd)))
+    return session, stimulus, run_end, suite, task
 
 
 def messages(fd: bool) -> tuple[Message, ...]:

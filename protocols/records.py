@@ -129,6 +129,8 @@ class Session:
     table_digest: int
     tasks: int = 0
     blind: bool = False
+    held_object: bool = False
+    """The board holds an object that GRIP commands act on (flags bit 2, §3.5.6)."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -138,6 +140,32 @@ class StimulusEntry:
 
     stimulus_id: int
     name: str
+
+
+@dataclasses.dataclass(frozen=True)
+class SuiteEntry:
+    """The suite case the board plays (SPEC.md §3.7): the suite's ``name`` and ``version``
+    and the ``case`` (all empty / 0: the board plays no suite), and ``n_tasks``, the
+    :class:`TaskEntry` records that follow it (UTF-8 names of 0..32 bytes)."""
+
+    name: str = ""
+    version: int = 0
+    case: str = ""
+    n_tasks: int = 0
+
+
+@dataclasses.dataclass(frozen=True)
+class TaskEntry:
+    """A task the board poses and its terms (SPEC.md §3.7): the ``task`` (its ANSWER id),
+    the ``tolerance`` of a right answer in ``unit`` (None: the task has none, a class or an
+    event is right or wrong as a whole), the ``unit`` (an SI symbol, 0..8 UTF-8 bytes) and
+    the ``classes`` a class task's answers choose from, in ``unit`` (binary32 on the wire,
+    at most 24)."""
+
+    task: Task | int
+    tolerance: float | None = None
+    unit: str = ""
+    classes: tuple[float, ...] = ()
 
 
 @dataclasses.dataclass(frozen=True)
@@ -286,8 +314,11 @@ class Answer:
         return CommandCode.ANSWER
 
 
+SessionRecord = Session | StimulusEntry | SuiteEntry | TaskEntry | RunEnd
+"""A session record (serial type 7, CAN classes 8..12: SPEC.md §3.7)."""
+
 Record = (Status | Marker | Command | Decision | Answer | Ack | Session | StimulusEntry
-          | RunEnd)
+          | SuiteEntry | TaskEntry | RunEnd)
 """Any non-event record a decoder returns."""
 
 COMMAND_KEY_DTYPE = np.dtype([("token", "<u2"), ("opcode", "u1")])

@@ -41,10 +41,8 @@ from protocols.records import (
     MarkerPhase,
     NackReason,
     Record,
-    RunEnd,
-    Session,
+    SessionRecord,
     Status,
-    StimulusEntry,
 )
 from protocols.session_layout import parse, payload_of
 from protocols.status_layout import STATUS_WORDS, WORD_WIDTHS, status_from_words, status_words
@@ -168,7 +166,7 @@ class SerialEncoder:
         body = _COMMAND.pack(k.T_COMMAND << 5, 0, token, opcode, arg)
         return self._packet(body)
 
-    def session_record(self, record: Session | StimulusEntry | RunEnd) -> bytes:
+    def session_record(self, record: SessionRecord) -> bytes:
         """A session-record packet (type 7, SPEC.md §3.7): the session, one row of the
         stimulus table, or the end of the run."""
         kind, payload = payload_of(record)

@@ -28,8 +28,8 @@ T_EVENTS, T_SYNC, T_STATUS, T_MARKER, T_COMMAND, T_ACK, T_WIDE, T_SESSION = rang
 """Packet types (high three bits of byte 0); T_WIDE carries wide (version 4) events;
 T_SESSION the session records (SPEC.md §3.7), their kind in byte 0 bits 4..0."""
 
-K_SESSION, K_STIMULUS, K_RUN_END = 0, 1, 2
-"""Kinds of a T_SESSION packet (byte 0 bits 4..0); 3..31 are reserved (malformed here)."""
+K_SESSION, K_STIMULUS, K_RUN_END, K_SUITE, K_TASK = 0, 1, 2, 3, 4
+"""Kinds of a T_SESSION packet (byte 0 bits 4..0); 5..31 are reserved (malformed here)."""
 SESSION_BODY = 2 + 39
 """Body length of a SESSION packet (header and the 39-byte payload)."""
 RUN_END_BODY = 2 + 7
@@ -38,6 +38,8 @@ MAX_NAME_BYTES = 64
 """Longest stimulus name of a STIMULUS packet (bytes)."""
 MAX_RUN_END_REASON = 3
 """Largest RUN_END reason (0 DURATION, 1 STOP, 2 SIGNAL, 3 ERROR)."""
+MAX_SUITE_NAME_BYTES, MAX_UNIT_BYTES, MAX_CLASSES, MAX_TASK_ID = 32, 8, 24, 15
+"""Longest suite / case name and unit (bytes), most classes of a TASK packet, largest task."""
 
 WIDE_ITEM_BYTES = 3
 """A wide event word: 24 bits, little-endian: bits 3..0 delta, bits 23..4 address."""
@@ -352,6 +354,21 @@ def session_ok(dec: np.ndarray, m: int) -> bool:
         return m >= 8 and 1 <= dec[6] <= MAX_NAME_BYTES and m == 7 + dec[6]
     if kind == K_RUN_END:
         return m == RUN_END_BODY and dec[8] <= MAX_RUN_END_REASON
+    if kind == K_SUITE:  # version, task records, name length n, case length m, names
+        if m < 7 or dec[5] > MAX_SUITE_NAME_BYTES or dec[6] > MAX_SUITE_NAME_BYTES:
+            return False
+        if (dec[5] == 0) != (dec[6] == 0) or (dec[5] == 0 and get_le(dec, 2, 2) != 0):
+            return False
+        return m == 7 + dec[5] + dec[6]
+    if kind == K_TASK:  # task, class count k, tolerance, unit length u, unit, classes
+        if m < 9 or dec[2] > MAX_TASK_ID or dec[3] > MAX_CLASSES or dec[8] > MAX_UNIT_BYTES:
+            return False
+        if m != 9 + dec[8] + 4 * dec[3] or get_le(dec, 4, 4) >= 0x7F800000:
+            return False  # the tolerance is >= 0 and finite
+        for c in range(9 + dec[8], m, 4):
+            if (get_le(dec, c, 4) & 0x7FFFFFFF) > 0x7F800000:  # a NaN class
+                return False
+        return True
     return False
 
 

@@ -1,4 +1,5 @@
-"""The payloads of the session records (SPEC.md §3.7): SESSION, STIMULUS and RUN_END.
+"""The payloads of the session records (SPEC.md §3.7): SESSION, STIMULUS, RUN_END, SUITE and
+TASK.
 
 Each record is one payload ``P`` of bytes, the same on every link: a serial packet of type 7
 carries ``P`` after its two header bytes (its kind in byte 0 bits 4..0); on CAN (classes 8,
@@ -14,6 +15,8 @@ import struct
 import zlib
 from collections.abc import Iterable
 
+import numpy as np
+
 from protocols.constants import KNOWN_VERSIONS
 from protocols.errors import ProtocolError
 from protocols.record_fields import check_uint, enum_or_int
@@ -22,20 +25,26 @@ from protocols.records import (
     RunEndReason,
     Session,
     SessionReason,
+    SessionRecord,
     StimulusEntry,
+    SuiteEntry,
+    Task,
+    TaskEntry,
 )
 
-KIND_SESSION, KIND_STIMULUS, KIND_RUN_END = 0, 1, 2
-"""Serial type-7 kinds (byte 0 bits 4..0); kinds 3..31 are reserved for future records."""
+KIND_SESSION, KIND_STIMULUS, KIND_RUN_END, KIND_SUITE, KIND_TASK = 0, 1, 2, 3, 4
+"""Serial type-7 kinds (byte 0 bits 4..0); kinds 5..31 are reserved for future records."""
 
-CLASS_OF_KIND = {KIND_SESSION: 8, KIND_STIMULUS: 9, KIND_RUN_END: 10}
-"""CAN frame class of each kind (ID = class << 4 | board id); classes 11..15 are reserved."""
+CLASS_OF_KIND = {KIND_SESSION: 8, KIND_STIMULUS: 9, KIND_RUN_END: 10, KIND_SUITE: 11,
+                 KIND_TASK: 12}
+"""CAN frame class of each kind (ID = class << 4 | board id); classes 13..15 are reserved."""
 
 SESSION_FIELDS: tuple[tuple[str, int, int], ...] = (
     ("TimeUs", 0, 6), ("Version", 6, 1), ("NChannels", 7, 4), ("StepUs", 11, 2),
     ("BoardId", 13, 1), ("TickUs", 14, 4), ("NStimuli", 18, 2), ("Reason", 20, 1),
     ("SnrDb", 21, 4), ("Rows", 25, 1), ("Cols", 26, 1), ("Flags", 27, 1),
     ("ResponseWindowUs", 28, 4), ("Tasks", 32, 2), ("TableDigest", 35, 4))
+
 """(DBC signal name, payload offset, bytes) of every SESSION field (byte 34 reserved); the
 layout :data:`_SESSION` packs."""
 RUN_END_FIELDS: tuple[tuple[str, int, int], ...] = (("TimeUs", 0, 6), ("Reason", 6, 1))
@@ -54,6 +63,24 @@ CLASSIC_CHUNK, FD_CHUNK = 7, 62
 """Payload bytes per classic frame (after byte 0) and per CAN FD frame (after bytes 0, 1)."""
 FD_FRAME_BYTES = 64
 """Every CAN FD session-record frame is 64 bytes long."""
+SUITE_HEAD = 5
+"""A SUITE payload: version (u16), task records that follow (u8), name length n (u8), case
+length m (u8), then the n name bytes and the m case bytes."""
+SUITE_FIELDS: tuple[tuple[str, int, int], ...] = (
+    ("SuiteVersion", 0, 2), ("NTasks", 2, 1), ("NameLength", 3, 1), ("CaseLength", 4, 1))
+"""(DBC signal name, payload offset, bytes) of the SUITE's fixed fields."""
+MAX_SUITE_NAME_BYTES = 32
+"""Longest suite or case name on the wire (UTF-8 bytes)."""
+TASK_HEAD = 7
+"""A TASK payload: task id (u8), class count k (u8), tolerance (binary32), unit length u (u8),
+then the u unit bytes and k binary32 classes."""
+TASK_FIELDS: tuple[tuple[str, int, int], ...] = (
+    ("Task", 0, 1), ("NClasses", 1, 1), ("Tolerance", 2, 4), ("UnitLength", 6, 1))
+"""(DBC signal name, payload offset, bytes) of the TASK's fixed fields."""
+MAX_UNIT_BYTES = 8
+"""Longest unit symbol on the wire (UTF-8 bytes)."""
+MAX_CLASSES = 24
+"""Most classes of one TASK record (its payload then fits 16 classic CAN chunks)."""
 
 
 def session_payload(s: Session) -> bytes:
@@ -69,7 +96,7 @@ def session_payload(s: Session) -> bytes:
         check_uint(s.n_stimuli, 16, "stimulus count"),
         check_uint(int(s.reason), 8, "session reason"), float(s.snr_db),
         check_uint(s.rows, 8, "rows"), check_uint(s.cols, 8, "cols"),
-        int(bool(s.running)) | int(bool(s.blind)) << 1,
+        int(bool(s.running)) | int(bool(s.blind)) << 1 | int(bool(s.held_object)) << 2,
         check_uint(s.response_window_us, 32, "response window (µs)"),
         check_uint(s.tasks, 16, "posed tasks"), 0, check_uint(s.table_digest, 32, "table digest"))
 
@@ -89,12 +116,57 @@ def run_end_payload(r: RunEnd) -> bytes:
                          check_uint(int(r.reason), 8, "run end reason"))
 
 
-def payload_of(record: Session | StimulusEntry | RunEnd) -> tuple[int, bytes]:
+def _name_bytes(text: str, most: int, what: str) -> bytes:
+    """``text`` in UTF-8, refused if longer than ``most`` bytes."""
+    raw = text.encode("utf-8")
+    if len(raw) > most:
+        raise ProtocolError(f"{what} {text!r} is {len(raw)} UTF-8 bytes: at most {most} on "
+                            "the wire")
+    return raw
+
+
+def suite_payload(e: SuiteEntry) -> bytes:
+    """The SUITE payload of ``e`` (5 + name + case bytes)."""
+    name = _name_bytes(e.name, MAX_SUITE_NAME_BYTES, "suite name")
+    case = _name_bytes(e.case, MAX_SUITE_NAME_BYTES, "suite case")
+    if (not name) != (not case) or (not name and e.version):
+        raise ProtocolError(f"suite {e.name!r} case {e.case!r} version {e.version}: give a "
+                            "name, a case and a version, or none of them (no suite)")
+    return struct.pack("<HBBB", check_uint(e.version, 16, "suite version"),
+                       check_uint(e.n_tasks, 8, "task records"), len(name), len(case)
+                       ) + name + case
+
+
+def task_payload(e: TaskEntry) -> bytes:
+    """The TASK payload of ``e`` (7 + unit bytes + 4 per class)."""
+    tol = 0.0 if e.tolerance is None or e.tolerance == 0 else float(e.tolerance)
+    if not (math.isfinite(tol) and tol >= 0):
+        raise ProtocolError(f"task {e.task} tolerance {e.tolerance!r}: give a finite value "
+                            ">= 0, or None for none")
+    if tol > 0 and struct.unpack("<f", struct.pack("<f", tol))[0] == 0:
+        raise ProtocolError(f"task {e.task} tolerance {tol!r} is 0 in binary32: give a larger "
+                            "one, or None for none")
+    unit = _name_bytes(e.unit, MAX_UNIT_BYTES, "task unit")
+    if len(e.classes) > MAX_CLASSES:
+        raise ProtocolError(f"task {e.task} has {len(e.classes)} classes: at most "
+                            f"{MAX_CLASSES} on the wire")
+    if any(math.isnan(float(c)) for c in e.classes):
+        raise ProtocolError(f"task {e.task} has a NaN class; give numbers")
+    return (struct.pack("<BBfB", check_uint(int(e.task), 4, "task id"), len(e.classes), tol,
+                        len(unit)) + unit
+            + struct.pack(f"<{len(e.classes)}f", *map(float, e.classes)))
+
+
+def payload_of(record: SessionRecord) -> tuple[int, bytes]:
     """(kind, payload) of a session record."""
     if isinstance(record, Session):
         return KIND_SESSION, session_payload(record)
     if isinstance(record, StimulusEntry):
         return KIND_STIMULUS, stimulus_payload(record)
+    if isinstance(record, SuiteEntry):
+        return KIND_SUITE, suite_payload(record)
+    if isinstance(record, TaskEntry):
+        return KIND_TASK, task_payload(record)
     return KIND_RUN_END, run_end_payload(record)
 
 
@@ -107,10 +179,16 @@ def payload_length(kind: int, head: bytes) -> int:
         return RUN_END_BYTES
     if kind == KIND_STIMULUS and len(head) >= STIMULUS_HEAD and 1 <= head[4] <= MAX_NAME_BYTES:
         return STIMULUS_HEAD + head[4]
+    if (kind == KIND_SUITE and len(head) >= SUITE_HEAD and head[3] <= MAX_SUITE_NAME_BYTES
+            and head[4] <= MAX_SUITE_NAME_BYTES):
+        return SUITE_HEAD + head[3] + head[4]
+    if (kind == KIND_TASK and len(head) >= TASK_HEAD and head[1] <= MAX_CLASSES
+            and head[6] <= MAX_UNIT_BYTES):
+        return TASK_HEAD + head[6] + 4 * head[1]
     return -1
 
 
-def parse(kind: int, p: bytes) -> Session | StimulusEntry | RunEnd | None:
+def parse(kind: int, p: bytes) -> SessionRecord | None:
     """The record of a payload (exactly its length), or None if its fields are invalid
     (the same checks as the serial layout check, SPEC.md §6)."""
     if payload_length(kind, p) != len(p):
@@ -122,12 +200,46 @@ def parse(kind: int, p: bytes) -> Session | StimulusEntry | RunEnd | None:
             return None
         return Session(int.from_bytes(t, "little"), enum_or_int(SessionReason, reason),
                        version, board, bool(flags & 1), n_ch, rows, cols, step, tick, snr,
-                       window, n_stim, digest, tasks, bool(flags & 2))
+                       window, n_stim, digest, tasks, bool(flags & 2), bool(flags & 4))
     if kind == KIND_STIMULUS:
         sid, _ = struct.unpack_from("<IB", p)
         return StimulusEntry(sid, p[STIMULUS_HEAD:].decode("utf-8", errors="replace"))
+    if kind == KIND_SUITE:
+        return _parse_suite(p)
+    if kind == KIND_TASK:
+        return _parse_task(p)
     t, reason = _RUN_END.unpack(p)
     return RunEnd(int.from_bytes(t, "little"), enum_or_int(RunEndReason, reason))
+
+
+def _parse_suite(p: bytes) -> SuiteEntry | None:
+    """The SUITE of payload ``p`` (its length checked), None if its fields are invalid."""
+    version, n_tasks, n, m = struct.unpack_from("<HBBB", p)
+    if (n == 0) != (m == 0) or (n == 0 and version):
+        return None
+    name = p[SUITE_HEAD:SUITE_HEAD + n].decode("utf-8", errors="replace")
+    case = p[SUITE_HEAD + n:].decode("utf-8", errors="replace")
+    return SuiteEntry(name, version, case, n_tasks)
+
+
+def _parse_task(p: bytes) -> TaskEntry | None:
+    """The TASK of payload ``p`` (its length checked), None if its fields are invalid."""
+    task, k, tol_bits, u = struct.unpack_from("<BBIB", p)
+    if task > 15 or tol_bits >= 0x7F800000:  # the tolerance: finite and >= 0 (no sign bit)
+        return None
+    tol = _shortest(struct.unpack("<f", struct.pack("<I", tol_bits))[0])
+    classes = struct.unpack_from(f"<{k}f", p, TASK_HEAD + u)
+    if any(math.isnan(c) for c in classes):
+        return None
+    return TaskEntry(enum_or_int(Task, task), None if tol == 0 else tol,
+                     p[TASK_HEAD:TASK_HEAD + u].decode("utf-8", errors="replace"),
+                     tuple(_shortest(c) for c in classes))
+
+
+def _shortest(value: float) -> float:
+    """The binary32 ``value`` as the shortest decimal that encodes to it again (0.05, not
+    0.0500000007)."""
+    return float(str(np.float32(value)))
 
 
 def table_digest(table: Iterable[StimulusEntry]) -> int:
@@ -169,8 +281,7 @@ class Reassembly:
         self._data = bytearray()
         self._next = 0
 
-    def add(self, kind: int, index: int, seq: int, chunk: bytes
-            ) -> Session | StimulusEntry | RunEnd | None:
+    def add(self, kind: int, index: int, seq: int, chunk: bytes) -> SessionRecord | None:
         """Take one chunk; return the record it completes, if any."""
         if index == 0:
             self._cls, self._data, self._next = kind, bytearray(), 0

@@ -26,7 +26,9 @@ from protocol_examples import (
     MARKER,
     SESSION,
     STATUS,
+    SUITE_RECORDS,
     TABLE,
+    TASK_CLASSES,
     framed,
 )
 
@@ -42,6 +44,7 @@ from protocols import (
     RunEndReason,
     SerialEncoder,
     Status,
+    SuiteEntry,
     Task,
 )
 from skinhil.events import make_events
@@ -67,7 +70,8 @@ def record_json(rec: Any) -> dict[str, Any]:
         return {"type": "DECISION", "token": rec.token, "stimulus_id": rec.stimulus_id,
                 "confidence": conf}
     names = {"Status": "STATUS", "Marker": "MARKER", "Command": "COMMAND", "Ack": "ACK",
-             "Session": "SESSION", "StimulusEntry": "STIMULUS", "RunEnd": "RUN_END"}
+             "Session": "SESSION", "StimulusEntry": "STIMULUS", "RunEnd": "RUN_END",
+             "SuiteEntry": "SUITE", "TaskEntry": "TASK"}
     out: dict[str, Any] = {"type": names[type(rec).__name__]}
     for k, v in vars(rec).items():
         if isinstance(v, bool):
@@ -76,6 +80,8 @@ def record_json(rec: Any) -> dict[str, Any]:
             v = "inf" if math.isinf(v) and v > 0 else "-inf" if math.isinf(v) else v
         elif isinstance(v, int):
             v = int(v)
+        elif isinstance(v, tuple):  # a TASK's classes: a JSON list
+            v = list(v)
         out[k] = v
     return out
 
@@ -176,6 +182,12 @@ def cases() -> list[dict[str, Any]]:
     out.append(_case(
         "session", "§3.7", "A SESSION, its two STIMULUS rows (ids 0 and 10) and a RUN_END "
         "(duration over).", sess, [], [record_json(r) for r in (SESSION, *TABLE, end)],
+        frames_ok=4))
+    suite = (*SUITE_RECORDS, TASK_CLASSES, SuiteEntry())
+    out.append(_case(
+        "suite", "§3.7", "The SUITE and TASK of a suite case (FORCE within 0.05 N), a TASK with "
+        "classes (VIBRATION: 50, 100, 200, 300 Hz) and the SUITE of a board playing no suite.",
+        b"".join(enc.session_record(r) for r in suite), [], [record_json(r) for r in suite],
         frames_ok=4))
     wide = SerialEncoder(n_channels=15_730)
     wide_ev = make_events([0, 0, 300, 900], [5, 15_000, 337, 12_810])

@@ -30,7 +30,9 @@ from protocols import (
     SessionReason,
     Status,
     StimulusEntry,
+    SuiteEntry,
     Task,
+    TaskEntry,
     table_digest,
 )
 from skinhil.events import make_events
@@ -78,6 +80,10 @@ RUN_END = RunEnd(t_us=60_000_000, reason=RunEndReason.DURATION)
 """The run ended after its 60 s."""
 SESSION_RECORDS = (SESSION, *TABLE)
 """A SESSION and the STIMULUS records that follow it."""
+SUITE_RECORDS = (SuiteEntry("tactile", 1, "force", 1), TaskEntry(Task.FORCE, 0.05, "N"))
+"""The SUITE of the case ``tactile-v1:force`` and its one TASK: FORCE within 0.05 N."""
+TASK_CLASSES = TaskEntry(Task.VIBRATION, None, "Hz", (50.0, 100.0, 200.0, 300.0))
+"""The TASK of the case ``tactile-v1:vibration``: no tolerance, 4 classes in Hz."""
 
 
 def distinct_events(t_us: object, addr: object) -> np.ndarray:
@@ -135,6 +141,8 @@ EXAMPLES: dict[str, Callable[[], str]] = {
     "serial-grip": _serial(lambda e: e.command(GRIP) + e.ack(GRIP_NACK)),
     "serial-session": _serial(lambda e: b"".join(e.session_record(r) for r in SESSION_RECORDS)),
     "serial-run-end": _serial(lambda e: e.session_record(RUN_END)),
+    "serial-suite": _serial(lambda e: b"".join(e.session_record(r) for r in SUITE_RECORDS)),
+    "serial-task-classes": _serial(lambda e: e.session_record(TASK_CLASSES)),
 }
 for _fd, _tag in ((False, "can"), (True, "canfd")):
     EXAMPLES[f"{_tag}-events"] = _can(_fd, lambda e: e.events(EVENTS, 1000))
@@ -149,5 +157,8 @@ for _fd, _tag in ((False, "can"), (True, "canfd")):
     EXAMPLES[f"{_tag}-session"] = _can(_fd, lambda e: [
         f for r in SESSION_RECORDS for f in e.session_record(r)])
     EXAMPLES[f"{_tag}-run-end"] = _can(_fd, lambda e: e.session_record(RUN_END))
+    EXAMPLES[f"{_tag}-suite"] = _can(_fd, lambda e: [
+        f for r in SUITE_RECORDS for f in e.session_record(r)])
+    EXAMPLES[f"{_tag}-task-classes"] = _can(_fd, lambda e: e.session_record(TASK_CLASSES))
     EXAMPLES[f"{_tag}-wide-events"] = (lambda fd: lambda: _frames(
         CanEncoder(board_id=1, fd=fd, n_channels=WIDE_CHANNELS).events(WIDE_EVENTS, 1000)))(_fd)

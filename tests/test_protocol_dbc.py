@@ -27,8 +27,9 @@ from skinhil.transports import CanTransport
 NAMES = {1: "SKIN_COMMAND", 2: "SKIN_ACK", 3: "SKIN_SYNC", 4: "SKIN_STATUS", 5: "SKIN_MARKER",
          6: "SKIN_EVENTS"}
 """The frames of the stream proper (and a host's); SKIN_WIDE_EVENTS is a larger skin's."""
-SESSION_NAMES = {8: "SKIN_SESSION", 9: "SKIN_STIMULUS", 10: "SKIN_RUN_END"}
-"""The session records a running board sends at its start and end (SPEC.md §5.8)."""
+SESSION_NAMES = {8: "SKIN_SESSION", 9: "SKIN_STIMULUS", 10: "SKIN_RUN_END", 11: "SKIN_SUITE"}
+"""The session records a running board sends at its start and end (SPEC.md §5.8); a board
+playing a suite case sends SKIN_TASK records too."""
 
 
 def _camel(name: str) -> str:
@@ -50,6 +51,7 @@ class DbcReader:
         self.sessions: list[dict[str, Any]] = []
         self.stimuli: list[dict[str, Any]] = []
         self.run_ends: list[dict[str, Any]] = []
+        self.suites: list[dict[str, Any]] = []
         self._mux: dict[str, Any] = {}
         self._session: dict[str, Any] = {}
 
@@ -93,6 +95,8 @@ class DbcReader:
             self.stimuli.append(d)
         elif msg.name == "SKIN_RUN_END":
             self.run_ends.append(d)
+        elif msg.name == "SKIN_SUITE":
+            self.suites.append(d)
 
 
 def _protocol_events(frames: list[Any], board_id: int, fd: bool) -> tuple[list[Any], Any]:
@@ -209,6 +213,8 @@ def test_cantools_decodes_a_live_board(board_id: int, fd: bool) -> None:
     assert protocols.table_digest(stimuli) == session.table_digest
     assert board_frames[-1].arbitration_id >> 4 == 10  # RUN_END is the last frame
     assert [d["Reason"] for d in reader.run_ends] == ["DURATION"]
+    # no suite: the SUITE record's lengths are 0 and no TASK record follows
+    assert [(d["NameLength"], d["CaseLength"], d["NTasks"]) for d in reader.suites] == [(0, 0, 0)]
     assert isinstance(res.records[-1], protocols.RunEnd)
     # one length per frame type, the DBC's
     assert {(f.arbitration_id, len(f.data)) for f in frames} == {

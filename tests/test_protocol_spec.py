@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 
 import pytest
-from protocol_examples import EXAMPLES, RUN_END, SESSION_RECORDS
+from protocol_examples import EXAMPLES, RUN_END, SESSION_RECORDS, SUITE_RECORDS, TASK_CLASSES
 
 from protocols import (
     SPEC_PATH,
@@ -38,10 +38,11 @@ def _spec_frames(text: str) -> list[CanFrame]:
 
 
 def test_session_examples_decode_to_their_records() -> None:
-    """The SPEC's SESSION, STIMULUS and RUN_END hex decodes (as written there) to the
-    records, on the serial layout and both CAN layouts."""
+    """The SPEC's SESSION, STIMULUS, RUN_END, SUITE and TASK hex decodes (as written there)
+    to the records, on the serial layout and both CAN layouts."""
     blocks = dict(BLOCK.findall(SPEC_PATH.read_text(encoding="utf-8")))
-    for records, name in ((list(SESSION_RECORDS), "session"), ([RUN_END], "run-end")):
+    for records, name in ((list(SESSION_RECORDS), "session"), ([RUN_END], "run-end"),
+                          (list(SUITE_RECORDS), "suite"), ([TASK_CLASSES], "task-classes")):
         serial = SerialDecoder()
         assert serial.feed(bytes.fromhex(blocks[f"serial-{name}"])).records == records
         assert serial.counters.frames_ok == len(records)

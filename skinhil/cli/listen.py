@@ -49,6 +49,7 @@ from skinhil.receiver import (
     ReceiverListener,
     ScoredDecision,
 )
+from skinhil.receiver.announcement import Announcement
 from skinhil.receiver.bus import MAX_UDP_SOURCES, BoardKey
 from skinhil.receiver.model_file import load_window_decoder
 from skinhil.receiver.task_answer import ANSWERERS, TaskAnswerer
@@ -157,11 +158,35 @@ class LivePrinter(ReceiverListener):
         print(f"{where}{p.detect_t_us * 1e-6:9.3f} s  {self._name(p.label):>13}{truth:>19}  "
               f"{mark:<5}{lat}{acc}", flush=True)
 
+    def on_announcement(self, announcement: Announcement) -> None:
+        info = announcement.as_dict()
+        if self.as_json:
+            print(json.dumps({"type": "session", **({} if self.board is None else {
+                "board": self.board}), **info}), flush=True)
+            return
+        where = "" if self.board is None else f"board {self.board}: "
+        print(f"skinhil listen: {where}{announced_text(info)}", file=sys.stderr, flush=True)
+
     def on_link_error(self, message: str) -> None:
         if self.as_json:
             print(json.dumps({"type": "link_error", "message": message}), flush=True)
         else:
             print(f"skinhil listen: link error: {message}", file=sys.stderr, flush=True)
+
+
+def announced_text(info: dict[str, Any]) -> str:
+    """One line of what the board announced (:meth:`Announcement.as_dict`)."""
+    suite = info["suite"]
+    parts = [f"suite {suite['id']}:{suite['case']}" if suite else "no suite"]
+    for name, t in info["tasks"].items():
+        tol = "" if t["tolerance"] is None else f" within {t['tolerance']:g} {t['unit']}"
+        classes = ("" if not t["classes"] else
+                   " of " + ", ".join(f"{c:g}" for c in t["classes"])
+                   + (f" {t['unit']}" if t["tolerance"] is None and t["unit"] else ""))
+        parts.append(f"{name}{tol}{classes}")
+    if info["held_object"]:
+        parts.append("an object held (GRIP)")
+    return "; ".join(parts)
 
 
 def _ms(value: float | None) -> float | None:
@@ -186,6 +211,7 @@ def summary(receiver: Receiver, wall_s: float) -> dict[str, Any]:
             "decision_latency_host_ms": {"p50": pct(lat_h, 50), "p99": pct(lat_h, 99)},
             "link": receiver.link_report().as_dict(),
             "socket_buffer": socket_buffer(receiver.transport),
+            "session": receiver.announcement.as_dict(),
             "run_end": None if receiver.run_end is None else {
                 "t_s": receiver.run_end.t_us * 1e-6,
                 "reason": getattr(receiver.run_end.reason, "name", receiver.run_end.reason)}}

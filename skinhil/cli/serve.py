@@ -60,7 +60,8 @@ from skinhil.recording import (
 )
 from skinhil.scoring import DecisionScoreboard, scoreboard_text, truth_lines
 from skinhil.scoring.score_file import score_record
-from skinhil.suites import suite_trials
+from skinhil.suites import case_ref, suite_trials
+from skinhil.suites.announcement import announcement
 from skinhil.world.scene import MAX_CONTACTS as MAX_LIFTS
 
 LIVE_WINDOW_TICKS = 1000
@@ -473,7 +474,8 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
         trials = suite_trials(args.suite, args.seed, args.size)
         schedule, scene, grasp = trials.scenario.schedule, trials.scenario.scene, trials.grasp
         duration_s = trials.duration_s if duration_s is None else duration_s
-        config = dataclasses.replace(config, tasks=tuple(t.name for t in trials.tasks))
+        config = dataclasses.replace(config, tasks=tuple(t.name for t in trials.tasks),
+                                     **announcement(*case_ref(args.suite))).check()
     tty = sys.stderr.isatty() and not args.quiet and not args.json
     where = describe_transport(args)
 

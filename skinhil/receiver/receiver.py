@@ -36,6 +36,7 @@ import numpy as np
 import protocols
 from skinhil.errors import SkinhilError, TransportError
 from skinhil.model.stimuli import direction_conditions
+from skinhil.receiver.announcement import Announcement
 from skinhil.receiver.clock import BoardClock
 from skinhil.receiver.decoder_adapter import WindowDecoder
 from skinhil.receiver.online import OnlineClassifier
@@ -67,6 +68,10 @@ class ReceiverListener:
     def on_session(self, session: Any) -> None:
         """The board's session record (``protocols.Session``): at its start, after a
         reconnect, on request."""
+
+    def on_announcement(self, announcement: Announcement) -> None:
+        """The board announced its suite case and the terms of each posed task (the SUITE and
+        its TASK records are in, SPEC.md §3.7)."""
 
     def on_run_end(self, run_end: Any) -> None:
         """The board's run ended (``protocols.RunEnd``: when and why); no more data follows."""
@@ -202,6 +207,9 @@ class Receiver:
         """The board's last SESSION record (``protocols.Session``), or None."""
         self.stimuli: dict[int, str] = {}
         """The board's stimulus table (id → name) from the STIMULUS records after it."""
+        self.announcement = Announcement()
+        """The suite case the board plays and each posed task's terms (its SESSION, SUITE
+        and TASK records)."""
         self.run_end: Any = None
         """The RUN_END record (``protocols.RunEnd``) once the board's run ended, else None."""
         self.run_ends = 0
@@ -246,6 +254,9 @@ class Receiver:
         elif isinstance(rec, protocols.RunEnd):
             self.run_end = rec
             self.run_ends += 1
+        if self.announcement.take(rec):
+            for listener in self.listeners:
+                listener.on_announcement(self.announcement)
         dispatch_record(rec, self.listeners)
 
     def _take_session(self, session: Any) -> None:
