@@ -29,4 +29,6 @@ def wilson_interval(k: int, n: int, z: float = Z_95) -> tuple[float, float] | No
     z2 = z * z
     centre = (p + z2 / (2 * n)) / (1 + z2 / n)
     half = z * math.sqrt(p * (1 - p) / n + z2 / (4 * n * n)) / (1 + z2 / n)
-    return max(0.0, centre - half), min(1.0, centre + half)
+    lo = 0.0 if k == 0 else max(0.0, centre - half)  # exact ends: 0 and 1 are bounds
+    hi = 1.0 if k == n else min(1.0, centre + half)
+    return lo, hi
