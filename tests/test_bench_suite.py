@@ -31,6 +31,7 @@ from skinhil.campaign.criteria import parse_criterion
 from skinhil.campaign.interval import wilson_interval
 from skinhil.campaign.report_card import build_card, counts
 from skinhil.campaign.suite_run import SuiteRun, draw_seeds
+from skinhil.cli import main
 from skinhil.decoding.classifier import DirectionDecoder
 from skinhil.decoding.model_file import save_decoder
 from skinhil.receiver.training import feature_spec
@@ -180,3 +181,35 @@ def test_wilson_interval() -> None:
     lo, hi = wilson_interval(5, 10)  # type: ignore[misc]
     assert lo < 0.5 < hi and 0.5 - lo == pytest.approx(hi - 0.5)
     assert wilson_interval(0, 0) is None
+
+
+@pytest.mark.parametrize(("args", "word"), [
+    (["--suite", "tactile-v9"], "no suite"),
+    (["--suite", SUITE, "--case", "juggling"], "no case"),
+    (["--suite", SUITE, "--seeds", "0"], "--seeds"),
+    (["--suite", SUITE, "--resume"], "--seed N"),
+    (["--suite", SUITE, "--port", "/dev/null", "--faults", "drop_p=0.1"], "--faults"),
+    ([str(REPO / "examples" / "campaigns" / "smoke.toml"), "--suite", SUITE], "not both"),
+    ([str(REPO / "examples" / "campaigns" / "smoke.toml"), "--seeds", "2"], "--suite"),
+    ([], "--suite"),
+])
+def test_a_refused_suite_run_is_one_line(args: list[str], word: str, tmp_path: Path,
+                                         capsys: pytest.CaptureFixture[str]) -> None:
+    try:  # refused by the parser (SystemExit) or by the command (its status)
+        status = main(["bench", *args, "--out", str(tmp_path / "out")])
+    except SystemExit as exc:
+        status = exc.code
+    assert status == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("skinhil: error: ") and "\n" not in err and word in err, err
+    assert not (tmp_path / "out").exists()
+
+
+def test_listen_grips_only_with_answer(tmp_path: Path, capsys: pytest.CaptureFixture[str]
+                                       ) -> None:
+    model = tmp_path / "m.npz"
+    model.write_bytes(b"")
+    assert main(["listen", "--port", "loop://", "--model", str(model), "--grip-readout",
+                 str(model)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "--grip-readout" in err and "--answer" in err, err
