@@ -4,7 +4,8 @@ Against the reference receiver (``listen --answer``) on the bench's own pty pair
 one drawn seed: the card is written as Markdown, JSON (valid against its schema) and JUnit
 XML, and the JSON's numbers are the board's score files' (the decoder's and, standing in for
 a baseline, the same run's). Against a silent decoder on a pty of the test's (``--port``),
-the case fails with the reason "the decoder sent nothing", in the card and in JUnit. A
+the case fails with the reason "the decoder sent nothing", in the card and in JUnit,
+and scores 0 of the onsets of the DECISION scoreboard. A
 campaign whose criteria are upper bounds alone fails when the decoder only pings the board
 and answers nothing.
 """
@@ -88,9 +89,10 @@ def test_the_card_of_a_case_against_the_reference_receiver(model: Path, tmp_path
     score = json.loads((Path(record["folder"]) / "score.json").read_text(encoding="utf-8"))
     entry = card["tasks"][CASE]
     own = score["tasks"][CASE]
-    assert entry["seeds"] == [{"seed": seed, "score": own["score"], "right": own["right"],
-                               "charged": counts(score, CASE)[1],
-                               "outcome": record["outcome"]}]
+    (row,) = entry["seeds"]
+    assert row == {"seed": seed, "score": row["score"], "right": own["right"],
+                   "charged": counts(score, CASE)[1], "outcome": record["outcome"]}
+    assert row["score"] == pytest.approx(own["score"], abs=1e-6)  # the score file's
     assert entry["charged"] == own["trials"] + own["answers"] - own["matched"] > 0
     assert entry["score"] == pytest.approx(own["score"], abs=1e-6)
     assert entry["interval"] == list(wilson_interval(entry["right"], entry["charged"]))
@@ -110,18 +112,23 @@ def test_the_card_of_a_case_against_the_reference_receiver(model: Path, tmp_path
 
 
 def test_a_silent_decoders_case_fails_with_its_reason(tmp_path: Path, pty_pair: Any) -> None:
+    """The classification case, whose score is the board's DECISION scoreboard (the score
+    file's top level): a silent decoder scores 0 of its onsets."""
     peer = PtyPeer(pty_pair.master)  # reads the stream, sends nothing
     out = tmp_path / "run"
     try:
-        status, _, stderr = _bench("--suite", SUITE, "--case", CASE, "--seeds", "1",
-                                   "--port", pty_pair.path, "--out", str(out), *LENIENT)
+        status, _, stderr = _bench("--suite", SUITE, "--case", "classification", "--seeds",
+                                   "1", "--port", pty_pair.path, "--out", str(out), *LENIENT)
     finally:
         peer.close()
     card = _card(out)
     (record,) = card["cases"]
     assert record["outcome"] == "failed", record
     assert record["message"] == SENT_NOTHING
-    assert card["tasks"][CASE]["right"] == 0 and card["tasks"][CASE]["score"] == 0
+    score = json.loads((Path(record["folder"]) / "score.json").read_text(encoding="utf-8"))
+    entry = card["tasks"]["classification"]
+    assert score["onsets"] > 0 and score["decisions"] == 0
+    assert (entry["right"], entry["charged"], entry["score"]) == (0, score["onsets"], 0)
     (junit_suite,) = list(JUnitXml.fromfile(str(out / "junit.xml")))
     (case,) = list(junit_suite)
     (result,) = case.result

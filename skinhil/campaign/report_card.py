@@ -29,6 +29,8 @@ FORMAT = "skinhil-report-card"
 VERSION = 1
 CARD_JSON = "report-card.json"
 CARD_MD = "report-card.md"
+CLASSIFICATION = "classification"
+"""The task DECISIONs answer: scored by the board's DECISION scoreboard."""
 GRASP = "grasp"
 """The card's key of the held object's score (the score file's ``grasp``)."""
 
@@ -43,7 +45,13 @@ def _score_file(record: Mapping[str, Any]) -> dict[str, Any] | None:
 
 def counts(score: Mapping[str, Any], task: str) -> tuple[int, int] | None:
     """(right, charged) of ``task`` (or :data:`GRASP`) in a score file; None if it has
-    none."""
+    none. :data:`CLASSIFICATION` is the DECISION scoreboard's, at the score file's top level
+    (right, and onsets + decisions - matched: charged as a task's ``score``)."""
+    if task == CLASSIFICATION and task not in (score.get("tasks") or {}):
+        if "onsets" not in score:
+            return None
+        return int(score["right"]), \
+            int(score["onsets"]) + int(score["decisions"]) - int(score["matched"])
     if task == GRASP:
         g = score.get("grasp")
         if not isinstance(g, Mapping) or not g.get("lifts"):
@@ -79,8 +87,8 @@ def _rows(summary: Mapping[str, Any], case: str, task: str) -> list[dict[str, An
         c = None if score is None else counts(score, task)
         if c is None:
             continue
-        own = score["grasp"] if task == GRASP else score["tasks"][task]  # type: ignore[index]
-        rows.append({"seed": record["seed"], "score": own["score"], "right": c[0],
+        rows.append({"seed": record["seed"], "score": c[0] / c[1] if c[1] else None,
+                     "right": c[0],
                      "charged": c[1], "outcome": record["outcome"]})
     return rows
 
