@@ -46,6 +46,7 @@ from skinhil.model.schedule_file import (
     read_schedule_text,
     table_list,
 )
+from skinhil.suites import case_ref, suite_trials
 from skinhil.validation import Declaration, InstanceOf, Interval, Options, check_param
 from skinhil.world.scenario_file import load_scenario
 
@@ -89,13 +90,15 @@ _NAME = re.compile(r"^[A-Za-z0-9_.+-]{1,64}$")
 
 @dataclass(frozen=True)
 class Scenario:
-    """One scenario: a schedule/scenario file (``file``) or a built-in schedule
-    (``builtin``), with the criteria its cases add to the campaign's."""
+    """One scenario: a schedule/scenario file (``file``), a built-in schedule
+    (``builtin``) or a suite's case (``suite``, ``SUITE:CASE``: ``serve --suite``, its
+    trials drawn from the case's seed), with the criteria its cases add to the campaign's."""
 
     name: str
     file: Path | None = None
     builtin: str | None = None
     criteria: tuple[Criterion, ...] = ()
+    suite: str | None = None
 
 
 @dataclass(frozen=True)
@@ -122,8 +125,17 @@ class Case:
         return int(self.parameters.get("seed", DEFAULTS["seed"])) + self.repetition
 
     @property
+    def holds_object(self) -> bool:
+        """Whether the case's board holds an object (a suite case with a grasp)."""
+        return self.scenario.suite is not None and case_ref(self.scenario.suite)[1].held_object
+
+    @property
     def duration_s(self) -> float:
-        """Board time (s) the case plays."""
+        """Board time (s) the case plays: a suite case's own length (its trials and tail)
+        unless ``duration_s`` is given."""
+        if self.scenario.suite is not None and "duration_s" not in self.parameters:
+            size = parse_size(str(self.parameters.get("size", format_size(PAPER_SIZE))))
+            return suite_trials(self.scenario.suite, self.seed, size).duration_s
         return float(self.parameters.get("duration_s", DEFAULTS["duration_s"]))
 
 

@@ -24,13 +24,14 @@ import subprocess
 import sys
 import threading
 import time
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any
 
 from skinhil import child_processes
 from skinhil.campaign.campaign_file import PARAMETERS, Case
-from skinhil.campaign.criteria import MissingKey
+from skinhil.campaign.criteria import Criterion, MissingKey, answers
 from skinhil.campaign.relay import RelayLink
 from skinhil.campaign.rig import RigBounds, board_health, rig_faults
 from skinhil.process_output import READY, SUMMARY, last_record, records
@@ -43,6 +44,8 @@ POLL_S = 0.1
 """How often (s) the case's processes are looked at."""
 DECODER_READY_S = 120.0
 """Longest wait (s) for the reference receiver to listen (a cold kernel cache compiles)."""
+TRUTH_NAME = "truth.jsonl"
+"""A suite case's truth file (``serve --truth``) in the case's folder."""
 DECODER_END_S = 10.0
 """How long (s) the reference receiver may take to end after the board's RUN_END."""
 
@@ -51,12 +54,32 @@ DECODER_END_S = 10.0
 class BenchLink:
     """Where the cases play: ``link_args`` (serve's link options, e.g. ``--port P``) with
     the user's decoder there, or, with ``model``, the bench's own pty link and the reference
-    receiver decoding with that model (``baud``, ``faults``: the link's)."""
+    receiver decoding with that model (``baud``, ``faults``: the link's).
+
+    On the bench's own link, ``answer_with`` says who answers the tasks (``listen
+    --answer-with``: ``reference``, ``random`` or ``oracle``; the oracle answers a case from
+    the truth file ``oracle_truths[case id]``), and ``grip_readout`` (a load readout file)
+    adds the reference grip controller (``listen --grip-readout``) in the cases that hold
+    an object."""
 
     link_args: tuple[str, ...] = ()
     model: Path | None = None
     baud: int = DEFAULT_BAUD
     faults: FaultParams | None = None
+    answer_with: str = "reference"
+    oracle_truths: Mapping[str, Path] = field(default_factory=dict)
+    grip_readout: Path | None = None
+
+    def decoder_args(self, case: Case) -> list[str]:
+        """``listen``'s answering options for ``case`` on the bench's own link."""
+        out = ["--answer"]
+        if self.answer_with != "reference":
+            out += ["--answer-with", self.answer_with]
+        if self.answer_with == "oracle":
+            out += ["--oracle-truth", str(self.oracle_truths.get(case.id, "no-truth-recorded"))]
+        if self.grip_readout is not None and case.holds_object:
+            out += ["--grip-readout", str(self.grip_readout)]
+        return out
 
 
 class Stopped(Exception):
@@ -68,9 +91,14 @@ def _python_skinhil(*args: str) -> list[str]:
 
 
 def serve_args(case: Case, score: Path) -> list[str]:
-    """``skinhil serve``'s options for ``case`` (beside the link's)."""
-    out = ["--duration", f"{case.duration_s!r}", "--seed", str(case.seed), "--score", str(score),
-           "--json", "--reconnect"]
+    """``skinhil serve``'s options for ``case`` (beside the link's). A suite case's board
+    plays ``--suite SUITE:CASE``, ends by itself and writes its truth beside the score
+    (:data:`TRUTH_NAME`: what an oracle answers from)."""
+    out = ["--seed", str(case.seed), "--score", str(score), "--json", "--reconnect"]
+    if case.scenario.suite is None or "duration_s" in case.parameters:
+        out = ["--duration", f"{case.duration_s!r}", *out]
+    if case.scenario.suite is not None:
+        out += ["--suite", case.scenario.suite, "--truth", str(score.parent / TRUTH_NAME)]
     for name, value in sorted(case.parameters.items()):
         if name not in ("duration_s", "seed"):
             out += [PARAMETERS[name][0], str(value)]
@@ -154,7 +182,7 @@ def _play(case: Case, folder: Path, link: BenchLink, relay: RelayLink | None, ri
             size = case.parameters.get("size")
             decoder = _Process(_python_skinhil(
                 "listen", "--port", relay.decoder_path, "--baud", str(link.baud), "--model",
-                str(link.model), "--answer", "--json",
+                str(link.model), *link.decoder_args(case), "--json",
                 *(["--size", str(size)] if size else [])),
                 folder, "decoder")
             t0 = time.monotonic()
@@ -237,6 +265,7 @@ def run_case(case: Case, folder: Path, link: BenchLink, rig: RigBounds,
         verdicts.append({"criterion": str(criterion), "value": value, "holds": holds})
         if not holds:
             failed.append(f"{criterion} (was {'null' if value is None else f'{value:g}'})")
+    failed = silence(health, score, case.criteria) + failed
     outcome = "error" if errors else "failed" if failed else "passed"
     message = "; ".join(errors) if errors else "; ".join(failed)
     return {"id": case.id, "scenario": case.scenario.name, "parameters": case.parameters,
@@ -245,6 +274,26 @@ def run_case(case: Case, folder: Path, link: BenchLink, rig: RigBounds,
             "errors": errors, "rig": {"board": health, "link": tap},
             "started": started, "wall_s": round(time.monotonic() - t0, 3),
             "folder": str(folder)}
+
+
+SENT_NOTHING = "the decoder sent nothing"
+"""Why a case fails whose board received no host command (whatever its criteria)."""
+NO_ANSWER = "the decoder answered nothing, and criteria of upper bounds alone need an answer"
+"""Why a case fails whose criteria are all upper bounds when the score holds no answer."""
+
+
+def silence(health: Mapping[str, Any] | None, score: Mapping[str, Any] | None,
+            criteria: tuple[Criterion, ...]) -> list[str]:
+    """The failures of a silent decoder: :data:`SENT_NOTHING` when the board's summary
+    counts no host command; :data:`NO_ANSWER` when every criterion is an upper bound
+    (``false_alarms <= 2`` holds with no decoder at all) and the score file counts no
+    answer (:func:`~skinhil.campaign.criteria.answers`)."""
+    if health is not None and health["commands"] == 0:
+        return [SENT_NOTHING]
+    if score is not None and criteria and all(c.upper_bound for c in criteria) \
+            and answers(score) == 0:
+        return [NO_ANSWER]
+    return []
 
 
 def _read_score(path: Path) -> dict[str, Any] | None:

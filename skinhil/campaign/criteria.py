@@ -62,10 +62,30 @@ class Criterion:
                              f"{type(node).__name__}")
         return float(node)
 
+    @property
+    def upper_bound(self) -> bool:
+        """Whether the criterion only bounds its value from above (``<=``, ``<``): a score
+        with no answer at all meets it."""
+        return self.op in ("<=", "<")
+
     def holds(self, value: float | None) -> bool:
         """Whether ``value`` (from :meth:`value`) meets the criterion; None never does."""
         return value is not None and not math.isnan(value) and \
             OPERATORS[self.op](value, self.threshold)
+
+
+def answers(score: Mapping[str, Any]) -> int:
+    """The decoder's answers the score file counts: its DECISIONs (``decisions``), its
+    ANSWERs of every task (``tasks.<task>.answers``) and its GRIPs, accepted or refused
+    (``grasp.grips``)."""
+    n = int(score.get("decisions") or 0)
+    for task in (score.get("tasks") or {}).values():
+        if isinstance(task, Mapping):
+            n += int(task.get("answers") or 0)
+    grips = (score.get("grasp") or {}).get("grips") or {}
+    if isinstance(grips, Mapping):
+        n += sum(int(v) for v in grips.values() if isinstance(v, int))
+    return n
 
 
 def parse_criterion(text: object, where: str) -> Criterion:

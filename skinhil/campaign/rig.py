@@ -86,7 +86,8 @@ def board_health(summary: Mapping[str, Any]) -> dict[str, Any]:
             "deadline_misses": int(summary["deadline_misses"]),
             "ticks": int(summary["ticks"]),
             "fifo_drops": sum(int(summary["dropped_by"].get(k, 0)) for k in BOARD_DROPS),
-            "link_losses": int(summary["link_losses"])}
+            "link_losses": int(summary["link_losses"]),
+            "commands": int(summary["commands"])}
 
 
 def rig_faults(bounds: RigBounds, board: Mapping[str, Any] | None,

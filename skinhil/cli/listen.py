@@ -51,6 +51,7 @@ from skinhil.receiver import (
 )
 from skinhil.receiver.announcement import Announcement
 from skinhil.receiver.bus import MAX_UDP_SOURCES, BoardKey
+from skinhil.receiver.grip_reflex import GripController, LoadReadout, SlipReflex
 from skinhil.receiver.model_file import load_window_decoder
 from skinhil.receiver.task_answer import ANSWERERS, TaskAnswerer
 from skinhil.recording import SessionRecorder
@@ -95,6 +96,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--oracle-truth", type=Path, metavar="FILE",
                    help="with --answer-with oracle: the truth of an earlier run of the same "
                         "scenario (serve --truth FILE)")
+    p.add_argument("--grip-readout", type=Path, metavar="NPZ",
+                   help="with --answer: grip a held object with the reference grip "
+                        "controller (skinhil.receiver.grip_reflex), reading the load with "
+                        "this readout (skinhil demo --task grasp fits and caches one)")
     p.add_argument("--udp-max-sources", type=integer(1, 4096, "count"),
                    default=None, metavar="N",
                    help=f"with --udp: decode at most N sending boards; datagrams of further "
@@ -372,6 +377,8 @@ def run(args: argparse.Namespace) -> int:
                           "--port or --can")
     if not args.answer and (args.answer_with != "reference" or args.oracle_truth is not None):
         raise ConfigError("--answer-with and --oracle-truth choose who answers: add --answer")
+    if args.grip_readout is not None and not args.answer:
+        raise ConfigError("--grip-readout grips the board's held object: add --answer")
     if (args.answer_with == "oracle") != (args.oracle_truth is not None):
         raise ConfigError("the oracle answers from a truth file: give --answer-with oracle "
                           "with --oracle-truth FILE (serve --truth FILE), or neither")
@@ -404,7 +411,12 @@ def run(args: argparse.Namespace) -> int:
     tasks = (TaskAnswerer(receiver, args.answer_with, args.oracle_truth,
                           encoder=answerer.encoder if answerer is not None else None)
              if args.answer else None)
-    for listener in (answerer, tasks):
+    grips = None
+    if args.grip_readout is not None:
+        grips = GripController(transport, SlipReflex(LoadReadout.load(
+            args.grip_readout, spring_count(args.size))), args.board_ids[0])
+        grips.encoder = answerer.encoder if answerer is not None else grips.encoder
+    for listener in (answerer, tasks, grips):
         if listener is not None:
             receiver.add_listener(listener)
     if record is None:
