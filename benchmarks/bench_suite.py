@@ -4,7 +4,7 @@ the bench's own pty pair, the reference, random and oracle answerers (and the gr
 reference controller) beside it at the same seeds.
 
 It writes the report card's figures, with the machine, its load, the command and the date,
-to benchmarks/results/bench_suite.json, and renders the docs table from that file between the
+to benchmarks/results/suite/bench_suite.json, and renders the docs table from that file between the
 markers of docs/suites.md (never typed by hand). ``--render`` renders the table from the
 results file alone. The full run plays 6 cases x 5 seeds x 4 answerers in real time: run it on
 a quiet machine (``nice``).
@@ -33,7 +33,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from machine import describe, load_average  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
-RESULTS = REPO / "benchmarks" / "results" / "bench_suite.json"
+RESULTS = REPO / "benchmarks" / "results" / "suite" / "bench_suite.json"
+"""A report card per run, apart from the figure files the benchmarks page renders."""
 DOCS = REPO / "docs" / "suites.md"
 BEGIN = "<!-- bench_suite.py: begin -->"
 END = "<!-- bench_suite.py: end -->"
