@@ -7,17 +7,21 @@ import platform
 import sys
 
 
-def describe() -> str:
-    """One block of text: CPU, cores, OS, Python and key package versions, the command."""
-    cpu = platform.processor() or "unknown CPU"
+def cpu_model() -> str:
+    """The CPU's model name as lscpu and /proc/cpuinfo give it."""
     try:
         with open("/proc/cpuinfo", encoding="ascii", errors="replace") as fh:
             for line in fh:
                 if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
+                    return line.split(":", 1)[1].strip()
     except OSError:
         pass
+    return platform.processor() or "unknown CPU"
+
+
+def describe() -> str:
+    """One block of text: CPU, cores, OS, Python and key package versions, the command."""
+    cpu = cpu_model()
     import numba
     import numpy
     import scipy

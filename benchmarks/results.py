@@ -11,6 +11,8 @@ import platform
 import sys
 from typing import Any
 
+from machine import cpu_model
+
 RESULTS_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "results")
 
 
@@ -21,15 +23,7 @@ def figure(name: str, value: float | int | str, unit: str = "", target: str = ""
 
 def machine() -> dict[str, Any]:
     """The machine a result was measured on: CPU model, cores, OS, Python and key packages."""
-    cpu = platform.processor() or "unknown CPU"
-    try:
-        with open("/proc/cpuinfo", encoding="ascii", errors="replace") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
+    cpu = cpu_model()
     import numba
     import numpy
 

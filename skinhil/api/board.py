@@ -13,12 +13,12 @@ from __future__ import annotations
 import dataclasses
 import threading
 from pathlib import Path
-from types import TracebackType
 from typing import Any
 
 from firmware_sim.board import Board as BoardEmulator
 from firmware_sim.config import BoardConfig, BoardSummary
 from firmware_sim.score import board_score
+from skinhil.api.background import BackgroundRun
 from skinhil.api.links import open_api_link
 from skinhil.errors import ConfigError
 from skinhil.kernel_notice import compiling
@@ -40,7 +40,7 @@ STOP_TIMEOUT_S = 30.0
 onto the link (``BoardConfig.drain_timeout_s``) and the final records."""
 
 
-class Board:
+class Board(BackgroundRun):
     """The emulated sensor board, in real time on a background thread.
 
     ``size`` (rows, columns of the top layer), ``snr_db`` (dB; inf: no neuron noise) and
@@ -54,6 +54,8 @@ class Board:
     scenario or schedule file). ``options`` are further :class:`BoardConfig` fields
     (``rest_s``, ``tick_s``, ``markers``, ...).
     """
+
+    stop_timeout_s = STOP_TIMEOUT_S
 
     def __init__(self, size: MeshSize = (6, 6), snr_db: float = 10.0, seed: int = 0,
                  duration_s: float | None = None, *, link: str | Transport[Any] | None = None,
@@ -143,26 +145,6 @@ class Board:
         self._thread.join(timeout)
         self._raise()
         return not self._thread.is_alive()
-
-    def close(self) -> None:
-        """Stop the run (the FIFO drained, RUN_END sent), wait for the thread and close the
-        link; an exception of the board's thread is raised here. Closing twice is a no-op."""
-        self._stop.set()
-        self._thread.join(STOP_TIMEOUT_S)
-        self.transport.shutdown()
-        self._raise()
-
-    def _raise(self) -> None:
-        error, self._error = self._error, None
-        if error is not None:
-            raise error
-
-    def __enter__(self) -> Board:
-        return self
-
-    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
-                 tb: TracebackType | None) -> None:
-        self.close()
 
     def __repr__(self) -> str:
         size = self.emulator.config.size

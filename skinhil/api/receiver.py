@@ -13,12 +13,12 @@ import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
-from types import TracebackType
 from typing import Any
 
 import numpy as np
 
 import protocols
+from skinhil.api.background import BackgroundRun
 from skinhil.api.links import open_api_link
 from skinhil.events import EVENT_DTYPE
 from skinhil.model.geometry import MeshSize, spring_count
@@ -72,7 +72,7 @@ class _Collector(ReceiverListener):
         self.acks[int(ack.token)] = ack
 
 
-class Receiver:
+class Receiver(BackgroundRun):
     """Receive one board's stream on ``link`` on a background thread.
 
     ``link``: a serial device path (``board.peer``), a link URL (``serial:...``,
@@ -82,6 +82,8 @@ class Receiver:
     :attr:`decisions`); None decides nothing. ``size`` (rows, columns of the top layer) sets
     the channel count when no model says it.
     """
+
+    stop_timeout_s = STOP_TIMEOUT_S
 
     def __init__(self, link: str | Transport[Any], *, model: str | Path | None = None,
                  size: MeshSize = (6, 6), board_id: int = 0,
@@ -220,26 +222,6 @@ class Receiver:
                 "nacked": len(answered) - acked, "unanswered": sent - len(answered)}
 
     # -- the end ----------------------------------------------------------------------------
-    def close(self) -> None:
-        """Stop the thread (what the link already received is decoded) and close the link;
-        an exception of the thread is raised here. Closing twice is a no-op."""
-        self._stop.set()
-        self._thread.join(STOP_TIMEOUT_S)
-        self.transport.shutdown()
-        self._raise()
-
-    def _raise(self) -> None:
-        error, self._error = self._error, None
-        if error is not None:
-            raise error
-
-    def __enter__(self) -> Receiver:
-        return self
-
-    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
-                 tb: TracebackType | None) -> None:
-        self.close()
-
     def __repr__(self) -> str:
         return (f"skinhil.Receiver({self.transport.name}, "
                 f"{'receiving' if self.receiving else 'stopped'})")
