@@ -4,7 +4,7 @@ stores them with their provenance (suite, version, seeds, SNR, this command) in
 skinhil/data/reference_fit.json, which task_decoders.py reads:
 
     python benchmarks/fit_reference_answerers.py --snr-db 10 --seeds 1-20
-    python benchmarks/fit_reference_answerers.py --smoke --out /tmp/fit.json  # runs, no fit to use
+    python benchmarks/fit_reference_answerers.py --smoke     # runs, writes nothing
 
 Each fit is its own script's (fit_force_line.py, fit_vibration_classes.py,
 fit_slip_channels.py), on calibration runs of the suite's cases simulated offline exactly as
@@ -40,7 +40,9 @@ def main() -> None:
     ap.add_argument("--seeds", default=SEEDS, help=f"training seeds of {SUITE}, e.g. {SEEDS}")
     ap.add_argument("--smoke", action="store_true",
                     help=f"one seed, {SMOKE_TRIALS} trials a case (a check that it runs)")
-    ap.add_argument("--out", type=Path, default=OUT)
+    ap.add_argument("--out", type=Path, default=None,
+                    help=f"where to write the fit (default {OUT.relative_to(REPO)}; with "
+                         "--smoke, nothing is written unless --out is given)")
     args = ap.parse_args()
     the_suite = suite(SUITE)
     seeds = parse_seeds(args.seeds)
@@ -65,9 +67,12 @@ def main() -> None:
     }
     text = json.dumps(fitted, indent=1) + "\n"
     print(text)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    write_text(args.out, text)
-    print(f"wrote {args.out}: force {fitted['force']}; vibration {vibration}; "
+    out = args.out or (None if args.smoke else OUT)
+    if out is None:  # a smoke run's fit is no fit to use: the package's file stays
+        return
+    out.parent.mkdir(parents=True, exist_ok=True)
+    write_text(out, text)
+    print(f"wrote {out}: force {fitted['force']}; vibration {vibration}; "
           f"slip {fitted['slip']}")
 
 
