@@ -71,7 +71,9 @@ def main() -> None:
     snr_db, seeds, trials = calibration_args(__doc__ or "")
     f = fit(snr_db, seeds, trials)
     if f is None:
-        print("some class had no touch: too few to fit every class")
+        played = "every" if trials is None else f"the first {trials}"
+        print(f"some class had no touch in {played} trials of {len(seeds)} seed(s): too few "
+              "to fit every class")
         if trials is None:
             raise SystemExit(1)
         return
