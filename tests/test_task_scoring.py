@@ -174,7 +174,7 @@ def test_scripted_decoder_lands_in_every_counter_on_a_blind_link(pty_pair, tmp_p
     packets = [p for p in data.split(b"\x00") if p]
     assert len(packets) == c.frames_ok  # no byte outside a decoded packet
     kinds = {type(r).__name__ for r in records}
-    assert kinds <= {"Session", "StimulusEntry", "Status", "Ack", "RunEnd"}, kinds
+    assert kinds <= {"Session", "StimulusEntry", "SuiteEntry", "Status", "Ack", "RunEnd"}, kinds
     assert not any(isinstance(r, protocols.Marker) for r in records)
     assert all(r.markers_sent == 0 for r in records if isinstance(r, protocols.Status))
     assert [m.phase for m in board.truth_markers] == ["onset", "end"]  # kept for the operator

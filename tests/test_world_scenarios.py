@@ -77,7 +77,8 @@ def test_a_scenario_plays_through_serve_on_a_pty(path: Path, pty_pair, tmp_path:
     # the link carries events, status, the stimuli's markers and the session records (the
     # stimulus table, the run's end) only: no contact truth
     kinds = {type(r).__name__ for r in peer.records}
-    assert kinds <= {"Sync", "Status", "Marker", "Ack", "Session", "StimulusEntry", "RunEnd"}
+    assert kinds <= {"Sync", "Status", "Marker", "Ack", "Session", "StimulusEntry", "SuiteEntry",
+                     "RunEnd"}
     markers = {m.stimulus_id for m in peer.of(protocols.Marker)}
     assert markers == ({10} if path.stem == "edge_and_pins" else set())
     # the board plays what simulate computes offline for the same seed, event for event
