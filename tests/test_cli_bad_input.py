@@ -20,6 +20,7 @@ from pathlib import Path
 
 import pytest
 from harness.hostile_models import HOSTILE, pickled, write_good
+from harness.refusals import refusal_failures
 from harness.serve import RUN_DIR, serve_env
 
 PARALLEL = 3
@@ -355,22 +356,9 @@ def test_bad_inputs_refused_with_one_line(files: Path, warm_kernels: None) -> No
 def test_bad_inputs_refused_in_process(files: Path, capsys) -> None:
     """Every case that needs no environment of its own, run through ``skinhil.cli.main`` in
     this process: one ``skinhil: error:`` line, status 2."""
-    from skinhil.cli import main
-
-    failures = []
     cases = [c for c in _bad_cases(files) if not c.prefix]
     assert len(cases) >= 110
-    for case in cases:
-        capsys.readouterr()
-        try:
-            status = main(list(case.argv))
-        except SystemExit as exc:  # argparse's refusals exit
-            status = exc.code
-        err = capsys.readouterr().err
-        lines = [ln for ln in err.splitlines() if ln.strip()]
-        if not (status == 2 and len(lines) == 1 and lines[0].startswith("skinhil: error: ")
-                and case.word.lower() in lines[0].lower()):
-            failures.append(f"{case.name}: status {status}, stderr {err[-500:]!r}")
+    failures = refusal_failures(cases, capsys)
     assert not failures, "\n".join(failures)
 
 

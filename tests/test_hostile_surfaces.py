@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from harness.refusals import refusal_failures
 from harness.serve import REPO, RUN_DIR, serve_env
 
 from skinhil.campaign import campaign_file
@@ -117,18 +118,7 @@ def test_hostile_inputs_refused_in_one_line(tmp_path: Path, capsys) -> None:
     foreign = tmp_path / "decoder.npz"
     foreign.write_bytes(b"PK\x03\x04" + bytes(range(256)) * 64)
     before = foreign.read_bytes()
-    failures = []
-    for case in _refusals(tmp_path):
-        capsys.readouterr()
-        try:
-            status = main(list(case.argv))
-        except SystemExit as exc:  # argparse's refusals exit
-            status = exc.code
-        err = capsys.readouterr().err
-        lines = [ln for ln in err.splitlines() if ln.strip()]
-        if not (status == 2 and len(lines) == 1 and lines[0].startswith("skinhil: error: ")
-                and case.word.lower() in lines[0].lower()):
-            failures.append(f"{case.name}: status {status}, stderr {err[-500:]!r}")
+    failures = refusal_failures(_refusals(tmp_path), capsys)
     assert not failures, "\n".join(failures)
     assert foreign.read_bytes() == before  # refused, never truncated
     assert not (tmp_path / "seed").exists() and not (tmp_path / "out" / "cases").exists()
