@@ -166,6 +166,7 @@ class HostCommands(Participant):
         rest = excess[~query]
         if rest.shape[0]:
             by_opcode = ctx.counters.busy_by_opcode
-            for opcode in rest["opcode"].tolist():
-                by_opcode[int(opcode)] = by_opcode.get(int(opcode), 0) + 1
+            opcodes, counts = np.unique(rest["opcode"], return_counts=True)
+            for opcode, n in zip(opcodes.tolist(), counts.tolist(), strict=True):
+                by_opcode[opcode] = by_opcode.get(opcode, 0) + n
             self._refuse_busy(ctx, rest[:int(ANSWER_BURST)].tolist(), rest.shape[0])
