@@ -144,7 +144,6 @@ class Board:
         for fn in self._hooks[hook]:
             fn(self.ctx, *args)
 
-    # -- the state the command line and the tests read -------------------------------------
     @property
     def link(self) -> BoardLink | None:
         """The link, None while it is down."""
@@ -181,7 +180,6 @@ class Board:
         return its :class:`protocols.Ack` (never raises)."""
         return self.commands.handle(self.ctx, cmd, arrival_us)
 
-    # -- one tick ------------------------------------------------------------------------
     def tick(self) -> None:
         """Run one publish tick: the phases of :data:`~firmware_sim.tick.SCHEDULE` in order.
         A link lost on the wire ends the wire's phases (``link_lost`` hooks)."""
@@ -203,7 +201,6 @@ class Board:
         for name in phases.MODEL_PHASES:
             self._each(name)
 
-    # -- run -----------------------------------------------------------------------------
     def run(self, duration_s: float | None = None, stop: threading.Event | None = None,
             on_second: Callable[[Board], None] | None = None,
             report_period_s: float = 0.5) -> BoardSummary:
@@ -287,6 +284,7 @@ class Board:
                 self._each(name)
 
     def summary(self, wall_s: float = 0.0, cpu_s: float = 0.0) -> BoardSummary:
+        """The run's account, with its wall and CPU time (s) as measured by the caller."""
         c = self.counters
         return BoardSummary(
             board_time_s=self.board_time_us() * 1e-6, wall_s=wall_s, cpu_s=cpu_s,

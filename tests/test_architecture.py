@@ -145,3 +145,14 @@ def test_link_kind_check_sees_a_kind_test(tmp_path: Path) -> None:
     pkg.mkdir()
     (pkg / "m.py").write_text('if transport.kind == "can":\n    pass\n')
     assert len(_link_kind_tests([pkg], tmp_path / "links")) == 1
+
+
+BOARD_MAX_LINES = 300
+"""The board keeps the clock and the list of participants; a job of its own is a participant
+(firmware_sim/*_stage.py), not more lines here."""
+
+
+def test_the_board_keeps_only_the_clock_and_its_participants() -> None:
+    lines = len((REPO / "firmware_sim" / "board.py").read_text().splitlines())
+    assert lines <= BOARD_MAX_LINES, (
+        f"firmware_sim/board.py has {lines} lines: move a job into a participant")
