@@ -73,7 +73,6 @@ class MarkerPhase(enum.IntEnum):
     """The stimulus starts pressing."""
     END = 1
     """The indentation phase ends (the force starts decaying)."""
-    INDENTATION_END = 1
 
 
 class SessionReason(enum.IntEnum):

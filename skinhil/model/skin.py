@@ -36,8 +36,8 @@ Defaults and their reasoning (the paper gives the structure, not SI values):
   reproduction and the board's real-time budget. Reproduction (``skinhil reproduce``,
   docs/figures/REPORT.md, both readouts of both mechanics): the geometric dynamics with the
   length readout reproduce 4 of the paper's 7 checked claims (1E-F, 2A, 3F, 4G), as many as
-  the linear dynamics with it (2A, 2C, 3F, 4G) and twice the old default's (linear, axial
-  readout: 2); the geometric is the one that stays a faithful model at the paper's forces:
+  the linear dynamics with it (2A, 2C, 3F, 4G) and twice the linear dynamics with the
+  axial readout (2); the geometric is the one that stays a faithful model at the paper's forces:
   1E-F, which only the dynamics change, fails on the linear dynamics with either readout,
   and there the mesh moves 4-5 rest lengths, far outside the small displacements its
   stiffness matrix assumes (REPORT.md, "Regime"). Budget: the geometric mechanics costs a
