@@ -1,7 +1,8 @@
 """The wheel is the product: built by ``pip wheel`` and installed into a new venv, it holds
-every file the code points at, its command line answers, and the notebook API runs a board
-and a receiver from outside the checkout; its kernel cache falls back to the user's cache
-folder when the package folder cannot be written, and says so."""
+every file the code points at, its command line answers, the notebook API runs a board and a
+receiver from outside the checkout and ``skinhil demo`` trains its decoder and plays; its
+kernel cache falls back to the user's cache folder when the package folder cannot be
+written, and says so."""
 
 from __future__ import annotations
 
@@ -65,6 +66,13 @@ def venv(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return env_dir
 
 
+@pytest.fixture(scope="module")
+def home(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The user's folders of the tests that run the installed package: one kernel cache, so
+    the kernels compile once for the module."""
+    return tmp_path_factory.mktemp("home")
+
+
 def _env(home: Path) -> dict[str, str]:
     """No PYTHONPATH, no kernel cache of this checkout: the installed package alone."""
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "NUMBA_CACHE_DIR")}
@@ -97,14 +105,25 @@ def test_the_command_line_answers(venv: Path, tmp_path: Path) -> None:
     assert out.read_text() == (REPO / "protocols" / "skinhil.dbc").read_text()
 
 
-def test_the_api_runs_and_the_kernel_cache_falls_back_to_the_users(venv: Path,
+def test_the_api_runs_and_the_kernel_cache_falls_back_to_the_users(venv: Path, home: Path,
                                                                    tmp_path: Path) -> None:
     code = "import logging; logging.basicConfig(level=logging.INFO)\n" + examples()[0]
     run = subprocess.run([str(venv / "bin" / "python"), "-c", code], cwd=tmp_path,
-                         env=_env(tmp_path), capture_output=True, text=True, timeout=600)
+                         env=_env(home), capture_output=True, text=True, timeout=600)
     assert run.returncode == 0, run.stderr[-3000:]
     received, sent = map(int, run.stdout.split())
     assert 0 < received <= sent
-    user_cache = tmp_path / "cache" / "skinhil" / "numba"
+    user_cache = home / "cache" / "skinhil" / "numba"
     assert f"kernel cache: {user_cache}" in run.stderr
     assert any(user_cache.rglob("*.nbi"))  # compiled and cached there
+
+
+def test_the_demo_trains_its_decoder_and_plays(venv: Path, home: Path, tmp_path: Path) -> None:
+    """``skinhil demo`` as a new user runs it: no decoder cached, so it trains one from the
+    package's own files, caches it in the user's folder and plays the board against it."""
+    demo = subprocess.run([str(venv / "bin" / "skinhil"), "demo", "--duration", "1", "--quiet"],
+                          cwd=tmp_path, env=_env(home), capture_output=True, text=True,
+                          timeout=900)
+    assert demo.returncode == 0, demo.stderr[-3000:]
+    assert "accuracy" in demo.stdout and "right / scored stimuli" in demo.stdout, demo.stdout
+    assert any((home / "cache" / "skinhil").glob("demo-decoder-*.npz"))
