@@ -24,18 +24,15 @@ import numpy as np
 from firmware_sim.config import DEFAULT_RESPONSE_WINDOW_S
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import PAPER_SIZE, MeshSize
-from skinhil.model.sensor import SkinSensor
 from skinhil.model.skin import DEFAULT_AMPLITUDE, SkinModel, SkinParams
-from skinhil.model.timeline import Timeline
+from skinhil.model.timeline import DEFAULT_REST_S
+from skinhil.receiver.training import board_stream
 from skinhil.scoring import TaskScoreboard
 from skinhil.scoring.tasks import Trial
 from skinhil.suites import Trials
 from skinhil.tasks import TrialKind
 from skinhil.world import TouchSensor
 from skinhil.world.truth import TRUTH_DTYPE, TRUTH_PERIOD_S
-
-BLOCK_S = 0.05
-"""Board time (s) simulated per compiled call."""
 
 
 @dataclass(frozen=True)
@@ -92,38 +89,28 @@ def simulate(trials: Trials, snr_db: float, dt_s: float = 1e-4,
         raise ConfigError(f"case {trials.case!r} holds an object whose lifts depend on the "
                           "decoder's grip: it has no offline samples; leave it out")
     scene = trials.scenario.scene
-    sensor = SkinSensor(skin_model(size), dt_s, snr_db, trials.seed,
-                        state_forces=scene is not None)
-    touch = TouchSensor(sensor, scene) if scene is not None else None
-    board = None
-    if touch is not None and scene is not None:
-        touch.start(0.0)
-        board = TaskScoreboard(
-            [c.trajectory.vibration_frequency_hz if c.trajectory.vibration_amplitude_m > 0
-             else 0.0 for c in scene.contacts], response_window_s)
-    timeline = Timeline(dt_s, trials.scenario.schedule, trials.seed,
-                        mode=Timeline.SCHEDULE_FILE, size=size)
+    board = None if scene is None else TaskScoreboard(
+        [c.trajectory.vibration_frequency_hz if c.trajectory.vibration_amplitude_m > 0
+         else 0.0 for c in scene.contacts], response_window_s)
     dt_us = int(round(dt_s * 1e6))
     every = max(1, int(round(TRUTH_PERIOD_S / dt_s)))
-    block = every * max(1, int(round(BLOCK_S / dt_s / every)))
     n_total = int(round((trials.duration_s + response_window_s) / dt_s))
-    events = []
     truth = [np.zeros(0, dtype=TRUTH_DTYPE)]
+
+    def observe(touch: TouchSensor, first: int, raw: np.ndarray) -> None:
+        """Feed the scoreboard the contacts' truth at the start of every 1 ms tick."""
+        assert board is not None
+        for k in range((-first) % every, len(raw), every):
+            board.observe((first + k) * dt_us, raw[k])
+        truth.append(touch.truth_at(raw, first, every))
+
+    events = []
     onsets: list[tuple[int, int]] = []
-    for first in range(0, n_total, block):
-        n = min(block, n_total - first)
-        playing = timeline.schedule_for(first * dt_s, (first + n - 1) * dt_s)
-        if touch is None:
-            _, spikes = sensor.advance_schedule(playing, n)
-        else:
-            _, spikes, raw = touch.advance_schedule(playing, n)
-            assert board is not None
-            for k in range((-first) % every, n, every):
-                board.observe((first + k) * dt_us, raw[k])
-            truth.append(touch.truth_at(raw, first, every))
-        events.append(sensor.events(spikes, first))
-        onsets += [(m.t_us, m.stimulus_id) for m in timeline.markers_before((first + n) * dt_us)
-                   if m.phase == "onset"]
+    for ev, markers, _ in board_stream(n_total * dt_s, snr_db, DEFAULT_REST_S, trials.seed,
+                                       dt_s, trials.scenario.schedule, size, scene,
+                                       on_contacts=observe):
+        events.append(ev)
+        onsets += [(m.t_us, m.stimulus_id) for m in markers if m.phase == "onset"]
     if board is not None:
         board.advance(n_total * dt_us)
     return Run(np.concatenate(events), onsets, board, np.concatenate(truth),

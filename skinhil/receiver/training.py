@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -146,14 +146,17 @@ def balanced_schedule(reps: int, rest_s: float, seed: int,
 
 def board_stream(duration_s: float, snr_db: float, rest_s: float, seed: int,
                  dt_s: float = 1e-4, schedule: Schedule | None = None,
-                 size: MeshSize = PAPER_SIZE, scene: Scene | None = None
+                 size: MeshSize = PAPER_SIZE, scene: Scene | None = None,
+                 on_contacts: Callable[[TouchSensor, int, np.ndarray], None] | None = None,
                  ) -> Iterator[tuple[np.ndarray, list[MarkerEvent], int]]:
     """The board's stream simulated offline: per block (events, markers, block end µs).
 
     Same schedule (the board's :class:`Timeline`: its random one for ``seed`` and
     ``rest_s``, or ``schedule`` played once, with the contacts of ``scene`` touching the skin
     from the start) and same sensor (:class:`SkinSensor` seeded ``seed``) as ``skinhil serve
-    --seed seed --rest rest_s --size size [--schedule ...]``.
+    --seed seed --rest rest_s --size size [--schedule ...]``. With a scene,
+    ``on_contacts(touch, first, raw)`` sees each block's contact states (``raw``, one row per
+    step from step ``first``) before the block is yielded.
     """
     sensor = SkinSensor(SkinModel(SkinParams(size=size)), dt_s=dt_s, snr_db=snr_db, seed=seed,
                         state_forces=scene is not None)
@@ -173,7 +176,9 @@ def board_stream(duration_s: float, snr_db: float, rest_s: float, seed: int,
         if touch is None:
             _, spikes = sensor.advance_schedule(playing, n)
         else:
-            _, spikes, _ = touch.advance_schedule(playing, n)
+            _, spikes, raw = touch.advance_schedule(playing, n)
+            if on_contacts is not None:
+                on_contacts(touch, first, raw)
         end_us = (first + n) * dt_us
         yield sensor.events(spikes, first), timeline.markers_before(end_us), end_us
 
