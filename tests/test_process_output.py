@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from harness.host_link import host_beside_serve
 from harness.hostile_models import write_good
 from harness.serve import REPO, RUN_DIR, ServeProcess, serve_env
 
@@ -105,6 +106,26 @@ def test_listen_json_opens_with_the_ready_line_and_ends_with_the_summary(
     assert "Ctrl-C stops" not in listen.stderr  # with --json the banner is not printed
     assert not _undocumented(ready) and not _undocumented(summary), (
         _undocumented(ready), _undocumented(summary))
+
+
+def test_listen_json_summary_names_the_suite_case_the_board_announced(tmp_path: Path) -> None:
+    """Over a real pty: ``serve --suite`` announces its case in the SESSION (SPEC §3.7) and
+    ``listen --json``'s summary carries what it heard under ``session``."""
+    model = write_good(tmp_path / "m.npz", n_channels=338)
+    board, host = host_beside_serve(
+        tmp_path, [sys.executable, "-m", "skinhil", "listen", "--port", "{HOST}", "--model",
+                   str(model), "--json"],
+        ["--suite", "tactile-v1:vibration", "--seed", "1000003", "--duration", "0.5",
+         "--quiet"], timeout_s=240, own_end_s=30, host_ready=True)
+    assert board.returncode == 0, board.stderr
+    summary = last_record(records(host.stdout), SUMMARY)
+    assert summary is not None, (host.stdout[-2000:], host.stderr[-2000:])
+    session = summary["session"]
+    assert session["suite"] == {"id": "tactile-v1", "name": "tactile", "version": 1,
+                                "case": "vibration"}, session
+    assert session["held_object"] is False
+    assert list(session["tasks"]) == ["vibration"]
+    assert session["tasks"]["vibration"]["classes"] == [50, 100, 200, 300]
 
 
 def test_a_ready_fd_that_is_not_open_is_one_line() -> None:

@@ -4,6 +4,7 @@ user runs a decoder beside the board (a linked pair of ptys stands for the cable
 from __future__ import annotations
 
 import contextlib
+import select
 import shutil
 import signal
 import subprocess
@@ -40,17 +41,25 @@ Finished = subprocess.CompletedProcess[str]
 
 
 def host_beside_serve(folder: Path, host_argv: Sequence[str], serve_args: Sequence[str],
-                      timeout_s: float = 120.0, own_end_s: float = 0.0
-                      ) -> tuple[Finished, Finished]:
+                      timeout_s: float = 120.0, own_end_s: float = 0.0,
+                      host_ready: bool = False) -> tuple[Finished, Finished]:
     """Run ``host_argv`` on the host end (``{HOST}`` in it is replaced by the path) and
     ``skinhil serve --port <board end> serve_args`` to completion, then give the host up to
     ``own_end_s`` to end by itself (``skinhil listen`` does at the board's RUN_END record)
-    before stopping it with SIGINT; (serve's result, the host's result), output as text."""
+    before stopping it with SIGINT; (serve's result, the host's result), output as text.
+    ``host_ready``: start the board only once the host printed its first line (``listen
+    --json``'s ready line: its link is open), as a user starts the decoder first."""
     with linked_ptys(folder) as (board_end, host_end):
         argv = [str(host_end) if a == "{HOST}" else a for a in host_argv]
         host = subprocess.Popen(argv, cwd=RUN_DIR, env=serve_env(), stdout=subprocess.PIPE,
                                 stderr=subprocess.PIPE, text=True)
+        first = ""
         try:
+            if host_ready:
+                assert host.stdout is not None
+                ready, _, _ = select.select([host.stdout], [], [], timeout_s)
+                assert ready, f"the host printed nothing within {timeout_s:g} s"
+                first = host.stdout.readline()
             board = run_serve("--port", str(board_end), *serve_args, timeout_s=timeout_s)
             time.sleep(0.5)  # the host reads and answers what is left on the link
             try:
@@ -66,4 +75,4 @@ def host_beside_serve(folder: Path, host_argv: Sequence[str], serve_args: Sequen
             if host.poll() is None:
                 host.kill()
                 host.wait()
-    return board, subprocess.CompletedProcess(argv, host.returncode, out, err)
+    return board, subprocess.CompletedProcess(argv, host.returncode, first + out, err)
