@@ -11,6 +11,7 @@ tick); one gamer of each family goes over a real pty against ``skinhil serve --s
 from __future__ import annotations
 
 import json
+import math
 import tempfile
 import time
 from functools import cache
@@ -21,7 +22,7 @@ import pytest
 from conftest import PtyPair, PtyReader
 from harness import gamers as g
 from harness.serve import ServeProcess
-from harness.suite_play import SNR_DB, Played, play_case, receiver_with
+from harness.suite_play import SNR_DB, Played, play_case, receiver_with, tick_of
 
 import protocols
 from skinhil.plant import GraspParams
@@ -32,6 +33,7 @@ from skinhil.receiver.grip_training import fit_readout
 from skinhil.receiver.task_answer import TaskAnswerer
 from skinhil.scoring import DecisionScoreboard
 from skinhil.suites import suite_trials
+from skinhil.suites.tactile_v1 import VIBRATION_CLASSES_HZ
 
 SEED = 1_000_003
 """The evaluation seed every gamer and baseline is scored on."""
@@ -82,9 +84,30 @@ def _replay(case: str) -> Played:
         receiver_with(end, lambda r: TaskAnswerer(r, "oracle", truth_path=path))])
 
 
-def _scripted(case: str, values: g.Values, period_s: float, per_beat: int = 1) -> Played:
+def _scripted(case: str, values: g.Values, period_s: float, per_beat: int = 1,
+              phase_s: float = 0.0, seed: int = SEED) -> Played:
     script = g.cadence(g.task_id(case), values, period_s, _duration_s(case), per_beat)
-    return play_case(_ref(case), SEED, script=script)
+    shift = tick_of(phase_s)
+    return play_case(_ref(case), seed, script={k + shift: v for k, v in script.items()})
+
+
+def _after_touches(delay_s: float) -> Played:
+    """A SLIP ``delay_s`` after each touch-down of the slip case (a decoder that senses
+    touches and guesses when the stick ends)."""
+    scene = suite_trials(_ref("slip"), SEED).scenario.scene
+    assert scene is not None
+    slip = g.task_id("slip")
+    script = {tick_of(c.start_s + delay_s): [g.command(slip, i + 1, ())]
+              for i, c in enumerate(scene.contacts)}
+    return play_case(_ref("slip"), SEED, script=script)
+
+
+SLIP_CADENCES = ((0.1, 0.0), (0.15, 0.05), (0.25, 0.1), (0.5, 0.0), (0.5, 0.25), (1.0, 0.125))
+"""Blind SLIP cadences: (period s, phase s), from below the slip window to the response
+window and beyond."""
+TOUCH_DELAYS_S = (0.125, 0.2)
+"""SLIP delays (s) after each touch-down: within the drawn stick (0.05-0.25 s after the
+press's ramp)."""
 
 
 CLASSES = [(float(i),) for i in range(9)]
@@ -105,9 +128,12 @@ GAMERS: dict[str, Any] = {
     "force-several-per-onset": lambda: _scripted(
         "force", g.cycle([(0.3,), (0.4,), (0.5,), (0.6,), (0.7,)]), CADENCE_S, per_beat=5),
     "slip-every-10ms": lambda: _scripted("slip", g.constant(()), 0.01),
-    "slip-cadence": lambda: _scripted("slip", g.constant(()), CADENCE_S),
+    **{f"slip-cadence-{p:g}s-phase-{ph:g}s": (
+        lambda p=p, ph=ph: _scripted("slip", g.constant(()), p, phase_s=ph))
+       for p, ph in SLIP_CADENCES},
+    **{f"slip-{d:g}s-after-each-touch": (lambda d=d: _after_touches(d))
+       for d in TOUCH_DELAYS_S},
     "slip-replay": lambda: _replay("slip"),
-    "vibration-constant": lambda: _scripted("vibration", g.constant((100.0,)), CADENCE_S),
     "vibration-several-per-onset": lambda: _scripted("vibration", g.cycle([(f,) for f in HZ]),
                                                      CADENCE_S, per_beat=4),
 }
@@ -115,13 +141,11 @@ GAMERS: dict[str, Any] = {
 :data:`OTHER_SEED`, the run whose truth the replays answer)."""
 
 WINS = {
-    "slip-cadence": "a SLIP at a cadence of the response window detects every slip: a slip "
-                    "has no value to be wrong, so only its timing can fail it, and the 0.5 s "
-                    "window lets a blind cadence match each slip once",
-    "vibration-constant": "a constant class is right as often as a random one (one in four "
-                          "of the drawn frequencies); on this seed the random answerer drew "
-                          "no right class in eight and the constant two: a class task's "
-                          "constant and random meet only over many seeds",
+    "slip-0.2s-after-each-touch": "a SLIP at a delay after each touch-down near the end of "
+                                  "the drawn stick lands in the slip window of most slips: "
+                                  "the window cannot be narrower than the reference's slip "
+                                  "latencies, and the stick's spread (0.2 s) is not much "
+                                  "wider; this decoder senses touches, not slips",
 }
 """Gamers that still beat the random answerer: holes of the rule that stay open (each
 strict, so a fix of the rule shows as an unexpected pass)."""
@@ -141,6 +165,46 @@ def test_a_gamer_scores_at_or_below_the_random_answerer(gamer: str) -> None:
     assert sum(scored[o] for o in outcomes) == scored.get("answers", scored.get("decisions"))
     assert score <= random_score, (
         f"{gamer} scored {score:.3f}, the random answerer {random_score:.3f}: {scored}")
+
+
+CONSTANT_SEEDS = (SEED, 1_000_005, 1_000_007)
+"""The seeds a constant class is played on: a constant and a random class meet only in
+expectation (chance = 1 / classes)."""
+
+
+def _chance_bound(trials: int, classes: int) -> float:
+    """The score a random class reaches at most with 95 % confidence over ``trials`` trials
+    of ``classes`` classes answered once each: the binomial quantile of chance, over the
+    trials."""
+    p, total, k = 1 / classes, 0.0, 0
+    for k in range(trials + 1):
+        total += math.comb(trials, k) * p ** k * (1 - p) ** (trials - k)
+        if total >= 0.95:
+            break
+    return k / trials
+
+
+@pytest.mark.parametrize("hz", (50.0, 300.0))
+def test_a_constant_class_scores_no_more_than_chance_over_seeds(hz: float) -> None:
+    """VIBRATION: a constant frequency at the response window's cadence, over
+    :data:`CONSTANT_SEEDS`, within the random answerer's chance bound (a constant right more
+    often than chance allows fails)."""
+    played = [_scripted("vibration", g.constant((hz,)), CADENCE_S, seed=s)
+              for s in CONSTANT_SEEDS]
+    trials = sum(p.task("vibration")["trials"] for p in played)
+    right = sum(p.task("vibration")["right"] for p in played)
+    assert trials > 0 and sum(p.task("vibration")["answers"] for p in played) > 0
+    bound = _chance_bound(trials, len(VIBRATION_CLASSES_HZ))
+    assert sum(p.score("vibration") for p in played) / len(played) <= bound
+    assert right / trials <= bound, f"{hz} Hz right on {right} of {trials} trials"
+
+
+def test_the_reference_receiver_detects_the_slips_in_their_window() -> None:
+    """The slip window and the charge of every unmatched SLIP leave the reference answerer
+    (``listen --answer --answer-with reference``) a high slip score."""
+    played = play_case(_ref("slip"), SEED, listening=lambda end: [
+        receiver_with(end, lambda r: TaskAnswerer(r, "reference"))])
+    assert played.score("slip") >= 0.8, played.task("slip")
 
 
 def test_an_answer_repeated_for_a_trial_voids_its_right_answer() -> None:

@@ -30,3 +30,16 @@ def headline(right: int, hedges: HedgedTrials, charged: int) -> float | None:
     if not charged:
         return None
     return round((right - hedges.voided) / charged, 6)
+
+
+def detection_headline(right: int, hedges: HedgedTrials, trials: int,
+                       unmatched: int) -> float | None:
+    """A detection task's ``score`` in [0, 1] (SLIP, SPEC.md §3.5.4): a detection has no
+    value to be wrong, so only its timing can fail it, and every answer that detects no
+    trial (a false alarm during the stick or after the window, a late one, a duplicate)
+    cancels one detection: max(0, right − voided − unmatched) / trials. A blind cadence
+    detects a trial only by landing in its window, and pays for every beat that does not;
+    None when nothing is charged (no trial, no answer)."""
+    if not trials:
+        return None if not unmatched else 0.0
+    return round(max(0, right - hedges.voided - unmatched) / trials, 6)
