@@ -17,14 +17,16 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pytest
 from harness.refusals import refusal_failures
-from harness.serve import REPO, RUN_DIR, serve_env
+from harness.serve import REPO, RUN_DIR, serve_argv, serve_env
 
+import protocols
 from skinhil.campaign import campaign_file
 from skinhil.campaign.campaign_file import load_campaign
 from skinhil.campaign.relay import RelayLink
@@ -345,3 +347,100 @@ def test_a_stop_during_a_held_write_is_raised_after_it() -> None:
     finally:
         signals.restore(previous)
         signals._received.clear()
+
+
+def test_a_replay_counts_every_refused_host_unit(tmp_path: Path) -> None:
+    """Host units sent while a recording plays: commands (NACKed REPLAYING), a corrupted
+    packet, a repeated sequence number and a host's SYNC + EVENTS are each one refused unit
+    in the replay summary, as a board's STATUS counts them (SPEC.md §3.3)."""
+    from conftest import PtyReader
+
+    from protocols.capture import CaptureHeader, CaptureWriter
+    from protocols.events import make_events
+    from skinhil.recording import Replayer, open_recording
+    from skinhil.transports import PtyMasterTransport
+
+    enc = protocols.SerialEncoder()
+    rec = tmp_path / "r.skcap"
+    with rec.open("wb") as f:
+        w = CaptureWriter(f, CaptureHeader(3, "serial", 100, 0))
+        for k in range(20):  # 0.4 s of events, 20 ms apart
+            w.write(k * 20_000_000, k * 20_000, enc.events(
+                make_events(np.array([k * 20_000]), np.array([k])), (k + 1) * 20_000))
+        w.close(20 * 20_000_000)
+    host = protocols.SerialEncoder()
+    ping = [host.command(protocols.Command(token=t, opcode=protocols.CommandCode.PING))
+            for t in (1, 2, 3)]
+    decision = host.command(protocols.Decision(token=4, stimulus_id=0, confidence=1.0))
+    corrupted = bytearray(host.command(protocols.Command(token=5,
+                                                         opcode=protocols.CommandCode.PING)))
+    corrupted[4] ^= 0x10
+    sync_and_events = host.events(make_events(np.array([100]), np.array([3])), 1000)
+    units = (ping[0], ping[1], decision, bytes(corrupted), ping[2], ping[2], sync_and_events)
+    refused = 2 + 1 + 1 + 2 + 2  # NACKs, the CRC error, PING 3 and its repeat, SYNC + EVENTS
+
+    link, slave = PtyMasterTransport.open_pair()
+    reader = PtyReader(slave)
+    try:
+        os.write(slave, b"".join(units))
+        summary = Replayer(open_recording(rec), link).run()
+        time.sleep(0.2)
+        back = protocols.SerialDecoder().feed(reader.take())
+    finally:
+        reader.stop()
+        link.shutdown()
+        os.close(slave)
+    acks = [r for r in back.records if isinstance(r, protocols.Ack)]
+    assert [(a.token, a.reason) for a in acks] == [
+        (t, protocols.NackReason.REPLAYING) for t in (1, 2, 4, 3)]
+    assert summary.complete and summary.commands == 4
+    assert summary.rx_errors == refused, summary
+
+
+@pytest.fixture(scope="module")
+def warm_kernels() -> None:
+    """Kernels compiled before a command whose stderr is counted (a cold cache adds a
+    notice line)."""
+    done = subprocess.run([sys.executable, "-m", "skinhil", "compile"], cwd=RUN_DIR,
+                          env=serve_env(), capture_output=True, text=True, timeout=600,
+                          stdin=subprocess.DEVNULL)
+    assert done.returncode == 0, done.stderr
+
+
+@pytest.fixture
+def full_folder(tmp_path: Path) -> Iterator[Path]:
+    """A folder on an 8 KiB tmpfs (mounted here: needs root), unmounted after the test."""
+    folder = tmp_path / "small"
+    folder.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=8k", "tmpfs", str(folder)],
+                      capture_output=True).returncode != 0:
+        pytest.skip("cannot mount a small tmpfs here (not root)")
+    try:
+        yield folder
+    finally:
+        subprocess.run(["umount", "-l", str(folder)], capture_output=True)
+
+
+def test_record_onto_a_full_disk_is_one_error_line_and_the_run_still_ends(
+        full_folder: Path, warm_kernels: None) -> None:
+    """``serve --record`` onto a disk that fills: one ``skinhil: error:`` line, a non-zero
+    status, no partial file, and the receiver still gets the board's RUN_END."""
+    from conftest import PtyPair, PtyReader
+
+    pair = PtyPair()
+    reader = PtyReader(pair.master)
+    try:
+        done = subprocess.run(serve_argv("--port", pair.path, "--record",
+                                         str(full_folder / "run.skcap"), "--duration", "20",
+                                         "--quiet"), cwd=RUN_DIR, env=serve_env(), text=True,
+                              capture_output=True, timeout=120, stdin=subprocess.DEVNULL)
+        time.sleep(0.3)
+        stream = protocols.SerialDecoder().feed(reader.take())
+    finally:
+        reader.stop()
+        pair.close()
+    lines = [ln for ln in done.stderr.splitlines() if ln.strip()]
+    assert done.returncode != 0 and len(lines) == 1, done.stderr
+    assert lines[0].startswith("skinhil: error: ") and "space" in lines[0], lines
+    assert any(isinstance(r, protocols.RunEnd) for r in stream.records)
+    assert list(full_folder.iterdir()) == []

@@ -323,7 +323,7 @@ def _replay_text(s: ReplaySummary, path: Path, unit: str) -> str:
             f"{s.events} events, {s.markers} markers; pace error p50 "
             f"{s.lateness_ms['p50']:.3f} ms p99 {s.lateness_ms['p99']:.3f} ms max "
             f"{s.lateness_ms['max']:.3f} ms; {s.commands} host commands (DECISIONs scored, "
-            "others NACK REPLAYING)")
+            f"others NACK REPLAYING), {s.rx_errors} host units refused")
 
 
 BOARD_OPTIONS: dict[str, str] = {
