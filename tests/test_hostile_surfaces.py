@@ -444,3 +444,28 @@ def test_record_onto_a_full_disk_is_one_error_line_and_the_run_still_ends(
     assert lines[0].startswith("skinhil: error: ") and "space" in lines[0], lines
     assert any(isinstance(r, protocols.RunEnd) for r in stream.records)
     assert list(full_folder.iterdir()) == []
+
+
+def test_a_decoder_stored_big_endian_is_the_same_decoder(tmp_path: Path, capsys) -> None:
+    """Every array of a decoder file in big-endian byte order (its digest taken as stored):
+    read as the same decoder, which decides as the original does; arrays of another type are
+    refused naming it."""
+    from harness.hostile_models import _entries, _signed, _write, write_good
+
+    from skinhil.decoding import DirectionDecoder
+
+    good = write_good(tmp_path / "good.npz")
+    header, arrays = _entries(good)
+    swapped = {k: a.astype(a.dtype.newbyteorder(">")) for k, a in arrays.items()}
+    assert all(a.dtype.byteorder == ">" for a in swapped.values())
+    _write(tmp_path / "big.npz", _signed(header, swapped), swapped)
+    ours, theirs = DirectionDecoder.load(good), DirectionDecoder.load(tmp_path / "big.npz")
+    x = np.random.default_rng(1).normal(size=(50, ours.spec_.n_features))
+    assert np.array_equal(ours.predict(x), theirs.predict(x))
+    assert np.array_equal(ours.coef_, theirs.coef_)
+    single = {**arrays, "coef": arrays["coef"].astype(">f4")}
+    _write(tmp_path / "f4.npz", _signed(header, single), single)
+    refuse = Case("float32 coef", ("listen", "--port", "loop://", "--model",
+                                   str(tmp_path / "f4.npz")), "holds float32")
+    failures = refusal_failures([refuse], capsys)
+    assert not failures, failures
