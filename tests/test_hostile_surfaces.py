@@ -469,3 +469,55 @@ def test_a_decoder_stored_big_endian_is_the_same_decoder(tmp_path: Path, capsys)
                                    str(tmp_path / "f4.npz")), "holds float32")
     failures = refusal_failures([refuse], capsys)
     assert not failures, failures
+
+
+def test_a_killed_demo_leaves_no_temp_folder_after_the_next_start(
+        tmp_path: Path, warm_kernels: None) -> None:
+    """``demo`` killed by SIGKILL mid-run cannot remove its temporary folder (its board dies
+    with it); the next ``demo`` removes it, and its own, and leaves nothing in the system's
+    temporary folder."""
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    env = {**serve_env(), "TMPDIR": str(tmp)}
+    demo = [sys.executable, "-m", "skinhil", "demo", "--model", str(_model(tmp_path)),
+            "--quiet", "--duration"]
+    proc = subprocess.Popen([*demo, "60"], cwd=RUN_DIR, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
+    try:
+        kids = _case_started(proc)
+        left = [p for p in tmp.rglob("*") if p.is_dir()]
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert _gone(kids) == []
+    assert left and all(p.exists() for p in left)  # what the killed demo could not remove
+    done = subprocess.run([*demo, "1"], cwd=RUN_DIR, env=env, text=True, capture_output=True,
+                          timeout=180, stdin=subprocess.DEVNULL)
+    assert done.returncode == 0, done.stderr
+    remains = sorted(str(p.relative_to(tmp)) for p in tmp.rglob("*"))
+    assert remains in ([], [f"skinhil-{os.getuid()}"]), remains
+
+
+def test_only_folders_of_ended_processes_are_removed(tmp_path: Path, monkeypatch) -> None:
+    """A folder of this process, of a pid reused by another process (another start time) and
+    of a pid that does not run; and a name not of skinhil's: only the ended ones go."""
+    from skinhil import temp_folders
+
+    monkeypatch.setattr(temp_folders.tempfile, "gettempdir", lambda: str(tmp_path))
+    with temp_folders.TempFolder("mine") as mine:
+        parent = mine.parent
+        ticks = temp_folders._start_ticks(os.getpid())
+        assert ticks
+        reused = parent / f"{os.getpid()}-{ticks + 1}-demo-0"
+        ended = parent / f"{2**22 + 1}-5-demo-0"
+        foreign = parent / "notes"
+        for p in (reused, ended, foreign):
+            p.mkdir()
+        with temp_folders.TempFolder("next") as other:
+            assert sorted(p.name for p in parent.iterdir()) == sorted(
+                [mine.name, other.name, "notes"])
+        assert not other.exists() and mine.exists()
+    assert not mine.exists() and parent.stat().st_mode & 0o777 == 0o700
