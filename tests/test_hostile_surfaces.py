@@ -521,3 +521,22 @@ def test_only_folders_of_ended_processes_are_removed(tmp_path: Path, monkeypatch
                 [mine.name, other.name, "notes"])
         assert not other.exists() and mine.exists()
     assert not mine.exists() and parent.stat().st_mode & 0o777 == 0o700
+
+
+def test_grasp_truth_onto_a_full_disk_keeps_the_run_and_ends_in_one_line(
+        full_folder: Path, tmp_path: Path, warm_kernels: None) -> None:
+    """``serve --grasp --grasp-truth`` onto a disk that fills: the run plays to its end (its
+    score written), the truth file holds whole records only, and the run ends with one
+    ``skinhil: error:`` line saying how far the file got, status 2."""
+    truth, score = full_folder / "held.bin", tmp_path / "score.json"
+    done = subprocess.run(serve_argv("--port", "loop://", "--grasp", "3", "--grasp-truth",
+                                     str(truth), "--score", str(score), "--quiet"),
+                          cwd=RUN_DIR, env=serve_env(), text=True, capture_output=True,
+                          timeout=120, stdin=subprocess.DEVNULL)
+    lines = [ln for ln in done.stderr.splitlines() if ln.strip()]
+    assert done.returncode == 2 and len(lines) == 1, done.stderr
+    assert lines[0].startswith("skinhil: error: ") and "space" in lines[0], lines
+    assert json.loads(score.read_text(encoding="utf-8"))["grasp"]["lifts"] == 3
+    kept = HeldTruthReader(truth).read()
+    assert len(kept) and truth.stat().st_size == len(MAGIC) + kept.nbytes
+    assert f"after {len(kept)} records" in lines[0]
