@@ -109,6 +109,12 @@ def _refusals(tmp: Path) -> list[Case]:
                                         str(tmp / "seed")), "seed"),
         Case("bench --out uncreatable", ("bench", smoke, "--model", str(_model(tmp)), "--out",
                                          "/proc/self/nope/out"), "cannot be created"),
+        # refused before a model is trained (the model cache is unwritable here: a model
+        # looked for first is refused for that instead)
+        Case("bench --out under a file", ("bench", smoke, "--out", str(tmp / "0.toml" / "o")),
+             "is not a folder"),
+        Case("bench --suite --out under a file", ("bench", "--suite", "tactile-v1", "--out",
+                                                  str(tmp / "0.toml" / "o")), "is not a folder"),
         Case("serve --grasp-truth a foreign file",
              ("serve", "--link", "pty:", "--grasp", "1", "--grasp-truth",
               str(tmp / "decoder.npz")), "not a held-object truth file"),
@@ -116,7 +122,8 @@ def _refusals(tmp: Path) -> list[Case]:
     return cases
 
 
-def test_hostile_inputs_refused_in_one_line(tmp_path: Path, capsys) -> None:
+def test_hostile_inputs_refused_in_one_line(tmp_path: Path, capsys, monkeypatch) -> None:
+    monkeypatch.setenv("XDG_CACHE_HOME", "/proc/nope")
     foreign = tmp_path / "decoder.npz"
     foreign.write_bytes(b"PK\x03\x04" + bytes(range(256)) * 64)
     before = foreign.read_bytes()
