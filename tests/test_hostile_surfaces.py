@@ -86,6 +86,11 @@ CAMPAIGNS: dict[str, tuple[str, str]] = {
         'name = "c"\nrepetitions = 2\n[parameters]\nseed = 9223372036854775807\n'
         '[[scenario]]\nbuiltin = "random"\n', "seed"),
     "scenario a symlink loop": ('name = "c"\n[[scenario]]\nfile = "loop.toml"\n', "loop"),
+    "scenario path with a NUL": ('name = "c"\n[[scenario]]\nfile = "a\\u0000b"\n', "path"),
+    "size past the wire": ('name = "c"\n[parameters]\nsize = "300x300"\n[[scenario]]\n'
+                           'builtin = "random"\n', "sensors"),
+    "size 2x2": ('name = "c"\n[parameters]\nsize = "2x2"\n[[scenario]]\n'
+                 'builtin = "random"\n', "campaign file"),
 }
 
 
