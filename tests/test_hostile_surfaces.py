@@ -79,6 +79,13 @@ SCENARIOS: dict[str, tuple[str, str]] = {
                                          "built-in"),
     "path time 1e300 s": (_contact('motion = "path"\npath = [[0, 0, 0, 0.1], '
                                    '[1e300, 0, 0, 0.1]]\n'), "path times"),
+    "two contacts of one name": (CONTACT_HEAD + ('[[contact]]\nindenter = "s"\nname = "c"\n'
+                                                 'motion = "press"\ndepth_mm = 0.2\n') * 2,
+                                 "distinct"),
+    "a path's depth_mm besides its keyframes": (_contact(
+        'motion = "path"\ndepth_mm = 0.3\npath = [[0, 0.5, 0.5, 0.1]]\n'), "depth_mm"),
+    "vibration_hz without vibration_mm": (_contact(
+        'motion = "press"\ndepth_mm = 0.2\nvibration_hz = 100.0\n'), "vibration_mm"),
 }
 
 CAMPAIGNS: dict[str, tuple[str, str]] = {
