@@ -6,7 +6,9 @@ folder skinhil makes (``demo``'s score and truth files) is a :class:`TempFolder`
 one parent the user owns, ``<the system's temporary folder>/skinhil-<uid>`` (mode 0700), and
 named after the process that made it, its pid and its start time (``/proc/<pid>/stat``: a
 reused pid is not taken for it). Each new :class:`TempFolder` first removes the folders of
-processes that no longer run; a process that ends as it should removes its own.
+processes that no longer run; a process that ends as it should removes its own. A temporary
+file kept beside an output instead (``listen --record``'s event spool, on the output's disk)
+is named the same way and removed the same way (:func:`remove_stale` with its prefix).
 """
 
 from __future__ import annotations
@@ -70,16 +72,33 @@ def parent_folder() -> Path:
     return parent
 
 
-def remove_stale(parent: Path) -> list[Path]:
-    """Remove the folders in ``parent`` of processes that no longer run; return them."""
+def process_tag() -> str:
+    """``PID-START``: this process's pid and start time, the head of the names of the
+    temporary files and folders it makes (:func:`ended_process`)."""
+    pid = os.getpid()
+    return f"{pid}-{_start_ticks(pid) or 0}"
+
+
+def ended_process(name: str) -> bool:
+    """Whether ``name`` begins with the :func:`process_tag` of a process that no longer
+    runs (False for a name that begins with no tag)."""
+    pid_text, _, rest = name.partition("-")
+    ticks_text = rest.partition("-")[0].partition(".")[0]
+    if not (pid_text.isdigit() and ticks_text.isdigit()):
+        return False
+    return not _running(int(pid_text), int(ticks_text))
+
+
+def remove_stale(parent: Path, prefix: str = "") -> list[Path]:
+    """Remove the entries of ``parent`` (files or folders) named ``prefix`` and a
+    :func:`process_tag` of a process that no longer runs; return them."""
     removed = []
-    for entry in parent.iterdir():
-        pid_text, _, rest = entry.name.partition("-")
-        ticks_text = rest.partition("-")[0]
-        if not (pid_text.isdigit() and ticks_text.isdigit()):
-            continue  # not one of ours
-        if not _running(int(pid_text), int(ticks_text)):
-            shutil.rmtree(entry, ignore_errors=True)
+    for entry in parent.glob(f"{prefix}*"):
+        if ended_process(entry.name[len(prefix):]):
+            if entry.is_dir() and not entry.is_symlink():
+                shutil.rmtree(entry, ignore_errors=True)
+            else:
+                entry.unlink(missing_ok=True)
             removed.append(entry)
             log.info("removed %s, left by an ended process", entry)
     return removed
@@ -97,8 +116,7 @@ class TempFolder:
     def __init__(self, purpose: str) -> None:
         parent = parent_folder()
         remove_stale(parent)
-        pid = os.getpid()
-        self.path = parent / f"{pid}-{_start_ticks(pid) or 0}-{purpose}-{secrets.token_hex(4)}"
+        self.path = parent / f"{process_tag()}-{purpose}-{secrets.token_hex(4)}"
         """The folder (mode 0700)."""
         self.path.mkdir(mode=0o700)
         self._finalizer = weakref.finalize(self, shutil.rmtree, self.path, True)

@@ -559,3 +559,22 @@ def test_grasp_truth_onto_a_full_disk_keeps_the_run_and_ends_in_one_line(
     kept = HeldTruthReader(truth).read()
     assert len(kept) and truth.stat().st_size == len(MAGIC) + kept.nbytes
     assert f"after {len(kept)} records" in lines[0]
+
+
+def test_a_killed_recorders_spool_is_removed_by_the_next(tmp_path: Path) -> None:
+    """``listen --record``'s event spool beside the output: one left by an ended process is
+    removed when the next recorder starts in that folder; a live one and other files stay."""
+    from skinhil.recording import SessionRecorder
+    from skinhil.recording.session import SPOOL_PREFIX
+    from skinhil.temp_folders import process_tag
+
+    stale = tmp_path / f"{SPOOL_PREFIX}{2**22 + 1}-7.abc.spool"
+    live = tmp_path / f"{SPOOL_PREFIX}{process_tag()}.xyz.spool"
+    other = tmp_path / f"{SPOOL_PREFIX}notes.spool"
+    for p in (stale, live, other):
+        p.write_bytes(b"x")
+    with SessionRecorder(tmp_path):
+        names = sorted(p.name for p in tmp_path.iterdir())
+        assert stale.name not in names and live.exists() and other.exists()
+        assert len(names) == 3  # its own spool beside the two kept
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([live.name, other.name])
