@@ -42,6 +42,26 @@ def check_output_path(path: Path, suffixes: tuple[str, ...] = ()) -> Path:
     return path
 
 
+def check_output_folder(path: Path, what: str) -> Path:
+    """``path`` as an absolute path of an output folder that exists and is writable, or that
+    can be made: its nearest existing ancestor is a folder this process can write in.
+
+    Raises :class:`ConfigError` (one line naming ``what``, e.g. ``--out``) otherwise, before
+    any work is done (a model trained first, then an output refused, is minutes lost).
+    """
+    path = Path(path).expanduser().absolute()
+    probe = path
+    while not os.path.lexists(probe) and probe.parent != probe:
+        probe = probe.parent
+    if not probe.is_dir():
+        raise ConfigError(f"{what} '{path}' cannot be created: '{probe}' is not a folder — give "
+                          "a folder you can write")
+    if not os.access(probe, os.W_OK | os.X_OK):
+        raise ConfigError(f"{what} '{path}' cannot be created: '{probe}' is not writable — give "
+                          "a folder you can write")
+    return path
+
+
 def current_umask() -> int:
     """The process's file-creation mask (read from /proc where it can be, so no thread sees
     it changed; else set and restored at once)."""

@@ -17,14 +17,16 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pytest
 from harness.refusals import refusal_failures
-from harness.serve import REPO, RUN_DIR, serve_env
+from harness.serve import REPO, RUN_DIR, serve_argv, serve_env
 
+import protocols
 from skinhil.campaign import campaign_file
 from skinhil.campaign.campaign_file import load_campaign
 from skinhil.campaign.relay import RelayLink
@@ -77,6 +79,13 @@ SCENARIOS: dict[str, tuple[str, str]] = {
                                          "built-in"),
     "path time 1e300 s": (_contact('motion = "path"\npath = [[0, 0, 0, 0.1], '
                                    '[1e300, 0, 0, 0.1]]\n'), "path times"),
+    "two contacts of one name": (CONTACT_HEAD + ('[[contact]]\nindenter = "s"\nname = "c"\n'
+                                                 'motion = "press"\ndepth_mm = 0.2\n') * 2,
+                                 "distinct"),
+    "a path's depth_mm besides its keyframes": (_contact(
+        'motion = "path"\ndepth_mm = 0.3\npath = [[0, 0.5, 0.5, 0.1]]\n'), "depth_mm"),
+    "vibration_hz without vibration_mm": (_contact(
+        'motion = "press"\ndepth_mm = 0.2\nvibration_hz = 100.0\n'), "vibration_mm"),
 }
 
 CAMPAIGNS: dict[str, tuple[str, str]] = {
@@ -84,6 +93,11 @@ CAMPAIGNS: dict[str, tuple[str, str]] = {
         'name = "c"\nrepetitions = 2\n[parameters]\nseed = 9223372036854775807\n'
         '[[scenario]]\nbuiltin = "random"\n', "seed"),
     "scenario a symlink loop": ('name = "c"\n[[scenario]]\nfile = "loop.toml"\n', "loop"),
+    "scenario path with a NUL": ('name = "c"\n[[scenario]]\nfile = "a\\u0000b"\n', "path"),
+    "size past the wire": ('name = "c"\n[parameters]\nsize = "300x300"\n[[scenario]]\n'
+                           'builtin = "random"\n', "sensors"),
+    "size 2x2": ('name = "c"\n[parameters]\nsize = "2x2"\n[[scenario]]\n'
+                 'builtin = "random"\n', "campaign file"),
 }
 
 
@@ -107,6 +121,12 @@ def _refusals(tmp: Path) -> list[Case]:
                                         str(tmp / "seed")), "seed"),
         Case("bench --out uncreatable", ("bench", smoke, "--model", str(_model(tmp)), "--out",
                                          "/proc/self/nope/out"), "cannot be created"),
+        # refused before a model is trained (the model cache is unwritable here: a model
+        # looked for first is refused for that instead)
+        Case("bench --out under a file", ("bench", smoke, "--out", str(tmp / "0.toml" / "o")),
+             "is not a folder"),
+        Case("bench --suite --out under a file", ("bench", "--suite", "tactile-v1", "--out",
+                                                  str(tmp / "0.toml" / "o")), "is not a folder"),
         Case("serve --grasp-truth a foreign file",
              ("serve", "--link", "pty:", "--grasp", "1", "--grasp-truth",
               str(tmp / "decoder.npz")), "not a held-object truth file"),
@@ -114,7 +134,8 @@ def _refusals(tmp: Path) -> list[Case]:
     return cases
 
 
-def test_hostile_inputs_refused_in_one_line(tmp_path: Path, capsys) -> None:
+def test_hostile_inputs_refused_in_one_line(tmp_path: Path, capsys, monkeypatch) -> None:
+    monkeypatch.setenv("XDG_CACHE_HOME", "/proc/nope")
     foreign = tmp_path / "decoder.npz"
     foreign.write_bytes(b"PK\x03\x04" + bytes(range(256)) * 64)
     before = foreign.read_bytes()
@@ -345,3 +366,215 @@ def test_a_stop_during_a_held_write_is_raised_after_it() -> None:
     finally:
         signals.restore(previous)
         signals._received.clear()
+
+
+def test_a_replay_counts_every_refused_host_unit(tmp_path: Path) -> None:
+    """Host units sent while a recording plays: commands (NACKed REPLAYING), a corrupted
+    packet, a repeated sequence number and a host's SYNC + EVENTS are each one refused unit
+    in the replay summary, as a board's STATUS counts them (SPEC.md §3.3)."""
+    from conftest import PtyReader
+
+    from protocols.capture import CaptureHeader, CaptureWriter
+    from protocols.events import make_events
+    from skinhil.recording import Replayer, open_recording
+    from skinhil.transports import PtyMasterTransport
+
+    enc = protocols.SerialEncoder()
+    rec = tmp_path / "r.skcap"
+    with rec.open("wb") as f:
+        w = CaptureWriter(f, CaptureHeader(3, "serial", 100, 0))
+        for k in range(20):  # 0.4 s of events, 20 ms apart
+            w.write(k * 20_000_000, k * 20_000, enc.events(
+                make_events(np.array([k * 20_000]), np.array([k])), (k + 1) * 20_000))
+        w.close(20 * 20_000_000)
+    host = protocols.SerialEncoder()
+    ping = [host.command(protocols.Command(token=t, opcode=protocols.CommandCode.PING))
+            for t in (1, 2, 3)]
+    decision = host.command(protocols.Decision(token=4, stimulus_id=0, confidence=1.0))
+    corrupted = bytearray(host.command(protocols.Command(token=5,
+                                                         opcode=protocols.CommandCode.PING)))
+    corrupted[4] ^= 0x10
+    sync_and_events = host.events(make_events(np.array([100]), np.array([3])), 1000)
+    units = (ping[0], ping[1], decision, bytes(corrupted), ping[2], ping[2], sync_and_events)
+    refused = 2 + 1 + 1 + 2 + 2  # NACKs, the CRC error, PING 3 and its repeat, SYNC + EVENTS
+
+    link, slave = PtyMasterTransport.open_pair()
+    reader = PtyReader(slave)
+    try:
+        os.write(slave, b"".join(units))
+        summary = Replayer(open_recording(rec), link).run()
+        time.sleep(0.2)
+        back = protocols.SerialDecoder().feed(reader.take())
+    finally:
+        reader.stop()
+        link.shutdown()
+        os.close(slave)
+    acks = [r for r in back.records if isinstance(r, protocols.Ack)]
+    assert [(a.token, a.reason) for a in acks] == [
+        (t, protocols.NackReason.REPLAYING) for t in (1, 2, 4, 3)]
+    assert summary.complete and summary.commands == 4
+    assert summary.rx_errors == refused, summary
+
+
+@pytest.fixture(scope="module")
+def warm_kernels() -> None:
+    """Kernels compiled before a command whose stderr is counted (a cold cache adds a
+    notice line)."""
+    done = subprocess.run([sys.executable, "-m", "skinhil", "compile"], cwd=RUN_DIR,
+                          env=serve_env(), capture_output=True, text=True, timeout=600,
+                          stdin=subprocess.DEVNULL)
+    assert done.returncode == 0, done.stderr
+
+
+@pytest.fixture
+def full_folder(tmp_path: Path) -> Iterator[Path]:
+    """A folder on an 8 KiB tmpfs (mounted here: needs root), unmounted after the test."""
+    folder = tmp_path / "small"
+    folder.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=8k", "tmpfs", str(folder)],
+                      capture_output=True).returncode != 0:
+        pytest.skip("cannot mount a small tmpfs here (not root)")
+    try:
+        yield folder
+    finally:
+        subprocess.run(["umount", "-l", str(folder)], capture_output=True)
+
+
+def test_record_onto_a_full_disk_is_one_error_line_and_the_run_still_ends(
+        full_folder: Path, warm_kernels: None) -> None:
+    """``serve --record`` onto a disk that fills: one ``skinhil: error:`` line, a non-zero
+    status, no partial file, and the receiver still gets the board's RUN_END."""
+    from conftest import PtyPair, PtyReader
+
+    pair = PtyPair()
+    reader = PtyReader(pair.master)
+    try:
+        done = subprocess.run(serve_argv("--port", pair.path, "--record",
+                                         str(full_folder / "run.skcap"), "--duration", "20",
+                                         "--quiet"), cwd=RUN_DIR, env=serve_env(), text=True,
+                              capture_output=True, timeout=120, stdin=subprocess.DEVNULL)
+        time.sleep(0.3)
+        stream = protocols.SerialDecoder().feed(reader.take())
+    finally:
+        reader.stop()
+        pair.close()
+    lines = [ln for ln in done.stderr.splitlines() if ln.strip()]
+    assert done.returncode != 0 and len(lines) == 1, done.stderr
+    assert lines[0].startswith("skinhil: error: ") and "space" in lines[0], lines
+    assert any(isinstance(r, protocols.RunEnd) for r in stream.records)
+    assert list(full_folder.iterdir()) == []
+
+
+def test_a_decoder_stored_big_endian_is_the_same_decoder(tmp_path: Path, capsys) -> None:
+    """Every array of a decoder file in big-endian byte order (its digest taken as stored):
+    read as the same decoder, which decides as the original does; arrays of another type are
+    refused naming it."""
+    from harness.hostile_models import _entries, _signed, _write, write_good
+
+    from skinhil.decoding import DirectionDecoder
+
+    good = write_good(tmp_path / "good.npz")
+    header, arrays = _entries(good)
+    swapped = {k: a.astype(a.dtype.newbyteorder(">")) for k, a in arrays.items()}
+    assert all(a.dtype.byteorder == ">" for a in swapped.values())
+    _write(tmp_path / "big.npz", _signed(header, swapped), swapped)
+    ours, theirs = DirectionDecoder.load(good), DirectionDecoder.load(tmp_path / "big.npz")
+    x = np.random.default_rng(1).normal(size=(50, ours.spec_.n_features))
+    assert np.array_equal(ours.predict(x), theirs.predict(x))
+    assert np.array_equal(ours.coef_, theirs.coef_)
+    single = {**arrays, "coef": arrays["coef"].astype(">f4")}
+    _write(tmp_path / "f4.npz", _signed(header, single), single)
+    refuse = Case("float32 coef", ("listen", "--port", "loop://", "--model",
+                                   str(tmp_path / "f4.npz")), "holds float32")
+    failures = refusal_failures([refuse], capsys)
+    assert not failures, failures
+
+
+def test_a_killed_demo_leaves_no_temp_folder_after_the_next_start(
+        tmp_path: Path, warm_kernels: None) -> None:
+    """``demo`` killed by SIGKILL mid-run cannot remove its temporary folder (its board dies
+    with it); the next ``demo`` removes it, and its own, and leaves nothing in the system's
+    temporary folder."""
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    env = {**serve_env(), "TMPDIR": str(tmp)}
+    demo = [sys.executable, "-m", "skinhil", "demo", "--model", str(_model(tmp_path)),
+            "--quiet", "--duration"]
+    proc = subprocess.Popen([*demo, "60"], cwd=RUN_DIR, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
+    try:
+        kids = _case_started(proc)
+        left = [p for p in tmp.rglob("*") if p.is_dir()]
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert _gone(kids) == []
+    assert left and all(p.exists() for p in left)  # what the killed demo could not remove
+    done = subprocess.run([*demo, "1"], cwd=RUN_DIR, env=env, text=True, capture_output=True,
+                          timeout=180, stdin=subprocess.DEVNULL)
+    assert done.returncode == 0, done.stderr
+    remains = sorted(str(p.relative_to(tmp)) for p in tmp.rglob("*"))
+    assert remains in ([], [f"skinhil-{os.getuid()}"]), remains
+
+
+def test_only_folders_of_ended_processes_are_removed(tmp_path: Path, monkeypatch) -> None:
+    """A folder of this process, of a pid reused by another process (another start time) and
+    of a pid that does not run; and a name not of skinhil's: only the ended ones go."""
+    from skinhil import temp_folders
+
+    monkeypatch.setattr(temp_folders.tempfile, "gettempdir", lambda: str(tmp_path))
+    with temp_folders.TempFolder("mine") as mine:
+        parent = mine.parent
+        ticks = temp_folders._start_ticks(os.getpid())
+        assert ticks
+        reused = parent / f"{os.getpid()}-{ticks + 1}-demo-0"
+        ended = parent / f"{2**22 + 1}-5-demo-0"
+        foreign = parent / "notes"
+        for p in (reused, ended, foreign):
+            p.mkdir()
+        with temp_folders.TempFolder("next") as other:
+            assert sorted(p.name for p in parent.iterdir()) == sorted(
+                [mine.name, other.name, "notes"])
+        assert not other.exists() and mine.exists()
+    assert not mine.exists() and parent.stat().st_mode & 0o777 == 0o700
+
+
+def test_grasp_truth_onto_a_full_disk_keeps_the_run_and_ends_in_one_line(
+        full_folder: Path, tmp_path: Path, warm_kernels: None) -> None:
+    """``serve --grasp --grasp-truth`` onto a disk that fills: the run plays to its end (its
+    score written), the truth file holds whole records only, and the run ends with one
+    ``skinhil: error:`` line saying how far the file got, status 2."""
+    truth, score = full_folder / "held.bin", tmp_path / "score.json"
+    done = subprocess.run(serve_argv("--port", "loop://", "--grasp", "3", "--grasp-truth",
+                                     str(truth), "--score", str(score), "--quiet"),
+                          cwd=RUN_DIR, env=serve_env(), text=True, capture_output=True,
+                          timeout=120, stdin=subprocess.DEVNULL)
+    lines = [ln for ln in done.stderr.splitlines() if ln.strip()]
+    assert done.returncode == 2 and len(lines) == 1, done.stderr
+    assert lines[0].startswith("skinhil: error: ") and "space" in lines[0], lines
+    assert json.loads(score.read_text(encoding="utf-8"))["grasp"]["lifts"] == 3
+    kept = HeldTruthReader(truth).read()
+    assert len(kept) and truth.stat().st_size == len(MAGIC) + kept.nbytes
+    assert f"after {len(kept)} records" in lines[0]
+
+
+def test_a_killed_recorders_spool_is_removed_by_the_next(tmp_path: Path) -> None:
+    """``listen --record``'s event spool beside the output: one left by an ended process is
+    removed when the next recorder starts in that folder; a live one and other files stay."""
+    from skinhil.recording import SessionRecorder
+    from skinhil.recording.session import SPOOL_PREFIX
+    from skinhil.temp_folders import process_tag
+
+    stale = tmp_path / f"{SPOOL_PREFIX}{2**22 + 1}-7.abc.spool"
+    live = tmp_path / f"{SPOOL_PREFIX}{process_tag()}.xyz.spool"
+    other = tmp_path / f"{SPOOL_PREFIX}notes.spool"
+    for p in (stale, live, other):
+        p.write_bytes(b"x")
+    with SessionRecorder(tmp_path):
+        names = sorted(p.name for p in tmp_path.iterdir())
+        assert stale.name not in names and live.exists() and other.exists()
+        assert len(names) == 3  # its own spool beside the two kept
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([live.name, other.name])

@@ -35,10 +35,11 @@ from dataclasses import dataclass, field
 from numbers import Integral, Real
 from pathlib import Path
 
+from protocols.versions import MAX_CHANNELS
 from skinhil.campaign.criteria import Criterion, parse_criterion
 from skinhil.campaign.rig import RigBounds, rig_bounds_from_table
 from skinhil.errors import ConfigError
-from skinhil.model.geometry import PAPER_SIZE, format_size, parse_size
+from skinhil.model.geometry import PAPER_SIZE, format_size, parse_size, spring_count
 from skinhil.model.neurons import MAX_SNR_DB, MIN_SNR_DB
 from skinhil.model.schedule_file import (
     checked_table,
@@ -184,7 +185,15 @@ def _criteria(value: object, where: str) -> tuple[Criterion, ...]:
 def _value(name: str, value: object, where: str) -> float | int | str:
     check_param(name, value, PARAMETERS[name][1], where=f"{where}: ")
     if name == "size":
-        return format_size(parse_size(str(value)))
+        try:
+            size = parse_size(str(value))
+        except ConfigError as exc:
+            raise ConfigError(f"{where}: size = {value!r}: {exc}") from None
+        if spring_count(size) > MAX_CHANNELS:  # as serve --size refuses it
+            raise ConfigError(f"{where}: size = {value!r}: a {format_size(size)} skin has "
+                              f"{spring_count(size)} sensors; the wire addresses at most "
+                              f"{MAX_CHANNELS} — give a smaller size")
+        return format_size(size)
     if name == "seed":
         return int(value)  # type: ignore[call-overload]
     return float(value)  # type: ignore[arg-type]
@@ -219,7 +228,7 @@ def _scenario(table: object, where: str, base: Path, sizes: tuple[str, ...],
                               f"{', '.join(repr(b) for b in BUILTINS)}")
         default_name = str(builtin)
     else:
-        if not isinstance(file, str) or not file:
+        if not isinstance(file, str) or not file or "\x00" in file:
             raise ConfigError(f"{where}: file = {file!r} — give the path in quotes")
         try:
             path = (base / file).resolve(strict=False)

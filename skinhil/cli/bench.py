@@ -23,6 +23,7 @@ from skinhil.cli.transport_args import (
 )
 from skinhil.cli.values import integer, real
 from skinhil.errors import ConfigError
+from skinhil.output_files import check_output_folder
 from skinhil.transports.faults import FaultParams
 
 DEFAULT_SEEDS = 3
@@ -174,6 +175,7 @@ def run_suite_bench(args: argparse.Namespace) -> int:
         raise ConfigError(f"--out '{out}' is not a folder — give a folder")
     if (out / SUMMARY_NAME).exists():
         raise ConfigError(f"'{out / SUMMARY_NAME}' holds an earlier run — give another --out")
+    check_output_folder(out, "--out")  # before a model is trained
     own = not link_args
     model = _model(args, ("6x6",)) if own or args.baselines else None
     holds = any(c.holds_object for c in campaign.cases())
@@ -259,6 +261,7 @@ def run_campaign_file(args: argparse.Namespace) -> int:
                           "continue it, or give another --out")
     if args.resume:  # a summary that cannot be resumed is refused before any model loads
         load_summary(out / SUMMARY_NAME, campaign)
+    check_output_folder(out, "--out")  # before a model is trained
     if link_args:
         link = BenchLink(link_args=tuple(link_args))
         link_text = describe_transport(args)

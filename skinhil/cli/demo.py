@@ -17,7 +17,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -45,6 +44,7 @@ from skinhil.receiver import DecisionAnswerer, Receiver
 from skinhil.receiver.model_file import load_window_decoder
 from skinhil.receiver.session import run_against_board, serve_command
 from skinhil.receiver.training import train_decoder
+from skinhil.temp_folders import TempFolder
 from skinhil.transports import DEFAULT_BAUD, PtyMasterTransport
 
 DEFAULT_LIFTS = 10
@@ -171,8 +171,8 @@ def run(args: argparse.Namespace) -> int:
                   else cached_model(args.snr_db, args.quiet, args.baud, args.seed))
     decoder = load_window_decoder(model_path, n_channels=spring_count(PAPER_SIZE))
     link, slave_fd = PtyMasterTransport.open_pair(args.baud)
-    score_dir = tempfile.TemporaryDirectory(prefix="skinhil-demo-")
-    score = Path(score_dir.name) / "score.json"
+    score_dir = TempFolder("demo")
+    score = score_dir.path / "score.json"
     cmd = serve_command(["--port", link.slave_path, "--baud", str(args.baud), "--score",
                          str(score), "--markers"], args.duration_s, args.snr_db, args.seed,
                         DEMO_REST_S)

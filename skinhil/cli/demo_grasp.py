@@ -15,7 +15,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import tempfile
 import threading
 import time
 from pathlib import Path
@@ -35,6 +34,7 @@ from skinhil.receiver.grip_reflex import GripController, LoadReadout, SlipReflex
 from skinhil.receiver.grip_training import fit_readout
 from skinhil.receiver.receiver import ReceiverListener
 from skinhil.receiver.session import run_against_board, serve_command
+from skinhil.temp_folders import TempFolder
 from skinhil.transports import PtyMasterTransport
 from skinhil.view.grasp_trace import GraspTrace
 
@@ -122,9 +122,9 @@ def run(args: argparse.Namespace) -> int:
     if readout is not None:
         controller = GripController(link, SlipReflex(readout))
         listeners.append(controller)
-    score_dir = tempfile.TemporaryDirectory(prefix="skinhil-demo-")
-    score = Path(score_dir.name) / "score.json"
-    truth = Path(score_dir.name) / "truth.bin"
+    score_dir = TempFolder("demo")
+    score = score_dir.path / "score.json"
+    truth = score_dir.path / "truth.bin"
     duration_s = lifts_duration_s(params, args.lifts)
     view_args = ["--grasp-truth", str(truth)] if args.view is not None else []
     cmd = serve_command(["--port", link.slave_path, "--baud", str(args.baud), "--grasp",

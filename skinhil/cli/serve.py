@@ -323,7 +323,7 @@ def _replay_text(s: ReplaySummary, path: Path, unit: str) -> str:
             f"{s.events} events, {s.markers} markers; pace error p50 "
             f"{s.lateness_ms['p50']:.3f} ms p99 {s.lateness_ms['p99']:.3f} ms max "
             f"{s.lateness_ms['max']:.3f} ms; {s.commands} host commands (DECISIONs scored, "
-            "others NACK REPLAYING)")
+            f"others NACK REPLAYING), {s.rx_errors} host units refused")
 
 
 BOARD_OPTIONS: dict[str, str] = {
@@ -542,7 +542,8 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
             sys.stderr.write("\n")
         if truth_file is not None:
             truth_file.close()
-            say_written("serve", "the held object's truth", truth_file.path, args.quiet)
+            if truth_file.error is None:
+                say_written("serve", "the held object's truth", truth_file.path, args.quiet)
     extra = grasp_scores(board)
     if score_path is not None:
         write_score(score_path, board_score(board))
@@ -565,4 +566,9 @@ def run_board(args: argparse.Namespace, open_link: Any, made: list[Board] | None
         print(json.dumps({"type": "truth", "ticks": board.truth.ticks,
                           "peak_normal_n": float(truth["normal_n"].max(initial=0.0))})
               if args.json else text, flush=True)
+    if truth_file is not None and truth_file.error is not None:  # the run's rest is kept
+        raise ConfigError(f"the held object's truth file '{truth_file.path}' stopped after "
+                          f"{truth_file.records} records of this run: "
+                          f"{truth_file.error.strerror or truth_file.error} — free some space "
+                          "or choose another folder")
     return 0

@@ -12,6 +12,11 @@ Entries (all plain numeric or Unicode arrays, read with ``allow_pickle=False``):
   ``scale`` (n_features,) float64 — the standardisation — and ``classes`` (n_classes,) int64
   or Unicode.
 
+Each array's ``.npy`` header names its byte order; :func:`save_decoder` writes the machine's
+own, and :func:`load_decoder` reads either (a file written on, or converted for, a
+big-endian machine holds the same decoder), converting to the machine's order after the
+digest (taken over the arrays as stored) is checked.
+
 A file that is not a zip of arrays (e.g. a pickle), lacks an entry, fails the digest, has
 another format or version, or does not match the stream, raises :class:`ModelFileError`.
 """
@@ -222,6 +227,13 @@ def _read(p: Path) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
     return header, arrays
 
 
+def _native(a: np.ndarray) -> np.ndarray:
+    """``a`` in this machine's byte order (the same values)."""
+    if a.dtype.byteorder in ("=", "|"):
+        return a
+    return a.astype(a.dtype.newbyteorder("="))
+
+
 def load_decoder(path: str | Path) -> DecoderFile:
     """Read and check a decoder file (see module docstring)."""
     p = Path(path)
@@ -236,6 +248,7 @@ def load_decoder(path: str | Path) -> DecoderFile:
     if header.get("sha256") != _digest(arrays, header):
         raise ModelFileError(f"{where} is corrupted: its content does not match the stored "
                              "digest")
+    arrays = {name: _native(a) for name, a in arrays.items()}
     try:
         spec = FeatureSpec.from_dict(header["feature_spec"])
         params = header["params"]
@@ -267,8 +280,12 @@ def load_decoder(path: str | Path) -> DecoderFile:
         raise ModelFileError(f"{where}: {n_features} features but its feature spec defines "
                              f"{spec.n_features}")
     for name in ("coef", "intercept", "mean", "scale"):
-        if arrays[name].dtype != np.float64 or not np.all(np.isfinite(arrays[name])):
-            raise ModelFileError(f"{where}: array {name!r} is not finite float64")
+        if arrays[name].dtype != np.float64:
+            raise ModelFileError(f"{where}: array {name!r} holds {arrays[name].dtype}, not "
+                                 "float64 — retrain with 'skinhil train'")
+        if not np.all(np.isfinite(arrays[name])):
+            raise ModelFileError(f"{where}: array {name!r} holds NaN or infinite values — "
+                                 "retrain with 'skinhil train'")
     if not np.all(arrays["scale"] > 0):
         raise ModelFileError(f"{where}: its standardisation 'scale' has zero or negative "
                              "entries (features would be divided by them) — retrain with "

@@ -7,7 +7,9 @@ records. A run appends to a file that starts with :data:`MAGIC` (a stopped run's
 in it), starts a new one where there is none (or an empty file), and refuses any other file
 before the board starts (:func:`check_truth_path`): it is never truncated or overwritten.
 A write that fails (a full disk) is cut back to the last whole record and the run goes on
-without the file, so the file never holds part of a record.
+without the file (its score and its closing records are worth more than the truth), so the
+file never holds part of a record; the writer keeps the error (:attr:`HeldTruthWriter.error`)
+for the run to report as it ends.
 """
 
 from __future__ import annotations
@@ -71,6 +73,8 @@ class HeldTruthWriter:
         self.records = 0
         """Records written so far (by this writer)."""
         self._fd: int | None = None
+        self.error: OSError | None = None
+        """The write error that ended the file (a full disk), None while it is written."""
         try:
             fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
         except OSError as exc:
@@ -103,7 +107,8 @@ class HeldTruthWriter:
             while view:
                 view = view[os.write(fd, view):]
         except OSError as exc:  # the reader's disk: the run goes on without it
-            log.warning("held-object truth file %s: %s; no more is written", self.path, exc)
+            log.info("held-object truth file %s: %s; no more is written", self.path, exc)
+            self.error = exc
             self._fd = None
             with contextlib.suppress(OSError):
                 os.ftruncate(fd, self._good)

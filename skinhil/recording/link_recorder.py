@@ -34,6 +34,9 @@ class LinkRecorder(abc.ABC):
 
     units = 0
     """Units (writes, sends or frames) recorded so far."""
+    error: OSError | None = None
+    """The write error that ended the recording (a full disk), None while it is written:
+    :func:`link_recorder` raises it as the block ends."""
 
     @abc.abstractmethod
     def write(self, payload: Any, board_us: int) -> None:
@@ -104,27 +107,49 @@ def link_recorder(path: Path, link: str, wire_version: int, step_us: int, fd: bo
             try:
                 yield can_rec
             finally:
-                can_rec.close()
+                with (contextlib.suppress(OSError) if can_rec.error is not None
+                      else contextlib.nullcontext()):
+                    can_rec.close()  # a log that failed to write may fail to close
+            if can_rec.error is not None:
+                raise can_rec.error
         else:
             with open(tmp, "wb") as f:
                 cap = CaptureRecorder(f, CaptureHeader(wire_version, link, step_us,
                                                        time.time_ns()))
                 yield cap
+                if cap.error is not None:
+                    raise cap.error
                 cap.close()
 
 
 class RecordingTransport(WrappedTransport[Any]):
     """``inner`` with every unit it accepts written to ``recorder``; ``board_time_us()``
-    gives the board time (µs) each is stamped with. Everything else is ``inner``'s."""
+    gives the board time (µs) each is stamped with. Everything else is ``inner``'s.
+
+    A recording that cannot be written (a full disk) ends the run once, never twice: the
+    send whose unit could not be recorded still returns what the link accepted (the board's
+    account stays exact), the next send raises the writer's ``OSError`` (the recorder's
+    ``error``) before sending, and every send after that goes to the link unrecorded, so the
+    board's closing STATUS and RUN_END still reach the receiver and the error is the only one
+    reported (:func:`link_recorder` raises it if no send did).
+    """
 
     def __init__(self, inner: Transport[Any], recorder: LinkRecorder,
                  board_time_us: Callable[[], int]) -> None:
         super().__init__(inner)
         self.recorder = recorder
         self._board_time_us = board_time_us
+        self._raised = False
 
     def send(self, payload: Any, timeout: float | None = None) -> int:
+        error = self.recorder.error
+        if error is not None and not self._raised:
+            self._raised = True
+            raise error
         n = self.inner.send(payload, timeout)
-        if n:
-            self.recorder.write(payload[:n], self._board_time_us())
+        if n and error is None:
+            try:
+                self.recorder.write(payload[:n], self._board_time_us())
+            except OSError as exc:
+                self.recorder.error = exc
         return n

@@ -65,6 +65,11 @@ class ReplaySummary:
     lateness_ms: dict[str, float]
     commands: int
     """Host commands received (each answered with a NACK, REPLAYING)."""
+    rx_errors: int
+    """Host units refused, counted as a board's STATUS counts them (SPEC.md §3.3
+    ``rx_errors``): every command answered with a NACK (all but the DECISIONs scored), every
+    packet or frame failing the CRC or the layout, repeating the host's sequence number, or
+    good but no command (a host's SYNC or EVENTS)."""
     markers: int
     """Ground-truth markers played."""
     events: int
@@ -105,6 +110,8 @@ class Replayer:
         self._answers, self._commands = self._codecs()
         self._played: Any = self._codecs()[1]
         self.commands = 0
+        self.rx_errors = 0
+        """Host units refused so far (:attr:`ReplaySummary.rx_errors`)."""
         self.markers = 0
         self.board_time_us = 0
         """The latest board time (µs) the played stream carried (events, statuses, markers):
@@ -157,11 +164,19 @@ class Replayer:
         data = self.transport.recv(timeout=0)
         if not data:
             return
-        for record in self._commands.feed(data).records:
-            if isinstance(record, protocols.Command | protocols.Decision | protocols.Answer):
-                answer = self._answers.ack(self.handle(record))
-                for unit in (answer if self.frames else [answer]):
-                    self._stream.answer(unit)
+        c = self._commands.counters
+        before = c.frames_ok + c.crc_errors + c.malformed + c.duplicates
+        commands = [r for r in self._commands.feed(data).records
+                    if isinstance(r, protocols.Command | protocols.Decision | protocols.Answer)]
+        # every unit but the commands is refused: bad, repeated, or good and no command
+        units = c.frames_ok + c.crc_errors + c.malformed + c.duplicates - before
+        self.rx_errors += units - len(commands)
+        for record in commands:
+            ack = self.handle(record)
+            self.rx_errors += not ack.ok
+            answer = self._answers.ack(ack)
+            for unit in (answer if self.frames else [answer]):
+                self._stream.answer(unit)
 
     def _wait(self, due: float, stop: threading.Event) -> None:
         while not stop.is_set():
@@ -239,6 +254,6 @@ class Replayer:
             units=self._units, wire_units=self._wire_units,
             recorded_s=(last_ts - first_ts) if first_ts is not None else 0.0,
             wall_s=time.monotonic() - wall0, speed=self.speed, lateness_ms=pct,
-            commands=self.commands, markers=self.markers,
+            commands=self.commands, rx_errors=self.rx_errors, markers=self.markers,
             events=int(self._played.counters.events_decoded), complete=complete and
             self._units == self.recording.units)

@@ -3,8 +3,9 @@ ground-truth markers and the decisions, streamed to disk as they arrive.
 
 Events go to a spool file (raw :data:`skinhil.events.EVENT_DTYPE` records) beside the output
 as they are decoded, so a session of any length holds no events in memory; :meth:`save`
-assembles the .npz from the spool chunk by chunk. Markers and decisions (a few per stimulus)
-are kept in memory.
+assembles the .npz from the spool chunk by chunk. The spool is named after its process, so
+the spool of a recorder killed by SIGKILL is removed by the next recorder in its folder.
+Markers and decisions (a few per stimulus) are kept in memory.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from skinhil.events import EVENT_DTYPE
 from skinhil.output_files import atomic_path
 from skinhil.receiver.receiver import ReceiverListener
 from skinhil.receiver.scoring import ScoredDecision
+from skinhil.temp_folders import process_tag, remove_stale
 
 DECISION_DTYPE = np.dtype([("detect_t_us", "<i8"), ("window_t_us", "<i8"),
                            ("decided_t_us", "<i8"), ("label", "<i4"), ("true_label", "<i4"),
@@ -30,6 +32,9 @@ DECISION_DTYPE = np.dtype([("detect_t_us", "<i8"), ("window_t_us", "<i8"),
 
 MARKER_DTYPE = np.dtype([("t_us", "<i8"), ("stimulus_id", "<i4"), ("phase", "U16")])
 
+SPOOL_PREFIX = ".skinhil-events."
+"""The spool file's name before its process tag (:func:`skinhil.temp_folders.process_tag`):
+a recorder removes the spools of ended processes in its folder as it starts."""
 COPY_CHUNK_EVENTS = 1 << 16
 """Events copied from the spool into the .npz at a time (0.7 MB)."""
 
@@ -45,8 +50,10 @@ class SessionRecorder(ReceiverListener):
     """
 
     def __init__(self, spool_dir: str | Path | None = None) -> None:
-        fd, name = tempfile.mkstemp(prefix=".skinhil-events.", suffix=".spool",
-                                    dir=None if spool_dir is None else str(spool_dir))
+        folder = Path(tempfile.gettempdir() if spool_dir is None else spool_dir)
+        remove_stale(folder, SPOOL_PREFIX)  # the spools of killed recorders
+        fd, name = tempfile.mkstemp(prefix=f"{SPOOL_PREFIX}{process_tag()}.", suffix=".spool",
+                                    dir=str(folder))
         self._spool_path = Path(name)
         self._spool = os.fdopen(fd, "w+b")
         self._n_events = 0

@@ -184,6 +184,12 @@ def _contact(table: object, where: str, indenters: Mapping[str, Indenter],
                           "load), one of them")
     if force and motion in ("tap", "path"):
         raise ConfigError(f"{where}: a {motion} is position-controlled: give depth_mm")
+    if motion == "path" and "depth_mm" in t:
+        raise ConfigError(f"{where}: a path's depths are its keyframes' — drop depth_mm")
+    idle = [k for k in ("vibration_hz", "vibration_axis") if k in t]
+    if idle and not t.get("vibration_mm"):
+        raise ConfigError(f"{where}: {' and '.join(idle)} without vibration_mm above 0 "
+                          "move nothing — give vibration_mm, or drop them")
     value = (_number(t, "load_n", where, CONTACT_LIMITS) if force
              else _number(t, "depth_mm", where, CONTACT_LIMITS, 0.0) * 1e-3)
     def mm(key: str, default: float | None = None) -> float:
@@ -259,6 +265,12 @@ def parse_scenario(text: str, where: str, size: MeshSize = PAPER_SIZE,
                                  events_required=not contacts_in)
     contacts = tuple(_contact(t, f"{where}: [[contact]] #{i + 1}", indenters, i)
                      for i, t in enumerate(contacts_in))
+    names = [c.name for c in contacts]
+    for i, name in enumerate(names):
+        if name in names[:i]:
+            raise ConfigError(f"{where}: [[contact]] #{i + 1}: name = {name!r} is taken by an "
+                              "earlier [[contact]] (the truth names each) — give each a "
+                              "distinct name")
     for i, contact in enumerate(contacts):
         _check_touches(contact, f"{where}: [[contact]] #{i + 1}", size, spacing_m)
     return Scenario(schedule, Scene(contacts) if contacts else None)
