@@ -1,6 +1,7 @@
 """Serial decoder on adversarial byte streams: resynchronisation is linear in time and memory.
 
-Run: ``python benchmarks/bench_resync.py [--mb 32] [--smoke]`` (pinned to one core;
+Run: ``python benchmarks/bench_resync.py [--mb 32] [--smoke] [--results-dir DIR]``
+(pinned to one core;
 ``--smoke``: 0.1 MB of the first pattern, to check the script runs). For each pattern it
 feeds ``--mb`` MB to a fresh :class:`protocols.SerialDecoder` in one ``feed()`` call, in a
 fresh interpreter (after a small warm-up feed, so numba's compilation is not timed), and
@@ -32,6 +33,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(__file__))
 from machine import describe, load_average, pin_one_core  # noqa: E402
+from results import add_arguments, figure, publish  # noqa: E402
 
 PATTERNS = ("runs01", "runsff", "longrun", "storm", "storm01", "random", "packets")
 
@@ -94,6 +96,7 @@ def main() -> None:
     ap.add_argument("--patterns", default=",".join(PATTERNS))
     ap.add_argument("--smoke", action="store_true",
                     help="0.1 MB of the first pattern: the script runs")
+    add_arguments(ap)
     args = ap.parse_args()
     if args.smoke:
         args.mb, args.patterns = 0.1, PATTERNS[0]
@@ -102,6 +105,7 @@ def main() -> None:
     print(load_average(), "(before)")
     size = int(args.mb * 1e6)
     print(f"{'pattern':9s} {'MB':>6s} {'s':>7s} {'MB/s':>7s} {'mem x':>6s}  counters")
+    figures = []
     for name in args.patterns.split(","):
         res = subprocess.run([sys.executable, "-c", _CHILD, name, str(size)],
                              capture_output=True, text=True, check=True)
@@ -109,7 +113,13 @@ def main() -> None:
         print(f"{name:9s} {r['mb']:6.1f} {r['seconds']:7.2f} {r['mb_s']:7.1f} "
               f"{r['added_x']:6.2f}  ok {r['frames_ok']} crc {r['crc_errors']} resyncs "
               f"{r['resyncs']} discarded {r['discarded']} events {r['events']}")
+        adversarial = name != "packets"
+        figures += [figure(f"{name}: decode rate, {r['mb']:g} MB in one feed",
+                           round(r["mb_s"], 1), "MB/s", "≥ 10" if adversarial else ""),
+                    figure(f"{name}: peak memory added", round(r["added_x"], 2), "x input",
+                           "≤ 4" if adversarial else "")]
     print(load_average(), "(after)")
+    publish(args, "resync", "Serial decoder on adversarial byte streams", figures)
 
 
 if __name__ == "__main__":
