@@ -12,17 +12,6 @@ each pass reports its time per second of stream and the minor page faults it too
 A receiver whose cost per second of stream grows with the backlog never catches up once
 behind: the next backlog is larger. Target: every chunk size well under 1 s per 1 s of
 stream, and no chunk size costlier than the smallest by more than a few times.
-
-Measured (2-core AMD EPYC Zen 4 VM, load 2-3: another engineer's tests and UML runs;
-command ``python benchmarks/bench_receiver_backlog.py``), s per s of stream / page faults
-per 12 s, chunks 0.02 / 0.2 / 1 / 4 s:
-
-- blocks of 10,000 steps (27 MB of PSP values), on the host: 0.015 / 0.012 / 0.035 / 0.025,
-  faults 1 / 0 / 21,221 / 15,887; inside user-mode Linux: 0.011 / 0.010 / **1.24 / 1.27**,
-  faults 6 / 0 / 284,509 / 201,376 (each fault a round trip to the host);
-- blocks of 1,000 steps (``MAX_BLOCK_STEPS``), on the host: 0.017 / 0.014 / 0.012 / 0.013,
-  faults 1 / 858 / 429 / 2,037 (0 / 0 / 0 / 0 in another run: the allocator's state);
-  inside user-mode Linux: 0.018 / 0.029 / 0.019 / 0.026, faults 6 / 1,880 / 990 / 1,806.
 """
 
 from __future__ import annotations

@@ -13,14 +13,6 @@ Patterns: ``runs01`` (``0x01`` × 1031 + ``0x00``: every suffix is a COBS chain)
 (``0xFF`` × 1031 + ``0x00``), ``longrun`` (no delimiter at all), ``storm`` (``0x00`` only),
 ``storm01`` (``0x01 0x00`` repeated), ``random`` (uniform bytes), ``packets`` (a real
 narrow stream, 20k events/s Poisson, for comparison).
-
-Measured (2 vCPU VM shared by other work, load average 0.72 before and 0.83 after; command
-``python benchmarks/bench_resync.py --mb 32``), MB/s and added memory / input:
-runs01 16.8 / 2.00, runsff 144.6 / 2.00, longrun 1758.0 / 1.00, storm 712.4 / 2.00,
-storm01 33.2 / 1.99, random 126.7 / 2.00 (the pending copy of the input and the one copy of
-its complete packets); packets 43.2 / 12.0 (the decoded events themselves: 13.3 million of
-them, 11 bytes each, plus their time and address columns).
-Before the one-pass suffix check the 0x01 runs decoded at 0.2-0.3 MB/s (quadratic).
 """
 
 from __future__ import annotations
