@@ -333,7 +333,7 @@ def size_figures(r: SizeResult) -> list[dict[str, object]]:
             figure(f"{k}: events per tick", round(r.events_us, 1), "µs"),
             figure(f"{k}: encoding per tick", round(r.encode_us, 1), "µs"),
             figure(f"{k}: model memory allocated", round(r.memory_mb, 1), "MB"),
-            figure(f"{k}: events", round(r.events_per_s), "events/s")]
+            figure(f"{k}: events generated", round(r.events_per_s), "events/s")]
 
 
 HEADER = (f"{'size':>6} {'th':>2} {'springs':>7} {'stepper':>9} "
