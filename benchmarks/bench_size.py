@@ -378,9 +378,9 @@ WARM_UP_ENV = "SKINHIL_BENCH_SIZE_WARM_UP"
 def warm_up(argv: list[str]) -> None:
     """Run this benchmark once briefly (0.01 s per timing, one repeat) in a process of its
     own, so that the kernels this run uses come from the disk cache, as they do for
-    ``serve`` after its first run: a process that compiled its kernels itself ran the 34x34
-    loop 4-8 µs per step slower (78.8-81.6 against 72.0-75.0 µs, two runs each, idle Zen 4 VM;
-    ``serve``'s board took 85 % of its core either way)."""
+    ``serve`` after its first run: a process that compiles its kernels itself runs the loop
+    slower than ``serve`` does (docs/benchmarks-log.md, "Performance"). The warm-up writes
+    no result."""
     t0 = time.monotonic()
     subprocess.run([sys.executable, __file__, *argv, "--seconds", "0.01", "--repeats", "1",
                     "--no-save"],
