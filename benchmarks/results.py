@@ -96,9 +96,13 @@ def save(benchmark: str, title: str, figures: list[dict[str, Any]],
 def publish(args: argparse.Namespace, benchmark: str, title: str,
             figures: list[dict[str, Any]]) -> str | None:
     """Save this run's figures where :func:`destination` says, print the path, return it
-    (None when the run writes none)."""
+    (None when the run writes none: no destination, or no figure measured, which leaves an
+    older result in place)."""
     directory = destination(args)
     if directory is None:
+        return None
+    if not figures:
+        print(f"no figure measured: {benchmark}'s result is not written")
         return None
     path = save(benchmark, title, figures, directory, smoke=bool(getattr(args, "smoke", False)))
     print("written:", path)
