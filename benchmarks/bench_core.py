@@ -1,7 +1,8 @@
 """Speed of the simulation core: real-time factor of one skin, and 450 trials.
 
-Run: ``python benchmarks/bench_core.py [--smoke]`` (pinned to one core; ``--smoke``: tiny
-runs, a few seconds, to check the script runs: its figures mean little). Reports
+Run: ``python benchmarks/bench_core.py [--smoke] [--results-dir DIR]`` (pinned to one core;
+``--smoke``: tiny runs, a few seconds, to check the script runs: its figures mean little).
+Reports
 - the real-time factor of one skin (mechanics + 338 neurons + noise at 10 dB) stepped as the
   board steps it, in 1 ms blocks of 0.1 ms steps, for both mechanics (targets ≥ 20x linear,
   ≥ 5x geometric);
@@ -25,6 +26,7 @@ import tracemalloc
 
 sys.path.insert(0, os.path.dirname(__file__))
 from machine import describe, load_average, pin_one_core  # noqa: E402
+from results import add_arguments, figure, publish  # noqa: E402
 
 pin_one_core()
 
@@ -142,7 +144,9 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--smoke", action="store_true",
                     help="tiny runs (one of each, 0.05 s, 9 x 2 trials): the script runs")
-    if ap.parse_args().smoke:
+    add_arguments(ap)
+    args = ap.parse_args()
+    if args.smoke:
         REPEATS, SIM_S, TRIAL_REPS, TRIAL_S = 1, 0.05, 2, 0.05
     print(describe())
     print(f"best of {REPEATS} runs each; {load_average()}", flush=True)
@@ -164,6 +168,22 @@ def main() -> None:
           f"{n_ev} events; peak memory allocated {ev_mb:6.1f} MB (target <= 250 MB; "
           f"tracemalloc), dense raster {raster_mb:6.1f} MB")
     print(load_average())
+    trials = f"{9 * TRIAL_REPS} trials x {TRIAL_S:g} s"
+    publish(args, "core", "Simulation core: real-time factor, trials, memory", [
+        figure("real-time factor, linear mechanics", round(lin, 1), "x real time", "≥ 20"),
+        figure("real-time factor, geometric mechanics", round(geo, 1), "x real time", "≥ 5"),
+        figure(f"{trials} with spikes at 10 dB", round(wall, 2), "s",
+               "≤ 10 for 450 x 0.5 s"),
+        figure(f"SkinModel.simulate, stimulus A, {TRIAL_S:g} s", round(1e3 * ours, 1), "ms"),
+        figure("solve_ivp RK45 over SkinModel.simulate", round(ref / ours, 1), "x faster",
+               "≥ 2"),
+        figure("largest difference to RK45", float(f"{err:.2g}"), "of the peak force"),
+        figure(f"{trials} kept as events", round(ev_wall, 2), "s"),
+        figure(f"{trials} kept as events: events", n_ev, "events"),
+        figure(f"{trials} kept as events: peak memory allocated", round(ev_mb, 1), "MB",
+               "≤ 250"),
+        figure(f"{trials} as a dense raster: peak memory allocated", round(raster_mb, 1),
+               "MB")])
 
 
 if __name__ == "__main__":

@@ -15,6 +15,7 @@ the board's 1 ms publish tick, the link both ways, the host's decoding and the b
 command poll (once a tick) included. A ``--smoke`` run plays two short lifts on a pty.
 
     python benchmarks/bench_grasp_loop.py [--lifts 3] [--links pty,udp,vcan] [--smoke]
+                                             [--results-dir DIR]
     python tests/uml_vcan.py -- python benchmarks/bench_grasp_loop.py --links vcan
 """
 
@@ -32,6 +33,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 from machine import describe  # noqa: E402
+from results import add_arguments, figure, publish  # noqa: E402
 
 import protocols  # noqa: E402
 from skinhil.plant import GraspParams  # noqa: E402
@@ -128,11 +130,13 @@ def main() -> int:
     ap.add_argument("--lifts", type=int, default=3)
     ap.add_argument("--links", default="pty,udp,vcan", help="links (vcan where vcan0 exists)")
     ap.add_argument("--smoke", action="store_true", help="two lifts on a pty (a quick check)")
+    add_arguments(ap)
     args = ap.parse_args()
     if args.smoke:
         args.lifts, args.links = 2, "pty"
     print(describe())
     failed = 0
+    figures = []
     for kind in args.links.split(","):
         if kind == "vcan" and not os.path.exists("/sys/class/net/vcan0"):
             print("vcan: no vcan0 here (python tests/uml_vcan.py -- python "
@@ -147,6 +151,13 @@ def main() -> int:
               f"p99 {m['p99_ms']:.2f} ms, "
               f"max {m['max_ms']:.2f} ms (board time; {args.lifts} lifts at "
               f"{args.snr_db:g} dB)", flush=True)
+        figures += [figure(f"{kind}: GRIPs executed", int(m["grips"]),
+                           f"of {int(m['sent'])} sent")]
+        figures += [figure(f"{kind}: spike on the board to contact force, {q}",
+                           round(m[f"{q}_ms"], 2), "ms board time") for q in
+                    ("p50", "p90", "p99", "max")]
+    publish(args, "grasp_loop", f"Closed loop: spike to GRIP to contact force, {args.lifts} "
+            f"lifts at {args.snr_db:g} dB", figures)
     return 1 if failed else 0
 
 

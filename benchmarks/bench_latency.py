@@ -10,7 +10,7 @@ are latencies above the fastest delivery (a lower bound on the true latency, exa
 that minimum).
 
     python benchmarks/bench_latency.py [--snr-db 10] [--duration 20] [--links pty,vcan]
-                                       [--smoke]
+                                       [--smoke] [--results-dir DIR]
 
 ``--smoke``: 1.5 s over the pty, a decoder of 1 stimulus per condition without its
 cross-validation (checks that the script runs; its figures mean little).
@@ -27,6 +27,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 from machine import describe  # noqa: E402
+from results import add_arguments, figure, publish  # noqa: E402
 
 from skinhil.receiver import Receiver, ReceiverListener, WindowDecoder  # noqa: E402
 from skinhil.receiver.session import run_against_board, serve_command  # noqa: E402
@@ -70,6 +71,7 @@ def main() -> int:
     ap.add_argument("--reps", type=int, default=15, help="training stimuli per condition")
     ap.add_argument("--links", default="pty,vcan", help="links to measure (vcan if present)")
     ap.add_argument("--smoke", action="store_true", help="1.5 s over the pty: the script runs")
+    add_arguments(ap)
     args = ap.parse_args()
     if args.smoke:
         args.duration, args.reps, args.rest, args.links = 1.5, 1, 0.05, "pty"
@@ -79,6 +81,8 @@ def main() -> int:
     wd = WindowDecoder(decoder)
     print(f"offline accuracy at {args.snr_db:g} dB (board-like windows): "
           f"{report.accuracy:.3f} of {report.markers} stimuli")
+    figures = [figure(f"offline accuracy at {args.snr_db:g} dB", round(report.accuracy, 3),
+                      f"of {report.markers} stimuli")]
     links = [k for k in args.links.split(",") if k == "pty"
              or (k == "vcan" and os.path.exists("/sys/class/net/vcan0"))]
     for kind in links:
@@ -110,6 +114,23 @@ def main() -> int:
               f"{m['decision_board_p99_ms']:.1f} ms, (host) p50 {m['decision_host_p50_ms']:.1f}"
               f" ms p99 {m['decision_host_p99_ms']:.1f} ms; online accuracy "
               f"{m['accuracy']:.3f} over {int(m['stimuli'])} stimuli")
+        figures += [figure(f"{kind}: events", int(m["events"]), "events"),
+                    figure(f"{kind}: event latency above the fastest, p50",
+                           round(m["event_p50_ms"], 2), "ms"),
+                    figure(f"{kind}: event latency above the fastest, p99",
+                           round(m["event_p99_ms"], 2), "ms"),
+                    figure(f"{kind}: decision latency from onset, board time, p50",
+                           round(m["decision_board_p50_ms"], 1), "ms"),
+                    figure(f"{kind}: decision latency from onset, board time, p99",
+                           round(m["decision_board_p99_ms"], 1), "ms"),
+                    figure(f"{kind}: decision latency from onset, host time, p50",
+                           round(m["decision_host_p50_ms"], 1), "ms"),
+                    figure(f"{kind}: decision latency from onset, host time, p99",
+                           round(m["decision_host_p99_ms"], 1), "ms"),
+                    figure(f"{kind}: online accuracy", round(m["accuracy"], 3),
+                           f"of {int(m['stimuli'])} stimuli")]
+    publish(args, "latency", "End-to-end latency: board spike to decoded event, onset to "
+            "decision", figures)
     return 0 if args.smoke or not math.isnan(report.accuracy) else 1
 
 

@@ -18,6 +18,7 @@ Usage::
 
     python benchmarks/bench_live_hand.py [--size 34x34] [--duration 60] [--board-cpu 0]
                                          [--listen-cpu 1] [--snr-db 10] [--smoke]
+                                         [--results-dir DIR]
 
 ``--smoke``: 6x6 for 1 s (checks that the script runs; its figures mean little).
 """
@@ -42,6 +43,7 @@ from harness.lab import chance_model  # noqa: E402
 from harness.serve import ServeProcess  # noqa: E402
 from machine import describe, load_average  # noqa: E402
 from process_cpu import cpu_while, settle  # noqa: E402
+from results import add_arguments, figure, publish  # noqa: E402
 
 
 def free_udp_port() -> int:
@@ -124,6 +126,7 @@ def main() -> int:
     ap.add_argument("--profile", type=Path, metavar="SVG",
                     help="record listen with py-spy (pip install py-spy) into this flame graph")
     ap.add_argument("--smoke", action="store_true", help="6x6 for 1 s: the script runs")
+    add_arguments(ap)
     args = ap.parse_args()
     if args.smoke:
         args.size, args.duration = "6x6", 1.0
@@ -148,6 +151,19 @@ def main() -> int:
           f"({res['listen_cpu_s_per_board_s']:.3f} CPU s per board s); {res['decisions']} "
           f"decisions; socket buffer {res['socket_buffer']}", flush=True)
     print(load_average(), flush=True)
+    publish(args, f"live_hand_{res['size']}", f"A whole hand live over UDP: {res['size']} for "
+            f"{args.duration:g} s at {args.snr_db} dB", [
+                figure("events sent", res["board_sent"], "events"),
+                figure("events decoded", res["events_decoded"], "events", "every event sent"),
+                figure("lost on the link", res["lost_on_link"], "events", "0"),
+                figure("late at the receiver", res["late_events"], "events"),
+                figure("board late ticks", res["late_ticks_pct"], f"% of {res['ticks']} ticks",
+                       "≤ 0.5"),
+                figure("listen CPU", round(100 * res["listen_cpu_share"], 1), "% of its core",
+                       "≤ 70"),
+                figure("listen CPU per second of board time",
+                       res["listen_cpu_s_per_board_s"], "s/s"),
+                figure("decisions", res["decisions"], "decisions")])
     return 0
 
 

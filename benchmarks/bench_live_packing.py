@@ -16,7 +16,7 @@ gives about 600 events/s), and everything it puts on the link is captured and co
 Usage::
 
     python benchmarks/bench_live_packing.py [--duration 10] [--snr-db -5] [--can-only]
-                                            [--smoke]
+                                            [--smoke] [--results-dir DIR]
 
 ``--smoke``: 0.3 s per run, serial at 921600 baud only (checks that the script runs).
 """
@@ -37,6 +37,7 @@ sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "benchmarks")]
 from conftest import PtyPair  # noqa: E402
 from harness.peers import PtyPeer  # noqa: E402
 from machine import describe, load_average  # noqa: E402
+from results import add_arguments, figure, publish  # noqa: E402
 
 import protocols  # noqa: E402
 from firmware_sim.board import Board, BoardConfig, BoardSummary  # noqa: E402
@@ -72,7 +73,9 @@ def _can_run(args: argparse.Namespace, fd: bool) -> tuple[BoardSummary, list[Any
     return summary, frames
 
 
-def _can_line(name: str, s: BoardSummary, frames: list[Any], fd: bool) -> str:
+def _can_line(name: str, s: BoardSummary, frames: list[Any], fd: bool
+              ) -> tuple[str, list[dict[str, Any]]]:
+    """The run's line and its figures."""
     dec = protocols.CanDecoder(fd=fd)
     per_frame = []
     for f in frames:
@@ -84,6 +87,14 @@ def _can_line(name: str, s: BoardSummary, frames: list[Any], fd: bool) -> str:
     n_full = sum(n == full for n in per_frame)
     ticks = s.ticks
     ev = sum(per_frame)
+    per = ev / max(1, len(per_frame))
+    figures = [figure(f"{name}: events per EVENTS frame", round(per, 2), "events/frame",
+                      "" if fd else "≥ 3.5"),
+               figure(f"{name}: full EVENTS frames", round(100 * n_full / max(1, len(per_frame)),
+                                                           1), "%"),
+               figure(f"{name}: events sent", round(s.sent / s.board_time_s), "events/s"),
+               figure(f"{name}: events generated", round(s.generated / s.board_time_s),
+                      "events/s")]
     return (f"{name}: {s.board_time_s:.0f} s board time; generated "
             f"{s.generated / s.board_time_s:.0f} ev/s, sent {s.sent / s.board_time_s:.0f} ev/s, "
             f"dropped {s.dropped_by}; {len(per_frame)} EVENTS frames carrying {ev} events: "
@@ -92,10 +103,11 @@ def _can_line(name: str, s: BoardSummary, frames: list[Any], fd: bool) -> str:
             f"{(len(per_frame) - n_full) / ticks:.2f} non-full frames per flush (tick); "
             f"decoder events_lost {dec.counters.events_lost}; wire busy "
             f"{100 * s.wire_busy_s / s.wall_s:.0f}% of the run; deadline misses "
-            f"{s.deadline_misses} of {ticks} ticks")
+            f"{s.deadline_misses} of {ticks} ticks"), figures
 
 
-def _serial_run(args: argparse.Namespace, baud: int) -> str:
+def _serial_run(args: argparse.Namespace, baud: int) -> tuple[str, list[dict[str, Any]]]:
+    """The run's line and its figures."""
     pair = PtyPair()
     peer = PtyPeer(pair.master)
     try:
@@ -106,12 +118,16 @@ def _serial_run(args: argparse.Namespace, baud: int) -> str:
         peer.close()
         pair.close()
     got = len(peer.events)
+    name = f"serial {baud} baud (pty)"
+    figures = [figure(f"{name}: bytes per event received", round(peer.raw_units / max(1, got),
+                                                                   2), "B/event"),
+               figure(f"{name}: events sent", round(s.sent / s.board_time_s), "events/s")]
     return (f"serial {baud} baud (pty): {s.board_time_s:.0f} s board time; generated "
             f"{s.generated / s.board_time_s:.0f} ev/s, sent {s.sent / s.board_time_s:.0f} ev/s, "
             f"dropped {s.dropped_by}; received {got} events in {peer.raw_units} bytes: "
             f"{peer.raw_units / max(1, got):.2f} bytes per event; wire busy "
             f"{100 * s.wire_busy_s / s.wall_s:.0f}% of the run; deadline misses "
-            f"{s.deadline_misses} of {s.ticks} ticks")
+            f"{s.deadline_misses} of {s.ticks} ticks"), figures
 
 
 def main() -> int:
@@ -121,18 +137,26 @@ def main() -> int:
     ap.add_argument("--bitrate", type=int, default=125_000, help="CAN bitrate (125000)")
     ap.add_argument("--can-only", action="store_true", help="no serial runs")
     ap.add_argument("--smoke", action="store_true", help="0.3 s per run: the script runs")
+    add_arguments(ap)
     args = ap.parse_args()
     if args.smoke:
         args.duration = 0.3
     print(describe(), flush=True)
+    figures = []
     for fd in (False, True):
         s, frames = _can_run(args, fd)
         name = f"{'CAN FD' if fd else 'classic CAN'} {args.bitrate // 1000} kbit/s"
-        print(_can_line(name, s, frames, fd), flush=True)
+        line, more = _can_line(name, s, frames, fd)
+        print(line, flush=True)
         print("  " + load_average(), flush=True)
+        figures += more
     for baud in () if args.can_only else (921600,) if args.smoke else (921600, 115200):
-        print(_serial_run(args, baud), flush=True)
+        line, more = _serial_run(args, baud)
+        print(line, flush=True)
         print("  " + load_average(), flush=True)
+        figures += more
+    publish(args, "live_packing", f"Live board's frames under a sustained touch at "
+            f"{args.snr_db:g} dB, {args.duration:g} s per run", figures)
     return 0
 
 

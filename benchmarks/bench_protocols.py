@@ -1,6 +1,7 @@
 """Compactness and speed of the wire protocols (serial, classic CAN, CAN FD).
 
-Run: ``python benchmarks/bench_protocols.py [--smoke]`` (pinned to one core; ``--smoke``:
+Run: ``python benchmarks/bench_protocols.py [--smoke] [--results-dir DIR]``
+(pinned to one core; ``--smoke``:
 0.05 s of spikes, one run each, to check the script runs). For Poisson spikes over
 338 channels at 100 µs steps, with frames flushed every 1 ms (one ``events`` call per ms, as
 the board does) and a status record every 100 ms, it reports
@@ -23,7 +24,7 @@ from collections.abc import Callable
 
 sys.path.insert(0, os.path.dirname(__file__))
 from machine import describe, pin_one_core  # noqa: E402
-from results import figure, save  # noqa: E402
+from results import add_arguments, figure, publish  # noqa: E402
 
 pin_one_core()
 
@@ -150,9 +151,9 @@ def can_report(rate: float, fd: bool) -> list[dict]:
           f"{n / t_bulk / 1e6:.2f} M ev/s (one call); decode {n / t_dec / 1e6:.2f} M ev/s "
           f"(64-frame batches), {n / t_dec_bulk / 1e6:.2f} M ev/s (one batch)")
     k = f"{name.strip()} at {rate / 1e3:.0f}k ev/s"
-    return [figure(f"{k}: events per events frame", round(n / len(ev_frames), 2), "",
+    return [figure(f"{k}: events per events frame", round(n / len(ev_frames), 2), "events/frame",
                    "≥ 28" if fd else "≥ 3"),
-            figure(f"{k}: bus load", round(bus_s / DURATION_S, 3), "", ""),
+            figure(f"{k}: bus load", round(bus_s / DURATION_S, 3), "of bus time", ""),
             figure(f"{k}: encode, 1 ms calls", round(n / t_enc / 1e6, 2), "M ev/s", "≥ 1"),
             figure(f"{k}: decode, 64-frame batches", round(n / t_dec / 1e6, 2), "M ev/s",
                    "≥ 1")]
@@ -162,8 +163,7 @@ def main() -> None:
     global DURATION_S, REPEATS
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--smoke", action="store_true", help="0.05 s, one run each: the script runs")
-    ap.add_argument("--no-save", action="store_true",
-                    help="print only; do not write benchmarks/results/protocols.json")
+    add_arguments(ap)
     args = ap.parse_args()
     if args.smoke:
         DURATION_S, REPEATS = 0.05, 1
@@ -182,9 +182,7 @@ def main() -> None:
         figures += can_report(rate, fd=False)
     for rate in (20_000, 100_000):
         figures += can_report(rate, fd=True)
-    if not (args.smoke or args.no_save):
-        print("written:", save("protocols", "Wire protocols: compactness and codec speed",
-                               figures))
+    publish(args, "protocols", "Wire protocols: compactness and codec speed", figures)
 
 
 if __name__ == "__main__":

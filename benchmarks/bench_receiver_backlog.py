@@ -1,6 +1,7 @@
 """The receiver's filters on a backlog: the cost of 1 s of stream whatever the chunk it comes in.
 
-Run: ``python benchmarks/bench_receiver_backlog.py [--seconds 12] [--block-steps N] [--smoke]``
+Run: ``python benchmarks/bench_receiver_backlog.py [--seconds 12] [--block-steps N] [--smoke]
+[--results-dir DIR]``
 (``--smoke``: 0.4 s of stream in chunks of 0.02 and 0.2 s, to check the script runs); inside
 user-mode Linux: ``python tests/uml_vcan.py -- python benchmarks/bench_receiver_backlog.py``.
 The same board stream (``board_stream``, 10 dB, seed 3; 338 channels at 0.1 ms) is pushed into
@@ -11,31 +12,25 @@ each pass reports its time per second of stream and the minor page faults it too
 A receiver whose cost per second of stream grows with the backlog never catches up once
 behind: the next backlog is larger. Target: every chunk size well under 1 s per 1 s of
 stream, and no chunk size costlier than the smallest by more than a few times.
-
-Measured (2-core AMD EPYC Zen 4 VM, load 2-3: another engineer's tests and UML runs;
-command ``python benchmarks/bench_receiver_backlog.py``), s per s of stream / page faults
-per 12 s, chunks 0.02 / 0.2 / 1 / 4 s:
-
-- blocks of 10,000 steps (27 MB of PSP values), on the host: 0.015 / 0.012 / 0.035 / 0.025,
-  faults 1 / 0 / 21,221 / 15,887; inside user-mode Linux: 0.011 / 0.010 / **1.24 / 1.27**,
-  faults 6 / 0 / 284,509 / 201,376 (each fault a round trip to the host);
-- blocks of 1,000 steps (``MAX_BLOCK_STEPS``), on the host: 0.017 / 0.014 / 0.012 / 0.013,
-  faults 1 / 858 / 429 / 2,037 (0 / 0 / 0 / 0 in another run: the allocator's state);
-  inside user-mode Linux: 0.018 / 0.029 / 0.019 / 0.026, faults 6 / 1,880 / 990 / 1,806.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import resource
 import sys
 import time
 
 import numpy as np
 
-import skinhil.receiver.online as online
-from skinhil.receiver import WindowDecoder
-from skinhil.receiver.training import board_stream, train_decoder
+sys.path.insert(0, os.path.dirname(__file__))
+from machine import describe  # noqa: E402
+from results import add_arguments, figure, publish  # noqa: E402
+
+import skinhil.receiver.online as online  # noqa: E402
+from skinhil.receiver import WindowDecoder  # noqa: E402
+from skinhil.receiver.training import board_stream, train_decoder  # noqa: E402
 
 CHUNKS_S = (0.02, 0.2, 1.0, 4.0)
 
@@ -46,6 +41,7 @@ def main() -> int:
     p.add_argument("--block-steps", type=int, default=online.MAX_BLOCK_STEPS,
                    help="steps filtered per block at most (default: the receiver's)")
     p.add_argument("--smoke", action="store_true", help="0.4 s of stream: the script runs")
+    add_arguments(p)
     args = p.parse_args()
     chunks_s = CHUNKS_S
     if args.smoke:
@@ -57,6 +53,8 @@ def main() -> int:
     events = np.concatenate([b[0] for b in board_stream(args.seconds, 10.0, 0.25, 3)])
     warm = online.OnlineClassifier(decoder)
     warm.advance(500_000)  # numba kernels loaded before anything is timed
+    print(describe())
+    figures = []
     print(f"{events.shape[0]} events in {args.seconds:g} s, blocks of {args.block_steps} steps")
     for chunk_s in chunks_s:
         clf = online.OnlineClassifier(decoder)
@@ -71,6 +69,12 @@ def main() -> int:
         faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - r0.ru_minflt
         print(f"chunks of {chunk_s:4.2f} s: {spent / args.seconds:.3f} s per s of stream, "
               f"{faults} minor page faults, {decisions} decisions")
+        figures += [figure(f"chunks of {chunk_s:g} s: time per second of stream",
+                           round(spent / args.seconds, 3), "s/s", "< 0.1"),
+                    figure(f"chunks of {chunk_s:g} s: minor page faults", faults,
+                           f"faults in {args.seconds:g} s")]
+    publish(args, "receiver_backlog", f"Receiver on a backlog: blocks of {args.block_steps} "
+            "steps", figures)
     return 0
 
 

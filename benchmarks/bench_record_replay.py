@@ -21,6 +21,7 @@ Usage::
     python benchmarks/bench_record_replay.py [--parts pace,record,session,listen,...]
                                              [--duration 20]
                                              [--events 10000000] [--smoke]
+                                             [--results-dir DIR]
 
 ``--smoke``: the parts pace, record and session with 1 s of board time and 20,000 events
 (checks that the script runs; its figures mean little).
@@ -50,6 +51,7 @@ sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "benchmarks")]
 from conftest import PtyPair, PtyReader  # noqa: E402
 from harness.serve import RUN_DIR, run_serve, serve_env  # noqa: E402
 from machine import describe, load_average  # noqa: E402
+from results import add_arguments, figure, publish  # noqa: E402
 
 import protocols  # noqa: E402
 from firmware_sim.clock import request_realtime  # noqa: E402
@@ -86,8 +88,17 @@ def pct(x: np.ndarray) -> str:
             f"max {x.max():.3f} ms")
 
 
+def pct_figures(name: str, x: np.ndarray) -> list[dict[str, Any]]:
+    """p50, p99 and max of ``x`` (s) as figures in ms."""
+    x = np.asarray(x) * 1e3
+    return [figure(f"{name} {q}", round(float(v), 3), "ms") for q, v in
+            (("p50", np.percentile(x, 50)), ("p99", np.percentile(x, 99)), ("max", x.max()))]
+
+
 # -- pace -------------------------------------------------------------------------------
-def replay_pace(rec: Path, transport: Transport[Any], realtime: bool) -> None:
+def replay_pace(rec: Path, transport: Transport[Any], realtime: bool, link: str
+                ) -> list[dict[str, Any]]:
+    """Replay ``rec`` onto ``transport``; print and return its pace figures."""
     recording = open_recording(rec)
     if realtime:
         why = request_realtime()
@@ -105,9 +116,11 @@ def replay_pace(rec: Path, transport: Transport[Any], realtime: bool) -> None:
     print(f"  lateness vs the recorded pace: {pct(late)}")
     print(f"  inter-unit timing error |sent - recorded interval|: {pct(interval_err)}")
     print(f"  {load_average()}")
+    return (pct_figures(f"{link}: lateness vs the recorded pace", late)
+            + pct_figures(f"{link}: inter-unit timing error", interval_err))
 
 
-def part_pace(duration_s: float, tmp: Path, realtime: bool) -> None:
+def part_pace(duration_s: float, tmp: Path, realtime: bool) -> list[dict[str, Any]]:
     print(f"\n[pace] serial: serve --port PTY --record, {duration_s:g} s; replay onto a "
           "second pty")
     rec = tmp / "pace.skcap"
@@ -120,7 +133,7 @@ def part_pace(duration_s: float, tmp: Path, realtime: bool) -> None:
     assert out.returncode == 0, out.stderr
     reader = PtyReader(second.master)
     with SerialTransport(second.path) as link:
-        replay_pace(rec, link, realtime)
+        figures = replay_pace(rec, link, realtime, "serial")
     reader.stop()
     print(f"\n[pace] UDP: serve --udp --record, {duration_s:g} s; replay onto a second port")
     rec = tmp / "pace_udp.skcap"
@@ -130,7 +143,8 @@ def part_pace(duration_s: float, tmp: Path, realtime: bool) -> None:
                         str(duration_s), "--quiet", *rt, timeout_s=duration_s + 120)
         assert out.returncode == 0, out.stderr
         with UdpTransport("127.0.0.1", port) as link:
-            replay_pace(rec, link, realtime)
+            figures += replay_pace(rec, link, realtime, "UDP")
+    return figures
 
 
 # -- a long stream ------------------------------------------------------------------------
@@ -178,7 +192,8 @@ class NullLink(Transport[Any]):
         pass
 
 
-def part_record(n_events: int, tmp: Path) -> None:
+def part_record(n_events: int, tmp: Path) -> list[dict[str, Any]]:
+    figures = []
     for suffix, kind in ((".skcap", "serial"), (".blf", "can")):
         path = tmp / f"long{suffix}"
         enc: Any = (protocols.CanEncoder(fd=True) if kind == "can"
@@ -203,10 +218,15 @@ def part_record(n_events: int, tmp: Path) -> None:
               f"{path.stat().st_size / 1e6:.1f} MB file, {wall:.1f} s: VmRSS {start:.1f} MB "
               f"at the start, peak {peak:.1f} MB (growth {peak - start:+.1f} MB), "
               f"{rss_mb():.1f} MB after; {load_average()}")
+        figures += [figure(f"{suffix}: VmRSS growth over {n_events:,} events",
+                           round(peak - start, 1), "MB", "< 50"),
+                    figure(f"{suffix}: file", round(path.stat().st_size / 1e6, 1), "MB"),
+                    figure(f"{suffix}: wall", round(wall, 1), "s")]
         path.unlink()
+    return figures
 
 
-def part_session(n_events: int, tmp: Path) -> None:
+def part_session(n_events: int, tmp: Path) -> list[dict[str, Any]]:
     """listen --record's recorder alone: the decoded events of a long stream into a
     SessionRecorder, then the .npz; memory from the first flush to the end of the save."""
     rec = SessionRecorder(tmp)
@@ -229,11 +249,15 @@ def part_session(n_events: int, tmp: Path) -> None:
           f"({out.stat().st_size / 1e6:.1f} MB): VmRSS {start:.1f} MB at the start, peak "
           f"{peak:.1f} MB (VmHWM, the save included; growth {peak - start:+.1f} MB); "
           f"{load_average()}")
+    figures = [figure(f"VmRSS growth over {n_events:,} events, the save included",
+                      round(peak - start, 1), "MB", "< 50"),
+               figure(".npz file", round(out.stat().st_size / 1e6, 1), "MB")]
     out.unlink()
+    return figures
 
 
 def part_listen(n_events: int, tmp: Path, record: bool = True,
-                arena_max: int | None = None) -> None:
+                arena_max: int | None = None) -> list[dict[str, Any]]:
     model = tmp / "decoder.npz"
     subprocess.run([sys.executable, "-m", "skinhil", "train", "--out", str(model), "--reps",
                     "8", "--snr-db", "inf", "--no-progress"], cwd=RUN_DIR, env=serve_env(),
@@ -309,6 +333,10 @@ def part_listen(n_events: int, tmp: Path, record: bool = True,
           f"{load_average()}")
     if proc.returncode != 0:
         print(err[-2000:])
+    return [figure("exit status", proc.returncode, "status", "0"),
+            figure("events in the file", n_saved, "events", f"{n_events:,}" if record else ""),
+            figure("VmRSS growth from before the stream", round(peak - base, 1), "MB", "< 50"),
+            figure("VmRSS growth from 1 % into the stream", round(peak - warm, 1), "MB")]
 
 
 def main() -> None:
@@ -323,6 +351,7 @@ def main() -> None:
                     help="pace: the board and the replay with real-time scheduling (root)")
     ap.add_argument("--smoke", action="store_true",
                     help="pace, record, session: 1 s and 20,000 events: the script runs")
+    add_arguments(ap)
     args = ap.parse_args()
     if args.smoke:
         args.parts, args.duration, args.events = "pace,record,session", 1.0, 20_000
@@ -332,15 +361,25 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as d:
         tmp = Path(d)
         if "pace" in parts:
-            part_pace(args.duration, tmp, args.realtime)
+            publish(args, "record_replay_pace", f"Replay pace: {args.duration:g} s of a live "
+                    "board recorded and replayed", part_pace(args.duration, tmp, args.realtime))
         if "record" in parts:
-            part_record(args.events, tmp)
+            publish(args, "record_replay_record", f"serve --record's recording path: "
+                    f"{args.events:,} events", part_record(args.events, tmp))
         if "session" in parts:
-            part_session(args.events, tmp)
+            publish(args, "record_replay_session", f"listen --record's session recorder: "
+                    f"{args.events:,} events", part_session(args.events, tmp))
+        arena = ("" if args.malloc_arena_max is None
+                 else f", MALLOC_ARENA_MAX={args.malloc_arena_max}")
         if "listen" in parts:
-            part_listen(args.events, tmp, arena_max=args.malloc_arena_max)
+            publish(args, "record_replay_listen", f"listen --record as a process: "
+                    f"{args.events:,} events{arena}",
+                    part_listen(args.events, tmp, arena_max=args.malloc_arena_max))
         if "listen-control" in parts:
-            part_listen(args.events, tmp, record=False, arena_max=args.malloc_arena_max)
+            publish(args, "record_replay_listen_control", f"listen without --record (the "
+                    f"control): {args.events:,} events{arena}",
+                    part_listen(args.events, tmp, record=False,
+                                arena_max=args.malloc_arena_max))
 
 
 if __name__ == "__main__":

@@ -1,6 +1,7 @@
 """Cost of the reproduction: one sweep grid point on one core, and the full run.
 
-Run: ``python benchmarks/bench_reproduce.py [--out DIR] [--skip-full] [--smoke]``
+Run: ``python benchmarks/bench_reproduce.py [--out DIR] [--skip-full] [--smoke]
+[--results-dir DIR]``
 (``--smoke``: two linear and one geometric grid point, no full run, to check the script
 runs). Reports
 - the time of one K x C grid point (5 paper stimuli, 0.5 s, both phases' measures) on one
@@ -23,6 +24,7 @@ import time
 
 sys.path.insert(0, os.path.dirname(__file__))
 from machine import describe  # noqa: E402
+from results import add_arguments, figure, publish  # noqa: E402
 
 from skinhil.analysis.sweep import SweepSpec, evaluate_point  # noqa: E402
 from skinhil.reproduce import ReproduceConfig, reproduce  # noqa: E402
@@ -48,13 +50,18 @@ def main() -> int:
     parser.add_argument("--skip-full", action="store_true", help="only the grid-point cost")
     parser.add_argument("--smoke", action="store_true",
                         help="3 grid points and no full run: the script runs")
+    add_arguments(parser)
     args = parser.parse_args()
     print(describe())
     n_linear, n_geometric = (2, 1) if args.smoke else (20, 5)
-    print(f"grid point, linear, one core: {point_cost_s('linear', n_linear) * 1e3:.1f} ms "
-          "(target <= 50 ms)")
-    print(f"grid point, geometric, one core: "
-          f"{point_cost_s('geometric', n_geometric) * 1e3:.0f} ms")
+    linear_ms = point_cost_s("linear", n_linear) * 1e3
+    print(f"grid point, linear, one core: {linear_ms:.1f} ms (target <= 50 ms)")
+    geometric_ms = point_cost_s("geometric", n_geometric) * 1e3
+    print(f"grid point, geometric, one core: {geometric_ms:.0f} ms")
+    publish(args, "reproduce_grid_point", "Reproduction: one sweep grid point on one core", [
+        figure(f"grid point, linear, median of {n_linear}", round(linear_ms, 1), "ms", "≤ 50"),
+        figure(f"grid point, geometric, median of {n_geometric}", round(geometric_ms),
+               "ms")])
     if args.skip_full or args.smoke:
         return 0
     out = args.out or tempfile.mkdtemp(prefix="skinhil-reproduce-")
@@ -63,8 +70,12 @@ def main() -> int:
     total = time.perf_counter() - t0
     print(f"full reproduce: {total:.1f} s wall on {os.cpu_count()} cores; report "
           f"{outcome.report}")
+    figures = [figure(f"full reproduce, wall on {os.cpu_count()} cores", round(total, 1), "s",
+                      "≤ 900")]
     for r in outcome.results:
         print(f"  {r.label}: " + ", ".join(f"{k} {v:.1f} s" for k, v in r.seconds.items()))
+        figures += [figure(f"{r.label}: {k}", round(v, 1), "s") for k, v in r.seconds.items()]
+    publish(args, "reproduce_full", "Reproduction: the full skinhil reproduce", figures)
     return 0
 
 

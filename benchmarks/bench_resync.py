@@ -1,6 +1,7 @@
 """Serial decoder on adversarial byte streams: resynchronisation is linear in time and memory.
 
-Run: ``python benchmarks/bench_resync.py [--mb 32] [--smoke]`` (pinned to one core;
+Run: ``python benchmarks/bench_resync.py [--mb 32] [--smoke] [--results-dir DIR]``
+(pinned to one core;
 ``--smoke``: 0.1 MB of the first pattern, to check the script runs). For each pattern it
 feeds ``--mb`` MB to a fresh :class:`protocols.SerialDecoder` in one ``feed()`` call, in a
 fresh interpreter (after a small warm-up feed, so numba's compilation is not timed), and
@@ -12,14 +13,6 @@ Patterns: ``runs01`` (``0x01`` × 1031 + ``0x00``: every suffix is a COBS chain)
 (``0xFF`` × 1031 + ``0x00``), ``longrun`` (no delimiter at all), ``storm`` (``0x00`` only),
 ``storm01`` (``0x01 0x00`` repeated), ``random`` (uniform bytes), ``packets`` (a real
 narrow stream, 20k events/s Poisson, for comparison).
-
-Measured (2 vCPU VM shared by other work, load average 0.72 before and 0.83 after; command
-``python benchmarks/bench_resync.py --mb 32``), MB/s and added memory / input:
-runs01 16.8 / 2.00, runsff 144.6 / 2.00, longrun 1758.0 / 1.00, storm 712.4 / 2.00,
-storm01 33.2 / 1.99, random 126.7 / 2.00 (the pending copy of the input and the one copy of
-its complete packets); packets 43.2 / 12.0 (the decoded events themselves: 13.3 million of
-them, 11 bytes each, plus their time and address columns).
-Before the one-pass suffix check the 0x01 runs decoded at 0.2-0.3 MB/s (quadratic).
 """
 
 from __future__ import annotations
@@ -32,6 +25,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(__file__))
 from machine import describe, load_average, pin_one_core  # noqa: E402
+from results import add_arguments, figure, publish  # noqa: E402
 
 PATTERNS = ("runs01", "runsff", "longrun", "storm", "storm01", "random", "packets")
 
@@ -94,6 +88,7 @@ def main() -> None:
     ap.add_argument("--patterns", default=",".join(PATTERNS))
     ap.add_argument("--smoke", action="store_true",
                     help="0.1 MB of the first pattern: the script runs")
+    add_arguments(ap)
     args = ap.parse_args()
     if args.smoke:
         args.mb, args.patterns = 0.1, PATTERNS[0]
@@ -102,6 +97,7 @@ def main() -> None:
     print(load_average(), "(before)")
     size = int(args.mb * 1e6)
     print(f"{'pattern':9s} {'MB':>6s} {'s':>7s} {'MB/s':>7s} {'mem x':>6s}  counters")
+    figures = []
     for name in args.patterns.split(","):
         res = subprocess.run([sys.executable, "-c", _CHILD, name, str(size)],
                              capture_output=True, text=True, check=True)
@@ -109,7 +105,13 @@ def main() -> None:
         print(f"{name:9s} {r['mb']:6.1f} {r['seconds']:7.2f} {r['mb_s']:7.1f} "
               f"{r['added_x']:6.2f}  ok {r['frames_ok']} crc {r['crc_errors']} resyncs "
               f"{r['resyncs']} discarded {r['discarded']} events {r['events']}")
+        adversarial = name != "packets"
+        figures += [figure(f"{name}: decode rate, {r['mb']:g} MB in one feed",
+                           round(r["mb_s"], 1), "MB/s", "≥ 10" if adversarial else ""),
+                    figure(f"{name}: peak memory added", round(r["added_x"], 2), "x input",
+                           "≤ 4" if adversarial else "")]
     print(load_average(), "(after)")
+    publish(args, "resync", "Serial decoder on adversarial byte streams", figures)
 
 
 if __name__ == "__main__":

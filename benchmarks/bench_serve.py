@@ -13,6 +13,7 @@ Runs the board as a subprocess, as a user would, and reports from its own summar
 Usage::
 
     python benchmarks/bench_serve.py [--duration 60] [--skip-vcan] [--realtime] [--smoke]
+                                     [--results-dir DIR]
 
 ``--smoke``: the defaults for 1 s on the pty, nothing else (checks that the script runs).
 
@@ -37,6 +38,7 @@ from conftest import PtyPair  # noqa: E402
 from harness.peers import CanPeer, PtyPeer  # noqa: E402
 from harness.serve import ServeProcess  # noqa: E402
 from machine import describe  # noqa: E402
+from results import add_arguments, figure, publish  # noqa: E402
 from uml_vcan import host_has_can, in_uml, run_in_uml  # noqa: E402
 
 
@@ -105,6 +107,22 @@ def _line(name: str, s: dict) -> str:
             f"{s['received_events'] / s['board_time_s']:.0f} ev/s; dropped {s['dropped_by']}")
 
 
+def _figures(name: str, s: dict, defaults: bool = False, realtime: bool = False
+             ) -> list[dict]:
+    """The figures of one run's summary; the CPU target holds at the defaults, the lateness
+    target at the defaults with ``--realtime``."""
+    lat, bt = s["lateness_ms"], s["board_time_s"]
+    return [figure(f"{name}: CPU", round(100 * s["cpu_s"] / s["wall_s"], 1), "% of one core",
+                   "≤ 25" if defaults else ""),
+            figure(f"{name}: tick lateness p50", round(lat["p50"], 3), "ms"),
+            figure(f"{name}: tick lateness p99", round(lat["p99"], 3), "ms",
+                   "≤ 0.5" if defaults and realtime else ""),
+            figure(f"{name}: tick lateness max", round(lat["max"], 3), "ms"),
+            figure(f"{name}: deadline misses", s["deadline_misses"], f"of {s['ticks']} ticks"),
+            figure(f"{name}: events sent", round(s["sent"] / bt), "events/s"),
+            figure(f"{name}: events received", round(s["received_events"] / bt), "events/s")]
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=60.0, help="seconds per run (60)")
@@ -114,6 +132,7 @@ def main() -> int:
                     help="serve with --realtime (FIFO scheduling; needs root or CAP_SYS_NICE)")
     ap.add_argument("--smoke", action="store_true",
                     help="the defaults for 1 s on the pty only: the script runs")
+    add_arguments(ap)
     args = ap.parse_args()
     if args.smoke:
         args.duration, args.skip_vcan = 1.0, True
@@ -123,16 +142,23 @@ def main() -> int:
         return 0
     print(describe())
     tag = " --realtime" if rt else ""
+    benchmark = "serve_realtime" if rt else "serve"
+    title = f"skinhil serve{tag}: {args.duration:g} s per run"
     t0 = _cpu_times()
-    print(_line(f"defaults{tag}, 921600-baud pty", _pty_run(args.duration, *rt)), flush=True)
+    s = _pty_run(args.duration, *rt)
+    print(_line(f"defaults{tag}, 921600-baud pty", s), flush=True)
     print("  " + _machine_load(t0), flush=True)
+    figures = _figures("defaults, 921600-baud pty", s, defaults=True, realtime=bool(rt))
     if args.smoke:
+        publish(args, benchmark, title, figures)
         return 0
     t0 = _cpu_times()
-    print(_line(f"saturated (--snr-db 20){tag}, 921600-baud pty",
-                _pty_run(args.duration, "--snr-db", "20", *rt)), flush=True)
+    s = _pty_run(args.duration, "--snr-db", "20", *rt)
+    print(_line(f"saturated (--snr-db 20){tag}, 921600-baud pty", s), flush=True)
     print("  " + _machine_load(t0), flush=True)
+    figures += _figures("saturated (--snr-db 20), 921600-baud pty", s)
     if args.skip_vcan:
+        publish(args, benchmark, title, figures)
         return 0
     cmd = [sys.executable, str(Path(__file__).resolve()), "--vcan-only", "--duration",
            str(args.duration), *rt]
@@ -148,10 +174,13 @@ def main() -> int:
     result = [ln for ln in out.splitlines() if ln.startswith("RESULT ")]
     if not result:
         print(f"vcan run failed:\n{out}")
+        publish(args, benchmark, title, figures)
         return 1
     s = json.loads(result[-1][7:])
     print(_line(f"saturated (--snr-db 20){tag}, 1 Mbit/s classic CAN, {where}", s))
     print(f"  frames received {s['received_frames']}, reader overflows {s['rx_overflows']}")
+    figures += _figures(f"saturated (--snr-db 20), 1 Mbit/s classic CAN, {where}", s)
+    publish(args, benchmark, title, figures)
     return 0
 
 

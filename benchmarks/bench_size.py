@@ -40,6 +40,7 @@ Usage::
                                     [--seconds 2] [--find-largest] [--min-rtf 1.0]
                                     [--clock wall|cpu] [--cpu N]
                                     [--contact slide,vibrate [--contact-only]] [--smoke]
+                                    [--results-dir DIR]
 
 ``--smoke``: 6x6 and 8x8 on one thread, one 0.05 s run each (checks that the script runs).
 
@@ -66,6 +67,7 @@ for _var in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 import numpy as np  # noqa: E402
 from machine import describe, load_average  # noqa: E402
+from results import add_arguments, figure, publish  # noqa: E402
 
 import protocols  # noqa: E402
 from skinhil.model.geometry import format_size, parse_size  # noqa: E402
@@ -306,6 +308,34 @@ def _row(r: SizeResult) -> str:
             f"{r.events_per_s / 1e3:8.1f} {r.rtf:6.2f}")
 
 
+WHOLE_HAND = (34, 34)
+"""The size issue 46's targets are set at (a whole hand: 17,866 sensors)."""
+REAL_TIME_SENSORS = 10_000
+"""Sensors from which one core is held to real time."""
+
+
+def size_figures(r: SizeResult) -> list[dict[str, object]]:
+    """The figures of one size on ``r.threads`` threads, with the targets set for it: at
+    34x34 on one thread a real-time factor >= 1.6 and neurons <= 1.5 ns per channel-step
+    (issue 46); from 10,000 sensors on one thread real time."""
+    k = f"{r.threads} thread{'s' if r.threads > 1 else ''}"
+    one = r.threads == 1
+    hand = one and r.size == WHOLE_HAND
+    rtf_target = "≥ 1.6" if hand else "≥ 1" if one and r.springs >= REAL_TIME_SENSORS else ""
+    step = r.loop_us / STEPS_PER_TICK
+    return [figure(f"{k}: real-time factor of the loop", round(r.rtf, 2), "x real time",
+                   rtf_target),
+            figure(f"{k}: loop per step", round(step, 1), "µs"),
+            figure(f"{k}: mechanics per spring-step", round(1e3 * r.mech_us / r.springs, 2),
+                   "ns", ""),
+            figure(f"{k}: neurons per channel-step", round(1e3 * r.neur_us / r.springs, 2),
+                   "ns", "≤ 1.5" if hand else ""),
+            figure(f"{k}: events per tick", round(r.events_us, 1), "µs"),
+            figure(f"{k}: encoding per tick", round(r.encode_us, 1), "µs"),
+            figure(f"{k}: model memory allocated", round(r.memory_mb, 1), "MB"),
+            figure(f"{k}: events generated", round(r.events_per_s), "events/s")]
+
+
 HEADER = (f"{'size':>6} {'th':>2} {'springs':>7} {'stepper':>9} "
           f"{'mech µs':>8} {'ns/sp':>6} {'neur µs':>8} {'ns/ch':>6} {'m+n µs':>7} "
           f"{'ev µs':>7} {'enc µs':>7} {'loop µs':>8} {'ns/sp':>6} {'mem MB':>7} "
@@ -348,11 +378,12 @@ WARM_UP_ENV = "SKINHIL_BENCH_SIZE_WARM_UP"
 def warm_up(argv: list[str]) -> None:
     """Run this benchmark once briefly (0.01 s per timing, one repeat) in a process of its
     own, so that the kernels this run uses come from the disk cache, as they do for
-    ``serve`` after its first run: a process that compiled its kernels itself ran the 34x34
-    loop 4-8 µs per step slower (78.8-81.6 against 72.0-75.0 µs, two runs each, idle Zen 4 VM;
-    ``serve``'s board took 85 % of its core either way)."""
+    ``serve`` after its first run: a process that compiles its kernels itself runs the loop
+    slower than ``serve`` does (docs/benchmarks-log.md, "Performance"). The warm-up writes
+    no result."""
     t0 = time.monotonic()
-    subprocess.run([sys.executable, __file__, *argv, "--seconds", "0.01", "--repeats", "1"],
+    subprocess.run([sys.executable, __file__, *argv, "--seconds", "0.01", "--repeats", "1",
+                    "--no-save"],
                    env={**os.environ, WARM_UP_ENV: "1"}, stdout=subprocess.DEVNULL,
                    check=True)
     print(f"kernels compiled and cached by a warm-up run first ({time.monotonic() - t0:.0f} s)",
@@ -381,6 +412,7 @@ def main() -> None:
                     help="with --contact: only the contact table")
     ap.add_argument("--smoke", action="store_true",
                     help="6x6 and 8x8, one thread, one 0.05 s run each: the script runs")
+    add_arguments(ap)
     args = ap.parse_args()
     if args.smoke:
         args.sizes, args.threads, args.seconds, args.repeats = "6,8", "1", 0.05, 1
@@ -395,6 +427,8 @@ def main() -> None:
     print(describe())
     if args.clock == "cpu" and max(thread_counts) > 1:
         ap.error("--clock cpu times one thread: CPU time of several threads is not wall time")
+    how = (f"{args.snr_db:g} dB, {args.clock} time, best of {args.repeats} runs of "
+           f">= {args.seconds:g} s{'' if args.cpu is None else f', core {args.cpu}'}")
     print(f"noise {args.snr_db:g} dB (diffusion), dt 0.1 ms, 1 ms ticks; {args.clock} time, "
           f"best of {args.repeats} runs of >= {args.seconds:g} s; {load_average()}", flush=True)
     if args.contact:
@@ -407,16 +441,30 @@ def main() -> None:
                 print(f"{format_size(size):>6} {kind:>8} {c.stepper:>9} {c.plain_us:9.2f} "
                       f"{c.touch_us:9.2f} {100 * c.added:6.1f}% "
                       f"{DT_S * 1e6 / c.touch_us:6.2f} {100 * c.strain:6.1f}%", flush=True)
+                publish(args, f"size_contact_{kind}_{format_size(size)}",
+                        f"Board loop with a {kind} contact: {format_size(size)} ({how})", [
+                            figure("loop per step without the contact", round(c.plain_us, 2),
+                                   "µs"),
+                            figure("loop per step with it", round(c.touch_us, 2), "µs"),
+                            figure("added by the contact", round(100 * c.added, 1), "%"),
+                            figure("real-time factor with it", round(DT_S * 1e6 / c.touch_us, 2),
+                                   "x real time"),
+                            figure("max strain", round(100 * c.strain, 1), "%")])
         if args.contact_only:
             print(load_average())
             return
     print(HEADER, flush=True)
+    by_size: dict[tuple[int, int], list[dict[str, object]]] = {size: [] for size in sizes}
+    largest: list[dict[str, object]] = []
+    springs: dict[tuple[int, int], int] = {}
     for threads in thread_counts:
         results = []
         for size in sizes:
             r = measure(size, threads, args.snr_db, args.seconds, args.repeats)
             results.append(r)
             print(_row(r), flush=True)
+            by_size[size] += size_figures(r)
+            springs[size] = r.springs
         print(f"threads {threads}: loop time per step ~ springs^{growth_exponent(results):.2f} "
               "over the leapfrog sizes (1.00 = linear)", flush=True)
         if args.find_largest:
@@ -432,7 +480,16 @@ def main() -> None:
                   f"time: {side}x{side} "
                   f"({SkinModel(SkinParams(size=(side, side))).n_springs} sensors)",
                   flush=True)
+            largest.append(figure(f"{threads} thread{'s' if threads > 1 else ''}: largest "
+                                  f"square skin at >= {args.min_rtf:g}x real time",
+                                  f"{side}x{side}", "top-layer size"))
     print(load_average())
+    for size, figures in by_size.items():
+        publish(args, f"size_{format_size(size)}", f"Board loop at {format_size(size)} "
+                f"({springs[size]} sensors; {how})", figures)
+    if largest:
+        publish(args, f"size_largest_{args.min_rtf:g}", f"Largest skin at >= {args.min_rtf:g}x "
+                f"real time ({how})", largest)
 
 
 if __name__ == "__main__":

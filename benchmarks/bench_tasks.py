@@ -8,6 +8,7 @@ do not depend on the noise, so every run of a scenario has the same truth), then
 then oracle. Prints a markdown table and writes the scores as JSON.
 
     python benchmarks/bench_tasks.py --snr-db 10 [--tasks force,slip] [--out scores.json]
+                                                    [--results-dir DIR]
     python benchmarks/bench_tasks.py --smoke    # one task, the reference, 1.5 s of board time
 """
 
@@ -24,6 +25,10 @@ import tempfile
 import time
 from collections.abc import Iterator
 from pathlib import Path
+
+sys.path.insert(0, os.path.dirname(__file__))
+from machine import describe  # noqa: E402
+from results import add_arguments, figure, publish  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
 TASKS = ("localisation", "force", "slip", "vibration")
@@ -132,6 +137,26 @@ def cell(s: dict, task: str) -> str:
     return f"{acc_text} ({s['right']}/{scored}{late}{extra}){metric}"
 
 
+def task_figures(s: dict, task: str, who: str) -> list[dict]:
+    """One answerer's figures on one task: its accuracy and the task's error or latency."""
+    if not s:
+        return []
+    key, unit = METRIC[task]
+    scored = s["matched"] + s["misses"]
+    out = [figure(f"{task}, {who}: right", round(100 * s["right"] / scored, 1) if scored
+                  else "n/a", f"% of {scored} trials")]
+    value = s.get(key)
+    if isinstance(value, dict):
+        value = value.get("p50")
+    if value is not None:
+        out.append(figure(f"{task}, {who}: {key.replace('_', ' ')}", float(f"{value:.3g}"),
+                          unit))
+    if task == "slip" and s.get("false_alarms_per_min") is not None:
+        out.append(figure(f"{task}, {who}: false alarms", round(s["false_alarms_per_min"], 1),
+                          "per min"))
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--snr-db", type=float, default=10.0)
@@ -145,7 +170,9 @@ def main() -> None:
     ap.add_argument("--smoke", action="store_true",
                     help=f"localisation only, the reference only, the scenario's first "
                          f"{SMOKE_DURATION_S:g} s (a check that the script runs)")
+    add_arguments(ap)
     args = ap.parse_args()
+    print(describe(), file=sys.stderr, flush=True)
     tasks = [t for t in args.tasks.split(",") if t]
     who = [w for w in args.who.split(",") if w]
     duration_s = None
@@ -170,6 +197,9 @@ def main() -> None:
         print(f"| {task} | " + " | ".join(cell(results[task][w], task) for w in who) + " |")
     if args.out is not None:
         args.out.write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
+    publish(args, "tasks", f"Contact tasks at {args.snr_db:g} dB, board seed {args.seed}: "
+            "reference, random and oracle answerers",
+            [f for task in tasks for w in who for f in task_figures(results[task][w], task, w)])
 
 
 if __name__ == "__main__":

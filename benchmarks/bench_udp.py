@@ -11,6 +11,7 @@ Usage::
 
     python benchmarks/bench_udp.py [--sizes 6x6,32x32] [--duration 60] [--snr-db DB]
                                    [--threads N] [--realtime] [--cpu N] [--smoke]
+                                   [--results-dir DIR]
 
 ``--smoke``: the default skin for 1 s (checks that the script runs).
 
@@ -34,6 +35,7 @@ sys.path[:0] = [str(ROOT / "tests"), str(ROOT / "benchmarks")]
 
 from harness.serve import ServeProcess  # noqa: E402
 from machine import describe, load_average  # noqa: E402
+from results import add_arguments, figure, publish  # noqa: E402
 
 import protocols  # noqa: E402
 from skinhil.transports import UdpTransport  # noqa: E402
@@ -79,7 +81,9 @@ class CountingHost:
         self.link.shutdown()
 
 
-def run(size: str | None, duration: float, extra: list[str]) -> str:
+def run(size: str | None, duration: float, extra: list[str]
+        ) -> tuple[str, list[dict[str, Any]]]:
+    """One size's run: its lines and its figures (none when serve failed)."""
     host = CountingHost()
     args = ["--udp", f"127.0.0.1:{host.link.port}", "--duration", str(duration), "--json",
             *(["--size", size] if size else []), *extra]
@@ -91,13 +95,26 @@ def run(size: str | None, duration: float, extra: list[str]) -> str:
         serve.kill()
         host.close()
     if rc != 0:
-        return f"{size or '6x6'}: serve failed ({rc}): {serve.stderr.strip()[-300:]}"
+        return f"{size or '6x6'}: serve failed ({rc}): {serve.stderr.strip()[-300:]}", []
     s = serve.summary()
     c = host.decoder.counters
     st = host.last_status
     bt = s["board_time_s"]
     lat = s["lateness_ms"]
     exact = st is not None and st.events_sent == host.events and c.events_lost == 0
+    figures = [figure("board time over wall time", round(bt / s["wall_s"], 3), "x real time",
+                      "1"),
+               figure("deadline misses", s["deadline_misses"], f"of {s['ticks']} ticks"),
+               figure("tick lateness p50", round(lat["p50"], 3), "ms"),
+               figure("tick lateness p99", round(lat["p99"], 3), "ms", "≤ 1"),
+               figure("tick lateness max", round(lat["max"], 3), "ms"),
+               figure("board CPU", round(100 * s["cpu_s"] / s["wall_s"]), "% of one core"),
+               figure("events sent", round(s["sent"] / bt), "events/s"),
+               figure("events decoded", round(host.events / bt), "events/s"),
+               figure("bytes per event on the wire", round(host.bytes / max(host.events, 1), 2),
+                      "B/event"),
+               figure("loss accounting", "exact" if exact else "NOT exact", "status vs decoded",
+                      "exact")]
     return (f"{size or '6x6'}: {bt:.0f} s board time in {s['wall_s']:.1f} s wall; deadline "
             f"misses {s['deadline_misses']} of {s['ticks']} ticks; lateness p50 "
             f"{lat['p50']:.3f} p99 {lat['p99']:.3f} max {lat['max']:.3f} ms; CPU "
@@ -110,7 +127,7 @@ def run(size: str | None, duration: float, extra: list[str]) -> str:
             f"  loss accounting: final status sent {None if st is None else st.events_sent}, "
             f"decoded {host.events}, frames lost {c.frames_lost}, events lost "
             f"{c.events_lost}, CRC errors {c.crc_errors}: {'exact' if exact else 'NOT exact'}"
-            f"\n  {load_average()}")
+            f"\n  {load_average()}"), figures
 
 
 def main() -> int:
@@ -125,6 +142,7 @@ def main() -> int:
     ap.add_argument("--cpu", type=int, default=None,
                     help="the board on this core (serve --cpu), the receiver on the others")
     ap.add_argument("--smoke", action="store_true", help="6x6 for 1 s: the script runs")
+    add_arguments(ap)
     args = ap.parse_args()
     if args.smoke:
         args.sizes, args.duration = "", 1.0
@@ -137,9 +155,16 @@ def main() -> int:
         if not CountingHost.cores:
             ap.error(f"--cpu {args.cpu}: no other core is left for the receiver")
     print(describe(), flush=True)
+    failed = 0
     for size in [s for s in args.sizes.split(",") if s] or [None]:
-        print(run(size, args.duration, extra), flush=True)
-    return 0
+        line, figures = run(size, args.duration, extra)
+        print(line, flush=True)
+        if not figures:
+            failed += 1
+            continue
+        publish(args, f"udp_{size or '6x6'}", f"skinhil serve --udp on loopback: {size or '6x6'}"
+                f" for {args.duration:g} s{''.join(' ' + x for x in extra)}", figures)
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":
