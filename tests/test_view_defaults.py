@@ -41,7 +41,7 @@ STATE = """view.config && view.mapZ ? JSON.stringify({
   latency: Array.from(document.querySelectorAll(
       '#decisions td:last-child, #decisions th:last-child')).map(
       (td) => [td.scrollWidth, td.clientWidth, td.getBoundingClientRect().right]),
-  right: document.documentElement.clientWidth,
+  right: window.innerWidth,
   map: (() => { const r = document.getElementById('map').getBoundingClientRect();
                 return [r.left, r.top, r.width, r.height]; })()}) : null"""
 

@@ -365,7 +365,9 @@ function setupMap() {
                        mapImg: new ImageData(bw, bh)});
   view.mapTmp = document.createElement("canvas");
   view.mapTmp.width = bw; view.mapTmp.height = bh;
-  $("map-info").textContent = `${rows}x${cols} skin, top view: rate above each sensor's own baseline`;
+  $("map-info").textContent = `${rows}x${cols}, rate above baseline (z)`;
+  $("map-info").title = "top view; each place's recent spike rate above its sensors' own " +
+    "baselines, in standard deviations of the noise";
 }
 
 function hot(t) {  // black → red → yellow → white
@@ -401,7 +403,7 @@ function drawLegend(top, baselineHz) {
   }
   ctx.fillStyle = "#aaa";
   ctx.font = "11px sans-serif";
-  ctx.fillText(`z ${MAP_Z_FLOOR} … ${top.toFixed(0)} (baseline ${baselineHz.toFixed(1)} spikes/s)`, 126, 11);
+  ctx.fillText(`z ${MAP_Z_FLOOR}–${top.toFixed(0)}, baseline ${baselineHz.toFixed(1)} Hz`, 126, 11);
 }
 
 // map px ↔ grid units (column, row from the top-left mass)
