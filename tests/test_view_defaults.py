@@ -70,7 +70,7 @@ def _state(browser: Chromium) -> dict[str, Any]:
 
 def test_a_late_page_at_the_defaults_shows_the_touch(tmp_path: Path) -> None:
     truth = tmp_path / "truth.jsonl"
-    with listening(tmp_path, "--view", "0", "--truth", str(truth),
+    with listening(tmp_path, "--view", "0", "--view-truth", str(truth),
                    ready="live view at") as (listen, board_end):
         url = wait_for_stderr(listen, "live view at").split()[-1]
         board = ServeProcess("--port", str(board_end), "--duration", "9", "--seed", "1",

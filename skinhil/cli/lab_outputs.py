@@ -49,7 +49,7 @@ def _lsl_name(text: str) -> str:
 def add_lab_output_args(parser: argparse.ArgumentParser, lsl: bool = True,
                         truth: bool = False) -> None:
     """Add ``--view [HOST:]PORT``, ``--psp-sensors``, (with ``lsl``) ``--lsl [NAME]`` and
-    (with ``truth``) ``--truth FILE``, the operator's truth the view draws."""
+    (with ``truth``) ``--view-truth FILE``, the operator's truth the view draws."""
     parser.add_argument("--view", metavar="[HOST:]PORT",
                         help="serve the live view (raster, PSP traces, decisions, counters) "
                              "at http://HOST:PORT/ (host 127.0.0.1 unless given; port 0: "
@@ -59,7 +59,7 @@ def add_lab_output_args(parser: argparse.ArgumentParser, lsl: bool = True,
                              "psp outlet carries (default: 8 spread over the skin in the "
                              "view, every sensor on LSL)")
     if truth:
-        parser.add_argument("--truth", dest="view_truth", type=Path, metavar="FILE",
+        parser.add_argument("--view-truth", type=Path, metavar="FILE",
                             help="with --view: draw the onsets of the board's truth file "
                                  "(serve --truth FILE: stimulus markers and contact trials) "
                                  "on the raster too, read as it appears or grows")
@@ -81,7 +81,7 @@ def check_lab_outputs(args: argparse.Namespace, size: MeshSize) -> None:
     if args.view is not None:
         parse_address(args.view)
     if getattr(args, "view_truth", None) is not None and args.view is None:
-        raise ConfigError("--truth FILE draws the truth on the live view: add --view PORT")
+        raise ConfigError("--view-truth FILE draws the truth on the live view: add --view PORT")
     n = spring_count(size)
     if args.psp_sensors is not None and not all(0 <= a < n for a in args.psp_sensors):
         raise ConfigError(f"--psp-sensors {','.join(map(str, args.psp_sensors))}: a skin of "

@@ -44,7 +44,7 @@ before the next update (the one after the last ``seq`` of the history), so a pag
 late is not empty.
 
 Onsets come from the stream's ground-truth markers, and also from the operator's truth
-(:meth:`ViewFeed.add_truth_onsets`: ``listen --view --truth FILE``; never from the
+(:meth:`ViewFeed.add_truth_onsets`: ``listen --view --view-truth FILE``; never from the
 decoder's link), each marker then saying its ``source``.
 
 Nothing here copies the session: each message holds only what arrived since the last one.

@@ -1,6 +1,6 @@
 """The operator's truth on the live view: onsets read from a file, never from the link.
 
-``listen --view --truth FILE`` reads FILE, the board's ground truth as ``serve --truth``
+``listen --view --view-truth FILE`` reads FILE, the board's ground truth as ``serve --truth``
 writes it (JSON lines: ``{"type": "marker", "t_us", "stimulus_id", "phase"}`` for each
 stimulus marker, ``{"type": "trial", "task", "t_us", "contact", ...}`` for each trial of a
 contact task), and draws its onsets on the raster and the PSP traces beside the stream's
