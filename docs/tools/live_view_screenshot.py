@@ -33,7 +33,7 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", type=Path, default=REPO / "docs" / "live-view.png")
     ap.add_argument("--at", type=float, default=12.0, help="board seconds before the picture")
-    ap.add_argument("--min-z", type=float, default=8.0,
+    ap.add_argument("--min-z", type=float, default=12.0,
                     help="the skin map's brightest place at least this z (a touch)")
     ap.add_argument("--timeout", type=float, default=600.0, help="seconds to give up after")
     args = ap.parse_args()

@@ -173,7 +173,7 @@ function drawMarks() {
     drawn += 1;
     // a label goes in the first row where it clears the label before it; none: left out
     const text = markLabel(mk), w = mctx.measureText(text).width;
-    const lx = Math.min(x + 3, W - w - 2);
+    const lx = Math.max(30, Math.min(x + 3, W - w - 2));  // clear of the channel ticks
     const row = rowEnd.findIndex((end) => lx > end + 4);
     if (row < 0) { thinned += 1; continue; }
     rowEnd[row] = lx + w;
