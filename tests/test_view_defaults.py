@@ -8,6 +8,8 @@ reading without a browser."""
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 import time
 import urllib.request
 from pathlib import Path
@@ -182,3 +184,15 @@ def test_truth_onsets_from_the_serve_truth_file() -> None:
     assert [(o["t_us"], o["phase"], o["label"], o["stimulus_id"]) for o in onsets] == [
         (1000, "onset", None, 3), (5000, "onset", "contact 2", None),
         (251000, "end", None, 3)]
+
+
+def test_view_truth_needs_the_view() -> None:
+    from harness.serve import RUN_DIR, serve_env
+
+    done = subprocess.run([sys.executable, "-m", "skinhil", "listen", "--port", "/dev/null",
+                           "--model", "none.npz", "--view-truth", "truth.jsonl"],
+                          cwd=RUN_DIR, env=serve_env(), capture_output=True, text=True,
+                          timeout=60)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        "skinhil: error: --view-truth FILE draws the truth on the live view: add --view PORT"]
