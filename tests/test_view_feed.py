@@ -173,3 +173,31 @@ def test_the_grasp_key_carries_the_boards_held_object_truth(receiver: Receiver,
     assert rest["outcomes"] == [{"lift": 2, "t_us": 150_000, "held": False}]
     hello = feed.hello()["grasp"]
     assert hello["t_us"] == got["t_us"] and len(hello["outcomes"]) == 2
+
+
+def test_a_late_page_gets_the_last_seconds_of_the_stream(receiver: Receiver) -> None:
+    """The ``config`` of a page that connects 15 s into a run holds the updates of the last
+    10 s of board time that brought spikes or markers, in order, ending with the newest;
+    a PSP pick leaves the samples of the sensors shown before out of them."""
+    from skinhil.view.feed import HISTORY_S
+
+    feed = _feed(receiver, [0, 5])
+    receiver.add_listener(feed)
+    enc = protocols.SerialEncoder()
+    assert feed.hello()["history"] == []
+    feed.update()  # nothing received yet: nothing kept
+    for k in range(1, 151):  # 15 s, one spike each 0.1 s
+        one = np.zeros(1, dtype=EVENT_DTYPE)
+        one["t"], one["addr"], one["p"] = k * 100_000, k % 338, 1
+        receiver.feed(enc.events(one, k * 100_000 + 100))
+        last = feed.update()
+    history = feed.hello()["history"]
+    times = [h["t_board_us"] for h in history]
+    assert times == sorted(times) and times[-1] == last["t_board_us"] == 15_000_000
+    assert times[0] >= 15_000_000 - HISTORY_S * 1e6 and len(history) >= 99, times[:3]
+    assert [h["seq"] for h in history] == list(range(history[0]["seq"], last["seq"] + 1))
+    assert sum(h["spikes"]["n"] for h in history) == len(history)
+    assert any(h["psp"]["n"] for h in history)
+    feed.pick_psp_sensors([7])
+    assert not any(h["psp"]["n"] for h in feed.hello()["history"])
+    assert feed.hello()["map_shape"] == [10, 10] and feed.hello()["map"]["z"]

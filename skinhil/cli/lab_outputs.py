@@ -22,6 +22,7 @@ from skinhil.receiver import Receiver, ReceiverListener
 from skinhil.view import ViewFeed, ViewServer, parse_address
 from skinhil.view.feed import StreamSource
 from skinhil.view.grasp_trace import GraspTrace
+from skinhil.view.truth_onsets import TruthTail
 
 
 def _sensors(text: str) -> list[int]:
@@ -45,8 +46,10 @@ def _lsl_name(text: str) -> str:
     return text
 
 
-def add_lab_output_args(parser: argparse.ArgumentParser, lsl: bool = True) -> None:
-    """Add ``--view [HOST:]PORT``, ``--psp-sensors`` and (with ``lsl``) ``--lsl [NAME]``."""
+def add_lab_output_args(parser: argparse.ArgumentParser, lsl: bool = True,
+                        truth: bool = False) -> None:
+    """Add ``--view [HOST:]PORT``, ``--psp-sensors``, (with ``lsl``) ``--lsl [NAME]`` and
+    (with ``truth``) ``--view-truth FILE``, the operator's truth the view draws."""
     parser.add_argument("--view", metavar="[HOST:]PORT",
                         help="serve the live view (raster, PSP traces, decisions, counters) "
                              "at http://HOST:PORT/ (host 127.0.0.1 unless given; port 0: "
@@ -55,6 +58,11 @@ def add_lab_output_args(parser: argparse.ArgumentParser, lsl: bool = True) -> No
                         help="sensor addresses whose PSP traces the view shows and the LSL "
                              "psp outlet carries (default: 8 spread over the skin in the "
                              "view, every sensor on LSL)")
+    if truth:
+        parser.add_argument("--view-truth", type=Path, metavar="FILE",
+                            help="with --view: draw the onsets of the board's truth file "
+                                 "(serve --truth FILE: stimulus markers and contact trials) "
+                                 "on the raster too, read as it appears or grows")
     if lsl:
         parser.add_argument("--lsl", nargs="?", const="skinhil", metavar="NAME", type=_lsl_name,
                             help="publish LSL outlets NAME-spikes, NAME-psp, NAME-markers, "
@@ -72,6 +80,8 @@ def check_lab_outputs(args: argparse.Namespace, size: MeshSize) -> None:
             raise ConfigError("--lsl NAME is empty — give a stream name such as skinhil")
     if args.view is not None:
         parse_address(args.view)
+    if getattr(args, "view_truth", None) is not None and args.view is None:
+        raise ConfigError("--view-truth FILE draws the truth on the live view: add --view PORT")
     n = spring_count(size)
     if args.psp_sensors is not None and not all(0 <= a < n for a in args.psp_sensors):
         raise ConfigError(f"--psp-sensors {','.join(map(str, args.psp_sensors))}: a skin of "
@@ -105,6 +115,7 @@ class LabOutputs:
         self.provenance = dict(prov or {})
         self.server: ViewServer | None = None
         self.outlets: list[LslOutlets] = []
+        self.truth_tails: list[TruthTail] = []
         self.boards = 0
         if args.view is not None:
             host, port = parse_address(args.view)
@@ -121,6 +132,9 @@ class LabOutputs:
             return None
         feed = ViewFeed(source, self.mesh, self.names, self.args.psp_sensors, answers, grasp)
         self.server.add_feed(str(key), feed)
+        truth = getattr(self.args, "view_truth", None)
+        if truth is not None:
+            self.truth_tails.append(TruthTail(truth, feed.add_truth_onsets).start())
         return feed
 
     def attach(self, key: object, receiver: Receiver,
@@ -144,6 +158,8 @@ class LabOutputs:
 
     def close(self) -> None:
         """End the view's run and close the outlets (they push what they kept)."""
+        for tail in self.truth_tails:
+            tail.close()
         if self.server is not None:
             self.server.close()
         for outlets in self.outlets:

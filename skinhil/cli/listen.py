@@ -110,7 +110,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                         "address:port; host names are not resolved); "
                         "datagrams of others are refused and counted")
     add_size_option(p)
-    add_lab_output_args(p)
+    add_lab_output_args(p, truth=True)
     add_nwb_args(p)
 
 

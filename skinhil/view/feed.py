@@ -21,6 +21,10 @@ every 0.1 s) drains it into one JSON-ready message:
 - ``score``: the running confusion matrix (rows true, columns decided), accuracy, misses,
   false alarms; ``link``: the receiver's link and loss counters; ``board``: the board's
   last status (late ticks, drops by reason);
+- ``map``: the skin map (:class:`skinhil.view.rate_map.RateMap`): each place's spike rate
+  above its sensors' own baselines as a z-score, ``z`` (base64 float32, row-major over the
+  ``map_shape`` places of the ``config``), and the mean baseline ``baseline_hz``;
+- ``seq``: the update's number (1, 2, ...);
 - ``psp_sensors`` and ``psp_labels``: present when the PSP sensors changed (a page picked
   one, :meth:`ViewFeed.pick_psp_sensors`);
 - ``grasp``: present when the feed has a held object's truth (``demo --task grasp
@@ -33,7 +37,15 @@ every 0.1 s) drains it into one JSON-ready message:
 The ``config`` message a page gets first says what does not change: the channels, the
 class names, the PSP sensors, the skin's top layer (``grid`` rows, cols) and each sensor's
 place on it (``sensor_xy``: base64 float32 pairs, column then row in grid units from the
-top-left mass, its spring's midpoint at rest), what the skin map is drawn on.
+top-left mass, its spring's midpoint at rest), the skin map's places (``map_shape``: rows,
+cols of half-cells) and its latest ``map``; and ``history``: the updates of the last
+:data:`HISTORY_S` board seconds (their spikes, markers, PSP samples), which the page draws
+before the next update (the one after the last ``seq`` of the history), so a page opened
+late is not empty.
+
+Onsets come from the stream's ground-truth markers, and also from the operator's truth
+(:meth:`ViewFeed.add_truth_onsets`: ``listen --view --view-truth FILE``; never from the
+decoder's link), each marker then saying its ``source``.
 
 Nothing here copies the session: each message holds only what arrived since the last one.
 """
@@ -56,6 +68,7 @@ from skinhil.model.geometry import Mesh, sensor_label, sensor_positions
 from skinhil.receiver import LinkReport, ReceiverListener, ScoredDecision, in_stream_order
 from skinhil.receiver.traces import PspTraces
 from skinhil.view.grasp_trace import GraspTrace
+from skinhil.view.rate_map import RateMap
 
 log = logging.getLogger(__name__)
 
@@ -73,6 +86,9 @@ MAX_TRACES = 16
 
 SILENT_S = 3.0
 """Host seconds without anything from the board after which the run is called silent."""
+
+HISTORY_S = 10.0
+"""Board seconds of updates a page that connects gets first (the raster's width)."""
 
 
 def _b64(array: np.ndarray) -> str:
@@ -125,13 +141,16 @@ class ViewFeed(ReceiverListener):
         self.traces = PspTraces(sensors, self.n_channels)
         self.answers = answers
         """The receiver's DECISION counters (``DecisionAnswerer.as_dict``), if it answers."""
+        xy = grid_xy(mesh)
+        self.rate_map = RateMap(xy, (int(mesh.size[0]), int(mesh.size[1])))
         self.config = {
             "type": "config", "n_channels": self.n_channels,
             "names": {str(k): v for k, v in names.items()},
             "psp_sensors": sensors, "psp_rate_hz": self.traces.rate_hz,
             "psp_labels": [sensor_label(mesh, a) for a in sensors], "max_traces": MAX_TRACES,
             "grid": [int(mesh.size[0]), int(mesh.size[1])],
-            "sensor_xy": _b64(grid_xy(mesh).astype("<f4"))}
+            "sensor_xy": _b64(xy.astype("<f4")),
+            "map_shape": [self.rate_map.rows, self.rate_map.cols]}
         self._lock = threading.Lock()
         self._traces_changed = False
         self._last_item_s = -math.inf
@@ -148,6 +167,8 @@ class ViewFeed(ReceiverListener):
         self._link_errors: list[str] = []
         self._t_board_us = 0
         self.updates = 0
+        self._history: deque[dict[str, Any]] = deque()
+        self._map: dict[str, Any] = self._map_message()
 
     # -- receiver callbacks (receiving thread) --------------------------------------------
     def on_events(self, events: np.ndarray, host_time_s: float) -> None:
@@ -155,6 +176,7 @@ class ViewFeed(ReceiverListener):
             return
         with self._lock:
             self.traces.add(events)
+            self.rate_map.add(events["addr"])
             self._events.append(events[["t", "addr"]].copy())
             self._t_board_us = max(self._t_board_us, int(events["t"][-1]))
             self._heard(host_time_s)
@@ -199,6 +221,8 @@ class ViewFeed(ReceiverListener):
             self.traces = traces
             self._psp, self._psp_first = [], -1
             self._traces_changed = True
+            for old in self._history:  # samples of the sensors shown before: not replayed
+                old["psp"] = {"first": -1, "n": 0, "values": ""}
             self.config = {**self.config, "psp_sensors": chosen,
                            "psp_labels": [sensor_label(self.mesh, a) for a in chosen]}
         return chosen
@@ -234,9 +258,18 @@ class ViewFeed(ReceiverListener):
         with self._lock:
             self._markers.append({"t_us": int(marker.t_us), "stimulus_id": sid,
                                   "phase": getattr(marker.phase, "name",
-                                                   str(marker.phase)).lower()})
+                                                   str(marker.phase)).lower(),
+                                  "source": "marker"})
             self._t_board_us = max(self._t_board_us, int(marker.t_us))
             self._heard()
+
+    def add_truth_onsets(self, onsets: Sequence[dict[str, Any]]) -> None:
+        """Show the operator's truth (:mod:`skinhil.view.truth_onsets`): each a dict with
+        ``t_us`` (board µs), ``phase`` (``onset`` or ``end``), ``label`` (what the page
+        writes) and, for a marker, ``stimulus_id``; drawn as the markers are, with
+        ``source`` ``truth``."""
+        with self._lock:
+            self._markers.extend({**o, "source": "truth"} for o in onsets)
 
     def on_decision(self, decision: ScoredDecision) -> None:
         p = decision.prediction
@@ -254,7 +287,10 @@ class ViewFeed(ReceiverListener):
         newest decisions (oldest first)."""
         with self._lock:
             recent = list(self._recent)
-        hello = {**self.config, "recent_decisions": recent}
+            history = list(self._history)
+            rate_map = self._map
+        hello = {**self.config, "recent_decisions": recent, "history": history,
+                 "map": rate_map}
         if self.grasp is not None:
             hello["grasp"] = self.grasp.history()
         return hello
@@ -304,7 +340,31 @@ class ViewFeed(ReceiverListener):
             msg["answers"] = self.answers()
         if self.grasp is not None:
             msg["grasp"] = self.grasp.drain()
+        with self._lock:
+            self.rate_map.advance(t_board)
+            self._map = msg["map"] = self._map_message()
+            msg["seq"] = self.updates
+            self._keep(msg)
         return msg
+
+    def _map_message(self) -> dict[str, Any]:
+        """The skin map's ``map`` item (lock held)."""
+        return {"z": _b64(self.rate_map.z.astype("<f4")),
+                "baseline_hz": round(float(self.rate_map.baseline_hz().mean()), 3)}
+
+    def _keep(self, msg: dict[str, Any]) -> None:
+        """Keep what a late page draws of ``msg`` (its spikes, markers, PSP samples) for
+        :data:`HISTORY_S` board seconds (lock held); an update that brought none of them
+        is not kept (a board not started yet fills nothing)."""
+        if not (msg["spikes"]["n"] or msg["markers"] or msg["psp"]["n"]):
+            return
+        self._history.append({
+            "type": "update", "seq": msg["seq"], "t_board_us": msg["t_board_us"],
+            "spikes": msg["spikes"], "markers": msg["markers"], "psp": msg["psp"],
+            "decisions": [], "link_errors": [], "run": msg["run"]})
+        horizon = msg["t_board_us"] - int(HISTORY_S * 1e6)
+        while self._history and self._history[0]["t_board_us"] < horizon:
+            self._history.popleft()
 
     def _score(self) -> dict[str, Any] | None:
         sb = getattr(self.receiver, "scoreboard", None)

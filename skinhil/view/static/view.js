@@ -1,16 +1,20 @@
 // skinhil live view: draws the updates of /events (server-sent events) on canvases.
 // Raster: channels on y, board time scrolling right to left over WINDOW_S seconds; spikes
 // add brightness, so a crowded pixel row (many channels) shows where the activity is.
-// Skin map: each place's mean spike rate, top view; its overlay canvas carries what is drawn
+// Skin map: each place's spike rate above its sensors' own baselines (a z-score computed by
+// the server, skinhil/view/rate_map.py), top view; its overlay canvas carries what is drawn
 // over the skin (the picked PSP sensors; the contact footprint goes there too).
+// A page that connects late draws the server's history (the config's last seconds of
+// updates) first, then the updates after it.
 "use strict";
 
 const WINDOW_S = 10;          // board seconds across the raster
 const PSP_WINDOW_S = 5;       // board seconds across the PSP traces
-const RATE_TAU_S = 0.5;       // board seconds of the map's rate average
-const MAP_FLOOR_HZ = 20;      // the map's colour scale reaches at least this rate
+const MAP_Z_FLOOR = 3;        // the map is black up to this z (the noise)
+const MAP_Z_TOP = 12;         // the map's colour scale reaches at least this z
+const LABEL_ROWS = 3;         // rows of onset labels at the raster's top (then thinned)
 const MAX_DECISIONS = 12;     // rows of the decision table
-const ONSET = "#3cf", END_MARK = "#567";
+const ONSET = "#3cf", TRUTH_ONSET = "#7e7", END_MARK = "#567";
 const ANSWERS = [
   ["sent", "DECISIONs sent"], ["acked", "ACKed"], ["nacked", "NACKed"], ["unsent", "not sent"],
 ];
@@ -37,7 +41,8 @@ const view = {
   config: null, nowUs: null, shiftRest: 0, updates: 0, spikesDrawn: 0, notDrawn: 0,
   decisions: [], psp: [], pspEnd: 0, lastLink: null, decisionsSeen: 0,
   markers: [], onsetsSeen: 0, onsetsDrawn: 0, run: {state: "waiting", reason: ""},
-  ended: false, rates: null, mapMaxHz: 0, picked: [], grasp: null,
+  ended: false, mapZ: null, mapMaxZ: 0, picked: [], grasp: null, lastSeq: 0,
+  history: {updates: 0, spikes: 0, markers: 0}, labelsDrawn: 0, labelsThinned: 0,
 };
 
 function report(body) {
@@ -140,23 +145,50 @@ function drawRaster(m) {
 // x (px) of board time t_us on a plot whose right edge is end_us and that spans window_s
 function timeX(t_us, end_us, window_s, W) { return W - 1 - (end_us - t_us) / (window_s * 1e6) * W; }
 
+// the markers to draw: the stream's, and the operator's truth where the stream has none
+// at that time (the same onset told twice is drawn once)
+function shownMarkers() {
+  const stream = view.markers.filter((mk) => mk.source !== "truth");
+  return view.markers.filter((mk) => mk.source !== "truth" || !stream.some(
+    (s) => s.phase.startsWith("onset") === mk.phase.startsWith("onset") &&
+           Math.abs(s.t_us - mk.t_us) <= 1000));
+}
+
+function markLabel(mk) { return mk.label || name(mk.stimulus_id); }
+
 function drawMarks() {
   const W = marks.width, H = marks.height, now = view.nowUs;
   mctx.clearRect(0, 0, W, H);
   mctx.font = "11px sans-serif";
-  let drawn = 0;
-  for (const mk of view.markers) {
+  let drawn = 0, labels = 0, thinned = 0;
+  const rowEnd = new Array(LABEL_ROWS).fill(-Infinity);  // right end (px) of each row's last label
+  const shown = shownMarkers().sort((a, b) => a.t_us - b.t_us), boxes = [];
+  for (const mk of shown) {
     const x = Math.round(timeX(mk.t_us, now, WINDOW_S, W));
     if (x < 0 || x >= W) continue;
     const onset = mk.phase.startsWith("onset");
-    mctx.fillStyle = onset ? ONSET : END_MARK;
+    mctx.fillStyle = onset ? (mk.source === "truth" ? TRUTH_ONSET : ONSET) : END_MARK;
     mctx.fillRect(x, 0, onset ? 2 : 1, H);
-    if (onset) {
-      drawn += 1;
-      mctx.fillText(name(mk.stimulus_id), Math.min(x + 3, W - 70), 11);
-    }
+    if (!onset) continue;
+    drawn += 1;
+    // a label goes in the first row where it clears the label before it; none: left out
+    const text = markLabel(mk), w = mctx.measureText(text).width;
+    const lx = Math.max(30, Math.min(x + 3, W - w - 2));  // clear of the channel ticks
+    const row = rowEnd.findIndex((end) => lx > end + 4);
+    if (row < 0) { thinned += 1; continue; }
+    rowEnd[row] = lx + w;
+    const y = 11 + 12 * row;
+    mctx.fillStyle = "rgba(0, 0, 0, 0.65)";
+    mctx.fillRect(lx - 1, y - 10, w + 2, 12);
+    mctx.fillStyle = mk.source === "truth" ? TRUTH_ONSET : ONSET;
+    mctx.fillText(text, lx, y);
+    boxes.push([lx, y - 10, w, 12]);
+    labels += 1;
   }
   view.onsetsDrawn = drawn;
+  view.labelsDrawn = labels;
+  view.labelsThinned = thinned;
+  view.labelBoxes = boxes;  // [x, y, w, h] of each label drawn (px)
   // channel ticks on the left edge
   const n = view.config.n_channels;
   mctx.fillStyle = "#8a8a8a";
@@ -201,11 +233,11 @@ function drawPsp() {
   pctx.fillStyle = "#000";
   pctx.fillRect(0, 0, W, H);
   const endUs = pspEndUs();
-  for (const mk of view.markers) {  // onsets under the traces
+  for (const mk of shownMarkers()) {  // onsets under the traces
     const x = Math.round(timeX(mk.t_us, endUs, PSP_WINDOW_S, W));
     if (x < 0 || x >= W) continue;
     const onset = mk.phase.startsWith("onset");
-    pctx.fillStyle = onset ? ONSET : END_MARK;
+    pctx.fillStyle = onset ? (mk.source === "truth" ? TRUTH_ONSET : ONSET) : END_MARK;
     pctx.fillRect(x, 0, onset ? 2 : 1, H);
   }
   const lane = H / k;
@@ -325,61 +357,43 @@ function drawGrasp() {
 
 // -- skin map ----------------------------------------------------------------------------
 function setupMap() {
-  const c = view.config, [rows, cols] = c.grid, n = c.n_channels;
-  const xy = new Float32Array(bytes(c.sensor_xy));
-  const bw = Math.max(1, 2 * (cols - 1)), bh = Math.max(1, 2 * (rows - 1));
-  const binOf = new Int32Array(n), count = new Float32Array(bw * bh);
-  for (let s = 0; s < n; s++) {
-    const bx = Math.min(bw - 1, Math.max(0, Math.floor(2 * xy[2 * s])));
-    const by = Math.min(bh - 1, Math.max(0, Math.floor(2 * xy[2 * s + 1])));
-    binOf[s] = by * bw + bx;
-    count[binOf[s]] += 1;
-  }
+  const c = view.config, [rows, cols] = c.grid, [bh, bw] = c.map_shape;
   const side = 270;
   mapCanvas.width = overlay.width = side;
   mapCanvas.height = overlay.height = Math.max(40, Math.round(side * (rows - 1) / Math.max(cols - 1, 1)));
-  Object.assign(view, {xy, bw, bh, binOf, binCount: count, rates: new Float32Array(n),
-                       lastRateUs: null, mapImg: new ImageData(bw, bh)});
+  Object.assign(view, {xy: new Float32Array(bytes(c.sensor_xy)), bw, bh,
+                       mapImg: new ImageData(bw, bh)});
   view.mapTmp = document.createElement("canvas");
   view.mapTmp.width = bw; view.mapTmp.height = bh;
-  $("map-info").textContent = `${rows}x${cols} skin, spikes/s per place, top view`;
+  $("map-info").textContent = `${rows}x${cols}, rate above baseline (z)`;
+  $("map-info").title = "top view; each place's recent spike rate above its sensors' own " +
+    "baselines, in standard deviations of the noise";
 }
 
 function hot(t) {  // black → red → yellow → white
   return [Math.min(1, 3 * t), Math.min(1, Math.max(0, 3 * t - 1)), Math.min(1, Math.max(0, 3 * t - 2))];
 }
 
-function updateMap(m) {
-  const now = m.t_board_us, rates = view.rates;
-  const dt = view.lastRateUs === null ? 0 : Math.max(0, (now - view.lastRateUs) * 1e-6);
-  view.lastRateUs = now;
-  const decay = Math.exp(-dt / RATE_TAU_S);
-  for (let s = 0; s < rates.length; s++) rates[s] *= decay;
-  if (m.spikes.n > 0) {
-    const a = new Uint16Array(bytes(m.spikes.addr));
-    for (let i = 0; i < a.length; i++) rates[a[i]] += 1 / RATE_TAU_S;
-  }
-  const bins = new Float32Array(view.bw * view.bh);
-  for (let s = 0; s < rates.length; s++) bins[view.binOf[s]] += rates[s];
+// the server's map: each place's z above its sensors' baselines, black up to MAP_Z_FLOOR
+function updateMap(map) {
+  const z = new Float32Array(bytes(map.z));
   let max = 0;
-  for (let b = 0; b < bins.length; b++) {
-    bins[b] = view.binCount[b] ? bins[b] / view.binCount[b] : 0;
-    if (bins[b] > max) max = bins[b];
-  }
-  view.mapMaxHz = max;
-  const scale = Math.max(MAP_FLOOR_HZ, max), px = view.mapImg.data;
-  for (let b = 0; b < bins.length; b++) {
-    const [r, g, bl] = hot(bins[b] / scale);
+  for (const v of z) if (v > max) max = v;
+  view.mapZ = z;
+  view.mapMaxZ = max;
+  const top = Math.max(MAP_Z_TOP, max), px = view.mapImg.data;
+  for (let b = 0; b < z.length; b++) {
+    const [r, g, bl] = hot(Math.max(0, z[b] - MAP_Z_FLOOR) / (top - MAP_Z_FLOOR));
     px[4 * b] = 255 * r; px[4 * b + 1] = 255 * g; px[4 * b + 2] = 255 * bl; px[4 * b + 3] = 255;
   }
   view.mapTmp.getContext("2d").putImageData(view.mapImg, 0, 0);
   mapCtx.imageSmoothingEnabled = false;
   mapCtx.drawImage(view.mapTmp, 0, 0, mapCanvas.width, mapCanvas.height);
-  drawLegend(scale);
-  drawOverlay(m);
+  drawLegend(top, map.baseline_hz);
+  drawOverlay();
 }
 
-function drawLegend(scale) {
+function drawLegend(top, baselineHz) {
   const c = $("map-legend"), ctx = c.getContext("2d"), W = c.width;
   ctx.clearRect(0, 0, W, c.height);
   for (let x = 0; x < 120; x++) {
@@ -389,7 +403,7 @@ function drawLegend(scale) {
   }
   ctx.fillStyle = "#aaa";
   ctx.font = "11px sans-serif";
-  ctx.fillText(`0 … ${scale.toFixed(0)} spikes/s`, 126, 11);
+  ctx.fillText(`z ${MAP_Z_FLOOR}–${top.toFixed(0)}, baseline ${baselineHz.toFixed(1)} Hz`, 126, 11);
 }
 
 // map px ↔ grid units (column, row from the top-left mass)
@@ -408,7 +422,7 @@ function nearestSensor(col, row) {
 }
 
 // What is drawn over the skin: the picked PSP sensors (the contact footprint joins here).
-function drawOverlay(m) {
+function drawOverlay() {
   octx.clearRect(0, 0, overlay.width, overlay.height);
   const k = view.config.psp_sensors.length;
   view.config.psp_sensors.forEach((a, c) => {
@@ -518,15 +532,9 @@ function reportState() {
           onsets_seen: view.onsetsSeen, run: view.run.state});
 }
 
-function onUpdate(m) {
-  view.updates += 1;
-  view.lastMsg = m;
-  if (m.psp_sensors) {
-    view.config.psp_sensors = m.psp_sensors;
-    view.config.psp_labels = m.psp_labels;
-    view.picked = m.psp_sensors.slice();
-    view.psp = [];
-  }
+// what an update draws of the stream: its spikes, markers and PSP samples
+function drawStream(m) {
+  view.lastSeq = Math.max(view.lastSeq, m.seq);
   for (const mk of m.markers) {
     view.markers.push(mk);
     if (mk.phase.startsWith("onset")) view.onsetsSeen += 1;
@@ -539,7 +547,30 @@ function onUpdate(m) {
   addPsp(m);
   drawPsp();
   drawTimeAxis($("psp-axis"), pspEndUs(), PSP_WINDOW_S, 0.5);
-  updateMap(m);
+}
+
+// a page that connects late: the server's last seconds, drawn as they came
+function drawHistory(history) {
+  for (const h of history) {
+    drawStream(h);
+    view.history.updates += 1;
+    view.history.spikes += h.spikes.n;
+    view.history.markers += h.markers.length;
+  }
+  if (history.length) $("clock").textContent = `board time ${(view.nowUs * 1e-6).toFixed(2)} s`;
+}
+
+function onUpdate(m) {
+  view.updates += 1;
+  view.lastMsg = m;
+  if (m.psp_sensors) {
+    view.config.psp_sensors = m.psp_sensors;
+    view.config.psp_labels = m.psp_labels;
+    view.picked = m.psp_sensors.slice();
+    view.psp = [];
+  }
+  drawStream(m);
+  updateMap(m.map);
   if (m.score) {  // a receiver with a decoder (the grasp demo's loop has none)
     showDecisions(m);
     showConfusion(m.score);
@@ -601,15 +632,23 @@ source.addEventListener("config", (e) => {
     enableGrasp();
     addGrasp(view.config.grasp);
   }
+  Object.assign(view, {markers: [], psp: [], nowUs: null, shiftRest: 0, lastSeq: 0});  // (again
+  // on a reconnection: the history redraws the window)
   setupRaster(view.config.n_channels);
   setupMap();
+  updateMap(view.config.map);
+  drawHistory(view.config.history);
   view.picked = view.config.psp_sensors.slice();
   view.decisions = view.config.recent_decisions.slice().reverse();
   showBoards(view.config.boards);
   showRun({state: "live", reason: ""});
   if (view.grasp) drawGrasp();
 });
-source.addEventListener("update", (e) => { if (view.config && !view.ended) onUpdate(JSON.parse(e.data)); });
+source.addEventListener("update", (e) => {
+  if (!view.config || view.ended) return;
+  const m = JSON.parse(e.data);
+  if (m.seq > view.lastSeq) onUpdate(m);  // the history drew the ones before
+});
 source.addEventListener("end", (e) => endRun(JSON.parse(e.data)));
 source.onerror = () => {
   if (view.ended) return;
