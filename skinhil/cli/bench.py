@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from skinhil.cli import signals
+from skinhil.cli.conventions import MODEL_HELP
 from skinhil.cli.transport_args import (
     add_transport_args,
     check_transport_args,
@@ -108,13 +109,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--resume", action="store_true",
                    help="continue the run whose summary is in --out: cases already played "
                         "are not played again")
-    p.add_argument("--model", type=Path, metavar="NPZ",
-                   help="the reference receiver's model (default: the demo's, trained and "
-                        "cached on first use)")
+    p.add_argument("--model", type=Path, metavar="NPZ", help=MODEL_HELP)
     p.add_argument("--faults", type=faults_value, metavar="KEY=VALUE[,...]", action=_Once,
                    help="damage the bench's own link on purpose, to check the rig reports "
                         f"it: {', '.join(FAULT_KEYS)} (skinhil.transports.faults)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar, only the totals")
 
 
 def _model(args: argparse.Namespace, sizes: tuple[str, ...]) -> Path:
@@ -124,10 +122,9 @@ def _model(args: argparse.Namespace, sizes: tuple[str, ...]) -> Path:
     from skinhil.receiver.model_file import load_window_decoder
 
     if args.model is None:
-        from skinhil.cli.demo import cached_model
-        from skinhil.cli.options import DECODE_SNR_DB
+        from skinhil.cli.demo_cache import demo_decoder
 
-        path = cached_model(DECODE_SNR_DB, args.quiet, serial_baud(args), 1)
+        path = demo_decoder(None, args.quiet, serial_baud(args))
     else:
         path = args.model
     for size in sizes:

@@ -11,13 +11,12 @@ from skinhil.transports.pty_bridge import PtyBridge
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    p = subparsers.add_parser(
+    subparsers.add_parser(
         "pty", help="two linked pty devices (a null-modem cable) until Ctrl-C",
         description="Make two pty devices joined back to back (what socat's 'pty,raw "
                     "pty,raw' makes) and print their paths, one per line; bytes written to "
                     "one are read from the other until Ctrl-C. Run 'skinhil serve --port' "
                     "on the first and your decoder on the second.")
-    p.add_argument("--quiet", action="store_true", help="print the two paths only")
 
 
 def run(args: argparse.Namespace) -> int:

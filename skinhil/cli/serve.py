@@ -195,7 +195,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                                "board's; as many cores as --threads")
     output = p.add_argument_group("output (docs: Process output)")
     out = output.add_mutually_exclusive_group()
-    out.add_argument("--quiet", action="store_true", help="print nothing but errors")
     out.add_argument("--json", action="store_true",
                      help="machine-readable output: one JSON object per line on stdout, "
                           "the ready line first and the summary line last")

@@ -70,7 +70,7 @@ def print_report(report: TrainingReport, names: dict[int, str]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from skinhil.cli.listen import class_names
+    from skinhil.cli.direction_names import class_names
 
     out = check_output_path(args.out, (".npz",))  # before minutes of training
     scenario = None
