@@ -67,6 +67,7 @@ def _run(argv: list[str]) -> int:
     import importlib
     import logging
 
+    from skinhil.cli.conventions import settle_common
     from skinhil.cli.distinct_paths import check_distinct_paths
     from skinhil.cli.parser import ERROR_STATUS, build_parser, error_line
     from skinhil.errors import SkinhilError
@@ -86,8 +87,7 @@ def _run(argv: list[str]) -> int:
             from skinhil.cli.user_config import apply_config
 
             apply_config(args, config)
-        if args.quiet and hasattr(args, "no_progress"):
-            args.no_progress = True  # -q means no progress bar too, on every command
+        settle_common(args)
         level = logging.ERROR if args.quiet else logging.WARNING - 10 * min(args.verbose, 2)
         logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
         check_distinct_paths(args)

@@ -39,10 +39,18 @@ def add_common_options(parser: argparse.ArgumentParser, top: bool = False) -> No
     (``top`` false) their defaults are left to the top-level parser's, so an option given
     before the command is not undone after it."""
     default: object = argparse.SUPPRESS
-    parser.add_argument("-v", "--verbose", action="count", default=0 if top else default,
+    group = parser.add_argument_group("common options (every command)")
+    group.add_argument("-v", "--verbose", action="count", default=0 if top else default,
                         help=VERBOSE_HELP)
-    parser.add_argument("-q", "--quiet", action="store_true",
+    group.add_argument("-q", "--quiet", action="store_true",
                         default=False if top else default, help=QUIET_HELP)
+
+
+def settle_common(args: argparse.Namespace) -> None:
+    """What the shared options imply once parsed: ``-q`` turns a command's ``--no-progress``
+    on."""
+    if args.quiet and hasattr(args, "no_progress"):
+        args.no_progress = True
 
 
 def exit_code_table() -> str:

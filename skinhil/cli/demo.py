@@ -33,9 +33,9 @@ from skinhil.cli.lab_outputs import (
     provenance,
 )
 from skinhil.cli.listen import LivePrinter, class_names, print_summary, summary
-from skinhil.cli.options import DECODE_SNR_DB
+from skinhil.cli.options import add_seed_option, add_snr_option
 from skinhil.cli.transport_args import baud_value
-from skinhil.cli.values import integer, real, seed_value, snr_value
+from skinhil.cli.values import integer, real
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import PAPER_SIZE, spring_count
 from skinhil.model.skin import SkinParams
@@ -54,6 +54,10 @@ MIN_DURATION_S = 1.0
 decide."""
 MAX_DURATION_S = 3600.0
 """Longest demo (s of board time)."""
+DEMO_SEED = 1
+"""The demo board's default seed (printed in its banner, the serve command it starts)."""
+
+
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
         "demo", help="board and receiver joined by a pty: live predictions, accuracy, latency",
@@ -61,17 +65,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "pair, play a random sequence of the 9 direction conditions, print each "
                     "online decision and end with accuracy, latency and loss figures. Trains "
                     "and caches a model on first use.")
-    p.add_argument("--snr-db", type=snr_value, default=DECODE_SNR_DB, metavar="DB",
-                   help="neuron noise SNR in dB, -20..200 or 'inf' for none "
-                        f"(default: {DECODE_SNR_DB:g})")
+    add_snr_option(p)
     p.add_argument("--duration", dest="duration_s",
                    type=real(MIN_DURATION_S, MAX_DURATION_S, "seconds"),
                    default=DEFAULT_DURATION_S,
                    metavar="SECONDS", help=f"board time to play, {MIN_DURATION_S:g}.."
                                            f"{MAX_DURATION_S:g} (default: "
                                            f"{DEFAULT_DURATION_S:g})")
-    p.add_argument("--seed", type=seed_value, default=1,
-                   help="board noise and schedule seed, 0..2^63-1 (default: 1)")
+    add_seed_option(p, DEMO_SEED)
     p.add_argument("--model", type=Path, metavar="NPZ", help=MODEL_HELP)
     p.add_argument("--baud", type=baud_value, default=DEFAULT_BAUD,
                    help=f"emulated serial baud rate (default: {DEFAULT_BAUD})")

@@ -7,8 +7,14 @@ import time
 from pathlib import Path
 
 from skinhil.cli.kernel_notice import announce_cold_cache
-from skinhil.cli.options import DECODE_SNR_DB, SCHEDULE_HELP, add_size_option, read_scenario
-from skinhil.cli.values import MAX_REST_S, integer, real, seed_value, snr_value
+from skinhil.cli.options import (
+    SCHEDULE_HELP,
+    add_seed_option,
+    add_size_option,
+    add_snr_option,
+    read_scenario,
+)
+from skinhil.cli.values import MAX_REST_S, integer, real
 from skinhil.model.timeline import DEFAULT_REST_S
 from skinhil.output_files import check_output_path
 from skinhil.receiver.training import BIN_S, WINDOW_S, TrainingReport, train_decoder
@@ -31,9 +37,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "(.npz + JSON metadata, no pickle). Train at the SNR and rest of the "
                     "board you will decode.")
     p.add_argument("--out", type=Path, required=True, metavar="NPZ", help="decoder file")
-    p.add_argument("--snr-db", type=snr_value, default=DECODE_SNR_DB, metavar="DB",
-                   help="neuron noise SNR in dB, -20..200 or 'inf' for none (default: "
-                        f"{DECODE_SNR_DB:g}, the paper's)")
+    add_snr_option(p)
     p.add_argument("--reps", type=integer(1, MAX_REPS, "count"), default=50,
                    help=f"stimuli per condition on average (9 x reps in all), 1..{MAX_REPS} "
                         "(default: 50)")
@@ -41,8 +45,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    default=DEFAULT_REST_S,
                    metavar="SECONDS", help="rest after each stimulus, as the board's --rest "
                                            f"(default: {DEFAULT_REST_S:g})")
-    p.add_argument("--seed", type=seed_value, default=0,
-                   help="noise and schedule seed, 0..2^63-1 (default: 0)")
+    add_seed_option(p)
     p.add_argument("--schedule", type=Path, metavar="TOML",
                    help=f"train on this {SCHEDULE_HELP} played once, as serve --schedule "
                         "plays it (its stimuli are the classes, its contacts touch the skin "
