@@ -13,7 +13,13 @@ import sys
 
 import pytest
 
-from skinhil.cli.conventions import EXIT_CODES, MODEL_HELP, NO_PROGRESS_HELP, QUIET_HELP
+from skinhil.cli.conventions import (
+    EXIT_CODES,
+    JSON_HELP,
+    MODEL_HELP,
+    NO_PROGRESS_HELP,
+    QUIET_HELP,
+)
 from skinhil.cli.parser import SUBCOMMANDS, build_parser
 
 SAME_THING_EXCEPT: dict[str, str] = {
@@ -28,7 +34,7 @@ SAME_THING_EXCEPT: dict[str, str] = {
     "--schedule": "what each command does with the file (play, train on, simulate, list)",
     "--record": "serve records the wire; listen the decoded session",
     "--udp": "serve sends to the address; listen listens on it",
-    "--json": "the lines each command prints (docs: Process output)",
+    "--json": "serve and listen print JSON lines as they run (docs: Process output)",
     "--rest": "train: the rest of the schedule it simulates, as the board's",
 }
 """Options whose name several commands share for different things, and why: for every other
@@ -40,8 +46,7 @@ DEFAULT_IN_BANNER: dict[tuple[str, str], str] = {
     ("simulate", "snr_db"): "its result line prints the SNR and the seed",
 }
 """A command whose default differs from :data:`SHARED_DEFAULTS`, and where it prints it."""
-JSON_PENDING = frozenset({"demo", "bench", "simulate", "train", "reproduce", "dataset", "pty",
-                          "compile"})
+JSON_PENDING = frozenset({"demo", "bench", "reproduce"})
 """Commands that print results but have no --json yet (issue 45)."""
 NO_RESULTS = frozenset({"dbc", "completion"})
 """Commands whose output is the artefact itself (a DBC, a completion script)."""
@@ -136,7 +141,28 @@ def test_model_falls_back_everywhere() -> None:
 def test_json_on_every_command_that_prints_results(name: str) -> None:
     if name in JSON_PENDING:
         pytest.xfail(f"{name} prints results without --json yet")
-    assert "--json" in _options(COMMANDS[name])
+    action = _options(COMMANDS[name]).get("--json")
+    assert action is not None
+    assert name in ("serve", "listen") or action.help == JSON_HELP, name
+
+
+def test_pty_json_names_both_ends() -> None:
+    import json
+    import os
+    import signal
+
+    from tests.harness.serve import RUN_DIR, serve_env
+
+    proc = subprocess.Popen([sys.executable, "-m", "skinhil", "pty", "--json"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=serve_env(), cwd=RUN_DIR)
+    try:
+        assert proc.stdout is not None
+        line = json.loads(proc.stdout.readline())
+        assert [os.path.exists(p) for p in line["paths"]] == [True, True]
+    finally:
+        proc.send_signal(signal.SIGINT)
+        proc.wait(timeout=30)
 
 
 def test_exit_code_table_in_every_help() -> None:

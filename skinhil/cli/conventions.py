@@ -8,6 +8,8 @@ table (:data:`EXIT_CODES`, docs: Command-line conventions) and the configuration
 from __future__ import annotations
 
 import argparse
+import json
+import math
 
 ERROR_STATUS = 2
 """Exit status of every refusal (bad option, bad file, unusable port, ...)."""
@@ -23,6 +25,8 @@ MODEL_HELP = ("decoder file written by skinhil train (default: the demo's 6x6 de
               "trained on first use and cached)")
 """``--model``'s help, the same on every command that decodes (demo, listen, bench): each
 falls back to the cached demo decoder."""
+JSON_HELP = "one JSON object on stdout: the result, instead of the text"
+"""``--json``'s help on every command that prints one result (serve and listen print lines)."""
 EXIT_CODES: tuple[tuple[int, str], ...] = (
     (0, "done"),
     (1, "failed: a case did not pass (bench), or stdout could not be written"),
@@ -51,6 +55,26 @@ def settle_common(args: argparse.Namespace) -> None:
     on."""
     if args.quiet and hasattr(args, "no_progress"):
         args.no_progress = True
+
+
+def add_json_option(parser: argparse.ArgumentParser | argparse._ArgumentGroup) -> None:
+    """Add ``--json`` (:data:`JSON_HELP`) to a command that prints one result."""
+    parser.add_argument("--json", action="store_true", help=JSON_HELP)
+
+
+def print_json(result: dict[str, object]) -> None:
+    """``result`` as one JSON line on stdout; a non-finite number is written as its text
+    (``"inf"``), which strict JSON readers accept."""
+    def clean(value: object) -> object:
+        if isinstance(value, float) and not math.isfinite(value):
+            return str(value)
+        if isinstance(value, dict):
+            return {str(k): clean(v) for k, v in value.items()}
+        if isinstance(value, list | tuple):
+            return [clean(v) for v in value]
+        return value
+
+    print(json.dumps(clean(result), allow_nan=False), flush=True)
 
 
 def exit_code_table() -> str:

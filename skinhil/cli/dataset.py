@@ -8,6 +8,7 @@ from pathlib import Path
 
 from tqdm.auto import tqdm
 
+from skinhil.cli.conventions import add_json_option, print_json
 from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.options import add_size_option, add_snr_option
 from skinhil.dataset import check_training, dataset_cases, make_dataset, parse_seeds
@@ -40,6 +41,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     add_snr_option(p)
     add_size_option(p)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_json_option(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -53,6 +55,12 @@ def run(args: argparse.Namespace) -> int:
     with tqdm(total=len(seeds) * len(cases), unit="run", disable=args.no_progress) as bar:
         written = make_dataset(out, the_suite, seeds, cases, args.snr_db, args.size,
                                progress=lambda case, seed: bar.update(1))
+    if args.json:
+        print_json({"path": str(written.path), "samples": written.samples,
+                    "spikes": written.spikes, "suite": the_suite.id,
+                    "cases": [c.name for c in cases], "seeds": len(seeds),
+                    "snr_db": args.snr_db})
+        return 0
     print(f"wrote {written.path}: {written.samples} samples ({written.spikes} spikes) of "
           f"{the_suite.id} cases {', '.join(c.name for c in cases)} over {len(seeds)} "
           f"training seed(s) at {args.snr_db:g} dB")

@@ -7,22 +7,27 @@ import argparse
 import sys
 
 from skinhil.cli import signals
+from skinhil.cli.conventions import add_json_option, print_json
 from skinhil.transports.pty_bridge import PtyBridge
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    subparsers.add_parser(
+    p = subparsers.add_parser(
         "pty", help="two linked pty devices (a null-modem cable) until Ctrl-C",
         description="Make two pty devices joined back to back (what socat's 'pty,raw "
                     "pty,raw' makes) and print their paths, one per line; bytes written to "
                     "one are read from the other until Ctrl-C. Run 'skinhil serve --port' "
                     "on the first and your decoder on the second.")
+    add_json_option(p)
 
 
 def run(args: argparse.Namespace) -> int:
     with PtyBridge() as bridge:
-        print(bridge.paths[0], flush=True)
-        print(bridge.paths[1], flush=True)
+        if args.json:
+            print_json({"paths": list(bridge.paths)})
+        else:
+            print(bridge.paths[0], flush=True)
+            print(bridge.paths[1], flush=True)
         if not args.quiet:
             print(f"skinhil pty: {bridge.paths[0]} <-> {bridge.paths[1]}; e.g. skinhil serve "
                   f"--port {bridge.paths[0]} and your decoder on {bridge.paths[1]}; "

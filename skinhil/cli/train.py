@@ -6,6 +6,7 @@ import argparse
 import time
 from pathlib import Path
 
+from skinhil.cli.conventions import add_json_option, print_json
 from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.options import (
     SCHEDULE_HELP,
@@ -52,6 +53,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                         "meanwhile), instead of the random direction conditions; --reps and "
                         "--rest then do not apply")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_json_option(p)
     add_size_option(p)
 
 
@@ -92,6 +94,17 @@ def run(args: argparse.Namespace) -> int:
               f"({out})", flush=True)
         raise
     decoder.save(out)
+    if args.json:
+        print_json({"path": str(out), "seconds": round(time.monotonic() - t0, 3),
+                    "snr_db": report.snr_db, "rest_s": report.rest_s, "seed": report.seed,
+                    "stimuli": report.markers, "accuracy": report.accuracy,
+                    "window_accuracy": report.window_accuracy,
+                    "window_accuracy_std": report.window_accuracy_std,
+                    "windows": report.windows, "decodable_windows": report.decodable_windows,
+                    "misses": report.misses, "false_alarms": report.false_alarms,
+                    "classes": [int(c) for c in report.classes],
+                    "confusion": [[int(v) for v in row] for row in report.confusion]})
+        return 0
     print_report(report, class_names())
     print(f"wrote {out} in {time.monotonic() - t0:.1f} s")
     return 0
