@@ -46,7 +46,7 @@ DEFAULT_IN_BANNER: dict[tuple[str, str], str] = {
     ("simulate", "snr_db"): "its result line prints the SNR and the seed",
 }
 """A command whose default differs from :data:`SHARED_DEFAULTS`, and where it prints it."""
-JSON_PENDING = frozenset({"demo", "bench", "reproduce"})
+JSON_PENDING = frozenset({"demo", "reproduce"})
 """Commands that print results but have no --json yet (issue 45)."""
 NO_RESULTS = frozenset({"dbc", "completion"})
 """Commands whose output is the artefact itself (a DBC, a completion script)."""

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from skinhil.cli import signals
-from skinhil.cli.conventions import MODEL_HELP
+from skinhil.cli.conventions import MODEL_HELP, add_json_option, print_json
 from skinhil.cli.transport_args import (
     add_transport_args,
     check_transport_args,
@@ -110,6 +110,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="continue the run whose summary is in --out: cases already played "
                         "are not played again")
     p.add_argument("--model", type=Path, metavar="NPZ", help=MODEL_HELP)
+    add_json_option(p)
     p.add_argument("--faults", type=faults_value, metavar="KEY=VALUE[,...]", action=_Once,
                    help="damage the bench's own link on purpose, to check the rig reports "
                         f"it: {', '.join(FAULT_KEYS)} (skinhil.transports.faults)")
@@ -194,7 +195,7 @@ def run_suite_bench(args: argparse.Namespace) -> int:
             bar.write(f"{record['outcome'].upper():6} {who} {record['id']}: "
                       f"{record['message']}")
 
-    if not args.quiet:
+    if not args.quiet and not args.json:
         print(f"bench {the_suite.id}: seeds {', '.join(map(str, seeds))} (--seed {draw})",
               flush=True)
     try:
@@ -206,9 +207,14 @@ def run_suite_bench(args: argparse.Namespace) -> int:
         bar.close()
     card = build_card(the_suite, result, draw, seeds, link_text)
     js, md = write_card(out, card)
+    t = result.decoder["totals"]
+    if args.json:
+        print_json({"suite": the_suite.id, "seeds": list(seeds), "totals": dict(t),
+                    "complete": card["complete"], "card": str(js), "card_markdown": str(md),
+                    "junit": str(out / JUNIT_NAME)})
+        return 0 if card["complete"] and t["passed"] == t["cases"] else 1
     if not args.quiet:
         print(md.read_text(encoding="utf-8"), end="", flush=True)
-    t = result.decoder["totals"]
     print(f"bench {the_suite.id}: {t['played']} of {t['cases']} cases played: {t['passed']} "
           f"passed, {t['failed']} failed (decoder), {t['errors']} errors (rig); {js}, {md}, "
           f"{out / JUNIT_NAME}", flush=True)
@@ -293,6 +299,11 @@ def run_campaign_file(args: argparse.Namespace) -> int:
     finally:
         bar.close()
     t = summary["totals"]
+    if args.json:
+        print_json({"campaign": campaign.name, "totals": dict(t),
+                    "skipped_earlier": counts["skipped"], "complete": summary["complete"],
+                    "summary": str(out / SUMMARY_NAME), "junit": str(out / JUNIT_NAME)})
+        return 0 if summary["complete"] and t["passed"] == t["cases"] else 1
     earlier = f" ({counts['skipped']} in the earlier run)" if counts["skipped"] else ""
     print(f"bench {campaign.name}: {t['played']} of {t['cases']} cases played{earlier}"
           f": {t['passed']} passed, {t['failed']} failed (decoder), {t['errors']} errors "
