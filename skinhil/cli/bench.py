@@ -191,7 +191,7 @@ def run_suite_bench(args: argparse.Namespace) -> int:
 
     def on_case(who: str, record: dict[str, Any] | None) -> None:
         bar.update()
-        if record is not None and record["outcome"] != "passed" and not args.quiet:
+        if record is not None and record["outcome"] != "passed" and not (args.quiet or args.json):
             bar.write(f"{record['outcome'].upper():6} {who} {record['id']}: "
                       f"{record['message']}")
 
@@ -289,7 +289,7 @@ def run_campaign_file(args: argparse.Namespace) -> int:
         bar.set_postfix(passed=counts["passed"], failed=counts["failed"],
                         errors=counts["error"], refresh=False)
         bar.update()
-        if record is not None and record["outcome"] != "passed" and not args.quiet:
+        if record is not None and record["outcome"] != "passed" and not (args.quiet or args.json):
             bar.write(f"{record['outcome'].upper():6} {record['id']}: {record['message']}")
 
     try:
