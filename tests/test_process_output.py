@@ -143,8 +143,8 @@ def test_serve_help_is_in_sections_with_every_option_in_one() -> None:
     parser = build_parser("serve")
     serve = next(a for a in parser._actions if a.dest == "command").choices["serve"]
     titles = [g.title for g in serve._action_groups]
-    for section in ("link", "what the board plays", "board", "model", "scoring",
-                    "recording", "real time", "output"):
+    for section in ("link", "stimulus and world", "board", "model", "scoring", "real time",
+                    "outputs"):
         assert any(t is not None and t.startswith(section) for t in titles), (section, titles)
     loose = [a.option_strings for g in serve._action_groups if g.title == "options"
              for a in g._group_actions if a.dest != "help"]

@@ -2,7 +2,8 @@
 parsers of :func:`skinhil.cli.parser.build_parser` at build time, so it is never stale.
 
 Each subcommand becomes a section: its usage line, its description and every option of every
-argument group with its help text (defaults expanded as ``--help`` prints them)."""
+argument group with its help text (defaults expanded as ``--help`` prints them), then its
+epilog (the exit-code table) as written."""
 
 from __future__ import annotations
 
@@ -65,6 +66,9 @@ def _parser_nodes(name: str, parser: argparse.ArgumentParser) -> nodes.section:
             item += definition
             items += item
         section += items
+    if parser.epilog:
+        epilog = parser.epilog.strip()
+        section += nodes.literal_block(epilog, epilog)
     return section
 
 

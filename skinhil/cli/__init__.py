@@ -67,17 +67,28 @@ def _run(argv: list[str]) -> int:
     import importlib
     import logging
 
+    from skinhil.cli.conventions import settle_common
     from skinhil.cli.distinct_paths import check_distinct_paths
     from skinhil.cli.parser import ERROR_STATUS, build_parser, error_line
     from skinhil.errors import SkinhilError
 
     command = next((a for a in argv if not a.startswith("-")), None)  # -v is the only option
     try:
+        config = None
         if command is None and "--version" in argv:
             command = ""  # the subcommands' names only: --version imports none of them
-        args = build_parser(command).parse_args(argv)  # imports the subcommand's module
+        else:
+            from skinhil.config import load_user_config
+
+            config = load_user_config()
+        args = build_parser(command, config).parse_args(argv)  # imports the subcommand
         signals.resume()  # start-up done: a Ctrl-C during the imports stops here
-        level = logging.WARNING - 10 * min(args.verbose, 2)
+        if config is not None:
+            from skinhil.cli.user_config import apply_config
+
+            apply_config(args, config)
+        settle_common(args)
+        level = logging.ERROR if args.quiet else logging.WARNING - 10 * min(args.verbose, 2)
         logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
         check_distinct_paths(args)
         module = importlib.import_module(f"skinhil.cli.{args.command}")

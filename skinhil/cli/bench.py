@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from skinhil.cli import signals
+from skinhil.cli.conventions import MODEL_HELP, add_json_option, print_json
 from skinhil.cli.transport_args import (
     add_transport_args,
     check_transport_args,
@@ -109,13 +110,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--resume", action="store_true",
                    help="continue the run whose summary is in --out: cases already played "
                         "are not played again")
-    p.add_argument("--model", type=Path, metavar="NPZ",
-                   help="the reference receiver's model (default: the demo's, trained and "
-                        "cached on first use)")
+    p.add_argument("--model", type=Path, metavar="NPZ", help=MODEL_HELP)
+    add_json_option(p)
     p.add_argument("--faults", type=faults_value, metavar="KEY=VALUE[,...]", action=_Once,
                    help="damage the bench's own link on purpose, to check the rig reports "
                         f"it: {', '.join(FAULT_KEYS)} (skinhil.transports.faults)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar, only the totals")
 
 
 def _model(args: argparse.Namespace, sizes: tuple[str, ...]) -> Path:
@@ -125,10 +124,9 @@ def _model(args: argparse.Namespace, sizes: tuple[str, ...]) -> Path:
     from skinhil.receiver.model_file import load_window_decoder
 
     if args.model is None:
-        from skinhil.cli.demo import cached_model
-        from skinhil.cli.options import DECODE_SNR_DB
+        from skinhil.cli.demo_cache import demo_decoder
 
-        path = cached_model(DECODE_SNR_DB, args.quiet, serial_baud(args), 1)
+        path = demo_decoder(None, args.quiet, serial_baud(args))
     else:
         path = args.model
     for size in sizes:
@@ -195,11 +193,11 @@ def run_suite_bench(args: argparse.Namespace) -> int:
 
     def on_case(who: str, record: dict[str, Any] | None) -> None:
         bar.update()
-        if record is not None and record["outcome"] != "passed" and not args.quiet:
+        if record is not None and record["outcome"] != "passed" and not (args.quiet or args.json):
             bar.write(f"{record['outcome'].upper():6} {who} {record['id']}: "
                       f"{record['message']}")
 
-    if not args.quiet:
+    if not args.quiet and not args.json:
         print(f"bench {the_suite.id}: seeds {', '.join(map(str, seeds))} (--seed {draw})",
               flush=True)
     try:
@@ -211,9 +209,14 @@ def run_suite_bench(args: argparse.Namespace) -> int:
         bar.close()
     card = build_card(the_suite, result, draw, seeds, link_text)
     js, md = write_card(out, card)
+    t = result.decoder["totals"]
+    if args.json:
+        print_json({"suite": the_suite.id, "seeds": list(seeds), "totals": dict(t),
+                    "complete": card["complete"], "card": str(js), "card_markdown": str(md),
+                    "junit": str(out / JUNIT_NAME)})
+        return 0 if card["complete"] and t["passed"] == t["cases"] else 1
     if not args.quiet:
         print(md.read_text(encoding="utf-8"), end="", flush=True)
-    t = result.decoder["totals"]
     print(f"bench {the_suite.id}: {t['played']} of {t['cases']} cases played: {t['passed']} "
           f"passed, {t['failed']} failed (decoder), {t['errors']} errors (rig); {js}, {md}, "
           f"{out / JUNIT_NAME}", flush=True)
@@ -289,7 +292,7 @@ def run_campaign_file(args: argparse.Namespace) -> int:
         bar.set_postfix(passed=counts["passed"], failed=counts["failed"],
                         errors=counts["error"], refresh=False)
         bar.update()
-        if record is not None and record["outcome"] != "passed" and not args.quiet:
+        if record is not None and record["outcome"] != "passed" and not (args.quiet or args.json):
             bar.write(f"{record['outcome'].upper():6} {record['id']}: {record['message']}")
 
     try:
@@ -299,6 +302,11 @@ def run_campaign_file(args: argparse.Namespace) -> int:
     finally:
         bar.close()
     t = summary["totals"]
+    if args.json:
+        print_json({"campaign": campaign.name, "totals": dict(t),
+                    "skipped_earlier": counts["skipped"], "complete": summary["complete"],
+                    "summary": str(out / SUMMARY_NAME), "junit": str(out / JUNIT_NAME)})
+        return 0 if summary["complete"] and t["passed"] == t["cases"] else 1
     earlier = f" ({counts['skipped']} in the earlier run)" if counts["skipped"] else ""
     print(f"bench {campaign.name}: {t['played']} of {t['cases']} cases played{earlier}"
           f": {t['passed']} passed, {t['failed']} failed (decoder), {t['errors']} errors "

@@ -8,18 +8,20 @@ import os
 import time
 
 from protocols import kernel_cache
+from skinhil.cli.conventions import add_json_option, print_json
 from skinhil.cli.kernel_notice import cache_is_cold
 from skinhil.errors import ConfigError
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    subparsers.add_parser(
+    p = subparsers.add_parser(
         "compile", help="compile the numba kernels now (the first run of serve, listen, "
                         "demo, train and simulate then starts at once)",
         description="Compile and cache every numba kernel of the board (skin, neurons, "
                     "stimuli, serial and CAN encoders) and of the receiver (serial and CAN "
                     "decoders, PSP filter), so that the first real run starts at once. "
                     "Takes 15-60 s on a cold cache, about a second on a warm one.")
+    add_json_option(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -48,5 +50,9 @@ def run(args: argparse.Namespace) -> int:
     if cold:
         raise ConfigError(f"the kernels compiled but were not cached in '{cached}' — set "
                           "NUMBA_CACHE_DIR to a writable folder")
-    print(f"kernels compiled and cached in {cached} in {time.monotonic() - t0:.1f} s")
+    seconds = time.monotonic() - t0
+    if args.json:
+        print_json({"cache": str(cached), "seconds": round(seconds, 3)})
+    else:
+        print(f"kernels compiled and cached in {cached} in {seconds:.1f} s")
     return 0

@@ -8,9 +8,9 @@ from pathlib import Path
 
 from tqdm.auto import tqdm
 
+from skinhil.cli.conventions import add_json_option, print_json
 from skinhil.cli.kernel_notice import announce_cold_cache
-from skinhil.cli.options import DECODE_SNR_DB, add_size_option
-from skinhil.cli.values import snr_value
+from skinhil.cli.options import add_size_option, add_snr_option
 from skinhil.dataset import check_training, dataset_cases, make_dataset, parse_seeds
 from skinhil.output_files import check_output_path
 from skinhil.suites import suite
@@ -38,11 +38,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="only these cases (default: every case that poses one answered "
                         "task; a held object's case has no offline samples)")
     p.add_argument("--out", type=Path, required=True, help="output file (.h5)")
-    p.add_argument("--snr-db", type=snr_value, default=DECODE_SNR_DB, metavar="DB",
-                   help=f"neuron noise SNR in dB, as serve's --snr-db (default: "
-                        f"{DECODE_SNR_DB:g})")
+    add_snr_option(p)
     add_size_option(p)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_json_option(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -56,6 +55,12 @@ def run(args: argparse.Namespace) -> int:
     with tqdm(total=len(seeds) * len(cases), unit="run", disable=args.no_progress) as bar:
         written = make_dataset(out, the_suite, seeds, cases, args.snr_db, args.size,
                                progress=lambda case, seed: bar.update(1))
+    if args.json:
+        print_json({"path": str(written.path), "samples": written.samples,
+                    "spikes": written.spikes, "suite": the_suite.id,
+                    "cases": [c.name for c in cases], "seeds": len(seeds),
+                    "snr_db": args.snr_db})
+        return 0
     print(f"wrote {written.path}: {written.samples} samples ({written.spikes} spikes) of "
           f"{the_suite.id} cases {', '.join(c.name for c in cases)} over {len(seeds)} "
           f"training seed(s) at {args.snr_db:g} dB")

@@ -21,9 +21,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-from protocols.kernel_cache import source_hash
 from skinhil.cli import demo_grasp
-from skinhil.cli.demo_cache import board_warming, cache_dir
+from skinhil.cli.conventions import MODEL_HELP
+from skinhil.cli.demo_cache import DEMO_REST_S, cached_model
 from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.lab_outputs import (
     add_lab_output_args,
@@ -32,18 +32,15 @@ from skinhil.cli.lab_outputs import (
     provenance,
 )
 from skinhil.cli.listen import LivePrinter, class_names, print_summary, summary
-from skinhil.cli.options import DECODE_SNR_DB
-from skinhil.cli.train import print_report
+from skinhil.cli.options import add_seed_option, add_snr_option
 from skinhil.cli.transport_args import baud_value
-from skinhil.cli.values import integer, real, seed_value, snr_value
+from skinhil.cli.values import integer, real
 from skinhil.errors import ConfigError
 from skinhil.model.geometry import PAPER_SIZE, spring_count
 from skinhil.model.skin import SkinParams
-from skinhil.model.timeline import DEFAULT_REST_S
 from skinhil.receiver import DecisionAnswerer, Receiver
 from skinhil.receiver.model_file import load_window_decoder
 from skinhil.receiver.session import run_against_board, serve_command
-from skinhil.receiver.training import train_decoder
 from skinhil.temp_folders import TempFolder
 from skinhil.transports import DEFAULT_BAUD, PtyMasterTransport
 
@@ -57,16 +54,8 @@ MIN_DURATION_S = 1.0
 decide."""
 MAX_DURATION_S = 3600.0
 """Longest demo (s of board time)."""
-DEMO_REST_S = DEFAULT_REST_S
-"""Rest (s) after each stimulus: the board's default."""
-DEMO_REPS = 30
-"""Training stimuli per condition for the cached demo model. At 10 dB the decoder is
-data-limited below this: cross-validated window accuracy 83 % with 15 per condition, 97 %
-with 30 (``skinhil train --reps``, seed 0)."""
-MODEL_FORMAT_TAG = "v3"
-"""Bumped when the cached model's file format changes; the file name also carries the hash
-of the package sources (:func:`protocols.kernel_cache.source_hash`), so a model is retrained
-once after any change of the code that simulated, cut and fitted its windows."""
+DEMO_SEED = 1
+"""The demo board's default seed (printed in its banner, the serve command it starts)."""
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -76,22 +65,17 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "pair, play a random sequence of the 9 direction conditions, print each "
                     "online decision and end with accuracy, latency and loss figures. Trains "
                     "and caches a model on first use.")
-    p.add_argument("--snr-db", type=snr_value, default=DECODE_SNR_DB, metavar="DB",
-                   help="neuron noise SNR in dB, -20..200 or 'inf' for none "
-                        f"(default: {DECODE_SNR_DB:g})")
+    add_snr_option(p)
     p.add_argument("--duration", dest="duration_s",
                    type=real(MIN_DURATION_S, MAX_DURATION_S, "seconds"),
                    default=DEFAULT_DURATION_S,
                    metavar="SECONDS", help=f"board time to play, {MIN_DURATION_S:g}.."
                                            f"{MAX_DURATION_S:g} (default: "
                                            f"{DEFAULT_DURATION_S:g})")
-    p.add_argument("--seed", type=seed_value, default=1,
-                   help="board noise and schedule seed, 0..2^63-1 (default: 1)")
-    p.add_argument("--model", type=Path, metavar="NPZ",
-                   help="decoder file (default: train on first use and cache)")
+    add_seed_option(p, DEMO_SEED)
+    p.add_argument("--model", type=Path, metavar="NPZ", help=MODEL_HELP)
     p.add_argument("--baud", type=baud_value, default=DEFAULT_BAUD,
                    help=f"emulated serial baud rate (default: {DEFAULT_BAUD})")
-    p.add_argument("--quiet", action="store_true", help="only the final figures")
     p.add_argument("--task", choices=("directions", "grasp"), default="directions",
                    help="directions: decide the 9 direction conditions (default); grasp: the "
                         "board holds an object through --lifts lifts and the reference grip "
@@ -103,36 +87,6 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="--task grasp: the reference grip controller (default), or none: the "
                         "hand keeps its constant low grip")
     add_lab_output_args(p)
-
-
-def cached_model(snr_db: float, quiet: bool, baud: int, seed: int) -> Path:
-    """The cached demo model for ``snr_db``, trained now (with a progress bar) if missing,
-    while the board's kernels warm up for a board at ``baud`` and ``seed``."""
-    stem = f"demo-decoder-{snr_db:g}dB-rest{DEMO_REST_S:g}s-{MODEL_FORMAT_TAG}"
-    path = cache_dir() / f"{stem}-{source_hash()}.npz"
-    if path.exists():
-        return path
-    try:  # before the training, not after it
-        path.parent.mkdir(parents=True, exist_ok=True)
-        if not os.access(path.parent, os.W_OK):
-            raise PermissionError(13, "Permission denied")
-    except OSError as exc:
-        raise ConfigError(f"the demo's model cache '{path.parent}' cannot be written "
-                          f"({exc.strerror or exc}) — set XDG_CACHE_HOME to a writable folder "
-                          "or give --model FILE") from None
-    print(f"training the demo model at {snr_db:g} dB (first use; cached in {path.parent})",
-          flush=True)
-    with board_warming(baud, snr_db, seed):
-        decoder, report = train_decoder(snr_db, DEMO_REPS, seed=0, rest_s=DEMO_REST_S,
-                                        progress=not quiet)
-    if not quiet:
-        print_report(report, class_names())
-    path.parent.mkdir(parents=True, exist_ok=True)
-    decoder.save(path)
-    for old in path.parent.glob(f"{stem}*.npz"):  # models of earlier sources
-        if old != path:
-            old.unlink(missing_ok=True)
-    return path
 
 
 def print_beside(own: dict[str, Any], board: dict[str, Any]) -> None:

@@ -17,6 +17,8 @@ import numpy as np
 
 from protocols.constants import KNOWN_VERSIONS
 from skinhil.cli import signals
+from skinhil.cli.conventions import MODEL_HELP
+from skinhil.cli.direction_names import class_names
 from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.lab_outputs import (
     LabOutputs,
@@ -33,6 +35,7 @@ from skinhil.cli.transport_args import (
     describe_transport,
     open_transport,
     selected_link,
+    serial_baud,
 )
 from skinhil.cli.values import MAX_DURATION_S, integer, real, udp_allow_value
 from skinhil.cli.written import say_written
@@ -68,8 +71,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "trained model (skinhil train). Markers in the stream, when present, "
                     "score the decisions: running accuracy, confusion matrix, latency.")
     add_transport_args(p, udp_listen=True)
-    p.add_argument("--model", type=Path, required=True, metavar="NPZ",
-                   help="decoder file written by skinhil train")
+    p.add_argument("--model", type=Path, metavar="NPZ", help=MODEL_HELP)
     p.add_argument("--board-id", dest="board_ids", type=_board_ids, default=[0],
                    metavar="N[,N...]",
                    help="board id(s) on the CAN bus, e.g. 0,5,9 to decode three boards at "
@@ -387,6 +389,10 @@ def run(args: argparse.Namespace) -> int:
     if record is not None and record.suffix.lower() == ".nwb":
         require_pynwb()
     check_lab_outputs(args, args.size)
+    if args.model is None:
+        from skinhil.cli.demo_cache import demo_decoder
+
+        args.model = demo_decoder(args.size, args.quiet, serial_baud(args))
     decoder = load_window_decoder(args.model, n_channels=spring_count(args.size))
     transport = open_transport(args)
     announce_cold_cache("listen")
@@ -479,9 +485,3 @@ def save_session(args: argparse.Namespace, recorder: SessionRecorder, names: dic
         recorder.save(args.record, {"model": str(args.model), "link": describe_transport(args),
                                     "summary": info})
 
-
-def class_names() -> dict[int, str]:
-    """Display names of the direction classes (stimulus id → name)."""
-    from skinhil.model.stimuli import direction_conditions
-
-    return {i: s.name for i, s in enumerate(direction_conditions())}

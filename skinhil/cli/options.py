@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from pathlib import Path
 
@@ -32,6 +31,25 @@ DECODE_SNR_DB = 10.0
 point (Figure 4)."""
 
 
+SNR_HELP = "neuron noise SNR in dB, -20..200 or 'inf' for none (default: %(default)g)"
+"""``--snr-db``'s help, the same on every command."""
+SEED_HELP = "noise and schedule seed, 0..2^63-1 (default: %(default)s)"
+"""``--seed``'s help, the same on every command whose seed draws the noise and schedule."""
+
+
+def add_snr_option(parser: argparse.ArgumentParser | argparse._ArgumentGroup,
+                   default: float = DECODE_SNR_DB) -> None:
+    """Add --snr-db (neuron noise, dB; ``default`` 10, the paper's operating point)."""
+    parser.add_argument("--snr-db", type=snr_value, default=default, metavar="DB",
+                        help=SNR_HELP)
+
+
+def add_seed_option(parser: argparse.ArgumentParser | argparse._ArgumentGroup,
+                    default: int = 0) -> None:
+    """Add --seed (the noise and schedule seed; ``default`` 0)."""
+    parser.add_argument("--seed", type=seed_value, default=default, help=SEED_HELP)
+
+
 def add_size_option(parser: argparse.ArgumentParser | argparse._ArgumentGroup) -> None:
     """Add --size ROWSxCOLS (the skin's top layer; default the paper's 6x6) to ``parser``."""
     parser.add_argument("--size", type=size_value, default=PAPER_SIZE, metavar="ROWSxCOLS",
@@ -41,7 +59,7 @@ def add_size_option(parser: argparse.ArgumentParser | argparse._ArgumentGroup) -
 
 
 def add_model_options(parser: argparse.ArgumentParser | argparse._ArgumentGroup,
-                      snr_default: float = math.inf) -> None:
+                      snr_default: float = DECODE_SNR_DB) -> None:
     """Add --size, --mechanics, --readout, --amplitude, --dt, --snr-db, --noise, --seed,
     --threads to ``parser``."""
     add_size_option(parser)
@@ -64,15 +82,12 @@ def add_model_options(parser: argparse.ArgumentParser | argparse._ArgumentGroup,
                         metavar="SECONDS",
                         help=f"simulation step in seconds, {DT_RANGE_S[0]:g}..{DT_RANGE_S[1]:g}"
                              " (default: 1e-4)")
-    parser.add_argument("--snr-db", type=snr_value, default=snr_default, metavar="DB",
-                        help="neuron noise SNR in dB, -20..200 or 'inf' for none "
-                        f"(default: {snr_default:g})")
+    add_snr_option(parser, snr_default)
     parser.add_argument("--noise", choices=("diffusion", "measured"), default="diffusion",
                         help="how the SNR becomes neuron noise: 'diffusion', sigma^2 = 1 mV^2 x "
                              "10^(-SNR/10) per ms whatever the step (default), or 'measured', "
                              "awgn(x, snr, 'measured') every step (runs away below ~24 dB)")
-    parser.add_argument("--seed", type=seed_value, default=0,
-                        help="noise seed, 0..2^63-1 (default: 0)")
+    add_seed_option(parser)
     parser.add_argument("--threads", type=integer(1, MAX_THREADS, "thread count"), default=1,
                         metavar="N",
                         help="threads for the model (diffusion noise), worth it from a few "

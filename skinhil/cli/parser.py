@@ -6,7 +6,12 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
-from typing import NoReturn
+from typing import TYPE_CHECKING, NoReturn
+
+from skinhil.cli.conventions import ERROR_STATUS, finish_parser
+
+if TYPE_CHECKING:
+    from skinhil.config import UserConfig
 
 SUBCOMMANDS: tuple[str, ...] = (
     "demo",
@@ -22,10 +27,9 @@ SUBCOMMANDS: tuple[str, ...] = (
     "bench",
     "suites",
     "dataset",
+    "completion",
 )
 
-ERROR_STATUS = 2
-"""Exit status of every refusal (bad option, bad file, unusable port, ...)."""
 
 
 def error_line(what: str) -> str:
@@ -66,16 +70,18 @@ class VersionAction(argparse.Action):
         parser.exit()
 
 
-def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+def build_parser(only: str | None = None, config: UserConfig | None = None
+                 ) -> argparse.ArgumentParser:
     """The top-level parser with every available subcommand registered, or only ``only``
-    when it names one (each subcommand module imports what it runs on: a board start need
-    not pay for scikit-learn's import); a word ``only`` that names none is refused by
-    argparse from the subcommands' names alone, no module imported
-    (tests/test_cold_start.py checks it)."""
+    when it names one; every parser given the shared options and epilog
+    (:mod:`skinhil.cli.conventions`), and ``config``'s defaults made known to them
+    (:mod:`skinhil.cli.user_config`; None: no configuration looked for). Each subcommand
+    module imports what it runs on: a board start need not pay for scikit-learn's import;
+    a word ``only`` that names none is refused by argparse from the subcommands' names
+    alone, no module imported (tests/test_cold_start.py checks it)."""
     parser = ArgumentParser(
         prog="skinhil",
         description="Real-time neuromorphic hardware-in-the-loop emulator of touch.")
-    parser.add_argument("-v", "--verbose", action="count", default=0, help="more log output")
     parser.add_argument("--version", action=VersionAction,
                         help="print skinhil's version and the wire versions it reads, and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=ArgumentParser)
@@ -92,4 +98,17 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
                 continue
             raise
         module.add_parser(sub)
+    _finish(parser, sub, config)
     return parser
+
+
+def _finish(parser: argparse.ArgumentParser, sub: argparse._SubParsersAction,
+            config: UserConfig | None) -> None:
+    line = None if config is None else config.describe()
+    finish_parser(parser, line, top=True)
+    for child in sub.choices.values():
+        finish_parser(child, line)
+    if config is not None:
+        from skinhil.cli.user_config import prepare_parser
+
+        prepare_parser(parser, config)

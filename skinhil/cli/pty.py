@@ -7,6 +7,7 @@ import argparse
 import sys
 
 from skinhil.cli import signals
+from skinhil.cli.conventions import add_json_option, print_json
 from skinhil.transports.pty_bridge import PtyBridge
 
 
@@ -17,13 +18,16 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "pty,raw' makes) and print their paths, one per line; bytes written to "
                     "one are read from the other until Ctrl-C. Run 'skinhil serve --port' "
                     "on the first and your decoder on the second.")
-    p.add_argument("--quiet", action="store_true", help="print the two paths only")
+    add_json_option(p)
 
 
 def run(args: argparse.Namespace) -> int:
     with PtyBridge() as bridge:
-        print(bridge.paths[0], flush=True)
-        print(bridge.paths[1], flush=True)
+        if args.json:
+            print_json({"paths": list(bridge.paths)})
+        else:
+            print(bridge.paths[0], flush=True)
+            print(bridge.paths[1], flush=True)
         if not args.quiet:
             print(f"skinhil pty: {bridge.paths[0]} <-> {bridge.paths[1]}; e.g. skinhil serve "
                   f"--port {bridge.paths[0]} and your decoder on {bridge.paths[1]}; "

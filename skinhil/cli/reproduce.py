@@ -39,7 +39,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="run only the paper preset's search (the paper's linear model, its "
                         "open choices searched) and cache it in DIR/paper_search.json, which "
                         "a later run in DIR reads")
-    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -92,7 +92,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "program driving it reads its ready line and summary line "
                     "(--json, --ready-fd; docs: Process output).")
     add_transport_args(p)
-    plays = p.add_argument_group("what the board plays (schedule, scenario, grasp or replay)")
+    plays = p.add_argument_group(
+        "stimulus and world (schedule, scenario, grasp, suite or replay)")
     src = plays.add_mutually_exclusive_group()
     src.add_argument("--schedule", type=Path, metavar="TOML",
                      help=f"play this {SCHEDULE_HELP}")
@@ -149,7 +150,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                             "returns")
     add_model_options(p.add_argument_group("model (skin, neurons, noise)"),
                       snr_default=DECODE_SNR_DB)  # the paper's 10 dB, as train and demo
-    scoring = p.add_argument_group("scoring the decoder under test")
+    scoring = p.add_argument_group("scoring (the decoder under test)")
     scoring.add_argument("--response-window", dest="response_window_s",
                          type=real(0, MAX_RESPONSE_WINDOW_S, "seconds", lo_open=True),
                          default=DEFAULT_RESPONSE_WINDOW_S, metavar="SECONDS",
@@ -166,7 +167,19 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                          help="with --score: send the ground-truth MARKERs on the link all "
                               "the same (a decoder that calibrates on them, the reference "
                               "receiver scoring itself)")
-    files = p.add_argument_group("recording and truth files")
+    realtime = p.add_argument_group("real time")
+    realtime.add_argument("--realtime", action="store_true",
+                          help="run with real-time (FIFO) scheduling so other programs cannot "
+                               "delay ticks (or replayed units), and spin the last 0.3 ms "
+                               "before each tick instead of sleeping (needs root or "
+                               "CAP_SYS_NICE)")
+    realtime.add_argument("--cpu", type=cores_value, metavar="N[,N...]",
+                          help="run the board on these CPU cores only (as firmware has its "
+                               "core to itself): with the receiver or the decoder under test "
+                               "on another core, no other program takes turns on the "
+                               "board's; as many cores as --threads")
+    files = p.add_argument_group("outputs (files written, what is printed; docs: Process "
+                                 "output)")
     files.add_argument("--record", type=Path, metavar="FILE",
                        help="record what the board puts on the link, as it goes: CAN to a "
                             f"python-can log chosen by the extension (.blf, .asc, .log, .csv, "
@@ -182,24 +195,10 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                             "50 ms; never on the link): what demo --task grasp --view plots. "
                             "FILE is new or one this option wrote; any other file is "
                             "refused, never overwritten")
-    realtime = p.add_argument_group("real time")
-    realtime.add_argument("--realtime", action="store_true",
-                          help="run with real-time (FIFO) scheduling so other programs cannot "
-                               "delay ticks (or replayed units), and spin the last 0.3 ms "
-                               "before each tick instead of sleeping (needs root or "
-                               "CAP_SYS_NICE)")
-    realtime.add_argument("--cpu", type=cores_value, metavar="N[,N...]",
-                          help="run the board on these CPU cores only (as firmware has its "
-                               "core to itself): with the receiver or the decoder under test "
-                               "on another core, no other program takes turns on the "
-                               "board's; as many cores as --threads")
-    output = p.add_argument_group("output (docs: Process output)")
-    out = output.add_mutually_exclusive_group()
-    out.add_argument("--quiet", action="store_true", help="print nothing but errors")
-    out.add_argument("--json", action="store_true",
+    files.add_argument("--json", action="store_true",
                      help="machine-readable output: one JSON object per line on stdout, "
                           "the ready line first and the summary line last")
-    add_ready_option(output)
+    add_ready_option(files)
 
 
 def _config(args: argparse.Namespace) -> BoardConfig:

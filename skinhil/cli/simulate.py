@@ -12,6 +12,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from skinhil.cli import signals
+from skinhil.cli.conventions import add_json_option, print_json
 from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.nwb_options import add_nwb_args, nwb_metadata
 from skinhil.cli.options import (
@@ -41,6 +42,11 @@ BLOCK_S = 0.05
 """Simulated seconds per progress-bar update."""
 
 
+SIMULATE_SNR_DB = math.inf
+"""simulate's default noise: none, the paper's deterministic figures (printed on its result
+line, as its seed)."""
+
+
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser(
         "simulate", help="simulate a stimulus or schedule offline and save forces and spikes",
@@ -63,10 +69,11 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--out", type=Path, default=Path("run.npz"),
                    help="output file: .npz (default run.npz) or .nwb")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_json_option(p)
     p.add_argument("--no-forces", dest="forces", action="store_false",
                    help="do not keep the spring forces (n_steps x n_springs floats: 14 GB for "
                         "10 s of a 48x48 skin); the file then holds an empty forces_n")
-    add_model_options(p)
+    add_model_options(p, snr_default=SIMULATE_SNR_DB)
     add_nwb_args(p)
 
 
@@ -153,7 +160,14 @@ def run(args: argparse.Namespace) -> int:
             np.savez_compressed(fh, forces_n=forces, events=ev, markers=markers,
                                 truth=truth_rec, meta=np.array(json.dumps(meta)))
     rate = len(ev) / (n_steps * args.dt_s) / model.n_springs
-    print(f"wrote {out}: {n_steps} steps of {args.dt_s * 1e3:g} ms, {len(ev)} spikes "
+    if args.json:
+        print_json({"path": str(out), "steps": n_steps, "dt_s": args.dt_s,
+                    "snr_db": args.snr_db, "seed": args.seed, "spikes": len(ev),
+                    "rate_hz": rate, "peak_force_n": peak, "max_strain": strain,
+                    "truth_records": len(truth_rec)})
+        return 0
+    print(f"wrote {out}: {n_steps} steps of {args.dt_s * 1e3:g} ms at {args.snr_db:g} dB, "
+          f"seed {args.seed}, {len(ev)} spikes "
           f"({rate:.1f} Hz per sensor), peak |force| {peak:.3g} N, max strain "
           f"{100 * strain:.3g} % (bound {100 * STRAIN_BOUND:g} %)")
     if scene is not None:

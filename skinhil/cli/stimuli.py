@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 import protocols
+from skinhil.cli.conventions import add_json_option
 from skinhil.cli.options import SCHEDULE_HELP, add_size_option, read_scenario
 from skinhil.model.stimuli import PAPER_STIMULUS_ID_BASE, USER_STIMULUS_ID_BASE, Stimulus
 from skinhil.model.stimulus_table import catalog, stimulus_table
@@ -22,7 +23,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "comes from and its time profile; with --schedule also the file's "
                     "stimuli and its timeline. The digest equals the SESSION record's.")
     p.add_argument("--schedule", type=Path, metavar="FILE", help=f"add the {SCHEDULE_HELP}")
-    p.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    add_json_option(p)
     add_size_option(p)
 
 

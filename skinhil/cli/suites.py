@@ -7,6 +7,7 @@ import argparse
 import json
 from typing import Any
 
+from skinhil.cli.conventions import add_json_option
 from skinhil.suites import SUITES, Suite
 
 
@@ -17,7 +18,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "poses (tolerances, classes) and its trial count, and the seeds for "
                     "training and for evaluation. Play a case with "
                     "'skinhil serve --suite SUITE:CASE --seed N'.")
-    p.add_argument("--json", action="store_true", help="one JSON object on stdout")
+    add_json_option(p)
 
 
 def suite_data(s: Suite) -> dict[str, Any]:

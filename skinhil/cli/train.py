@@ -6,9 +6,16 @@ import argparse
 import time
 from pathlib import Path
 
+from skinhil.cli.conventions import add_json_option, print_json
 from skinhil.cli.kernel_notice import announce_cold_cache
-from skinhil.cli.options import DECODE_SNR_DB, SCHEDULE_HELP, add_size_option, read_scenario
-from skinhil.cli.values import MAX_REST_S, integer, real, seed_value, snr_value
+from skinhil.cli.options import (
+    SCHEDULE_HELP,
+    add_seed_option,
+    add_size_option,
+    add_snr_option,
+    read_scenario,
+)
+from skinhil.cli.values import MAX_REST_S, integer, real
 from skinhil.model.timeline import DEFAULT_REST_S
 from skinhil.output_files import check_output_path
 from skinhil.receiver.training import BIN_S, WINDOW_S, TrainingReport, train_decoder
@@ -31,9 +38,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                     "(.npz + JSON metadata, no pickle). Train at the SNR and rest of the "
                     "board you will decode.")
     p.add_argument("--out", type=Path, required=True, metavar="NPZ", help="decoder file")
-    p.add_argument("--snr-db", type=snr_value, default=DECODE_SNR_DB, metavar="DB",
-                   help="neuron noise SNR in dB, -20..200 or 'inf' for none (default: "
-                        f"{DECODE_SNR_DB:g}, the paper's)")
+    add_snr_option(p)
     p.add_argument("--reps", type=integer(1, MAX_REPS, "count"), default=50,
                    help=f"stimuli per condition on average (9 x reps in all), 1..{MAX_REPS} "
                         "(default: 50)")
@@ -41,14 +46,14 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    default=DEFAULT_REST_S,
                    metavar="SECONDS", help="rest after each stimulus, as the board's --rest "
                                            f"(default: {DEFAULT_REST_S:g})")
-    p.add_argument("--seed", type=seed_value, default=0,
-                   help="noise and schedule seed, 0..2^63-1 (default: 0)")
+    add_seed_option(p)
     p.add_argument("--schedule", type=Path, metavar="TOML",
                    help=f"train on this {SCHEDULE_HELP} played once, as serve --schedule "
                         "plays it (its stimuli are the classes, its contacts touch the skin "
                         "meanwhile), instead of the random direction conditions; --reps and "
                         "--rest then do not apply")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_json_option(p)
     add_size_option(p)
 
 
@@ -70,7 +75,7 @@ def print_report(report: TrainingReport, names: dict[int, str]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from skinhil.cli.listen import class_names
+    from skinhil.cli.direction_names import class_names
 
     out = check_output_path(args.out, (".npz",))  # before minutes of training
     scenario = None
@@ -89,6 +94,17 @@ def run(args: argparse.Namespace) -> int:
               f"({out})", flush=True)
         raise
     decoder.save(out)
+    if args.json:
+        print_json({"path": str(out), "seconds": round(time.monotonic() - t0, 3),
+                    "snr_db": report.snr_db, "rest_s": report.rest_s, "seed": report.seed,
+                    "stimuli": report.markers, "accuracy": report.accuracy,
+                    "window_accuracy": report.window_accuracy,
+                    "window_accuracy_std": report.window_accuracy_std,
+                    "windows": report.windows, "decodable_windows": report.decodable_windows,
+                    "misses": report.misses, "false_alarms": report.false_alarms,
+                    "classes": [int(c) for c in report.classes],
+                    "confusion": [[int(v) for v in row] for row in report.confusion]})
+        return 0
     print_report(report, class_names())
     print(f"wrote {out} in {time.monotonic() - t0:.1f} s")
     return 0

@@ -3,9 +3,10 @@
 ``--link URL`` selects any registered link (docs: Links: ``serial:``, ``can:``, ``udp:``,
 ``pty:`` and the schemes packages add). The shorthands build that URL: ``--port PORT``
 (serial: a device path or a pyserial URL, with ``--baud``), ``--can CHANNEL`` (python-can,
-with ``--interface``, ``--fd``, ``--bitrate``, ``--data-bitrate``) and ``--udp [HOST:]PORT``
-(the serial packets in UDP datagrams, with ``--bitrate``: the board sends to HOST:PORT, the
-host listens on it). :func:`link_url` is the one place they become a URL;
+with ``--interface``, ``--fd``, ``--bitrate``, ``--data-bitrate``, ``--bus-kwargs``; without
+``--interface`` python-can's own configuration, ``CAN_INTERFACE`` or ``~/.canrc``, names it)
+and ``--udp [HOST:]PORT`` (the serial packets in UDP datagrams, with ``--bitrate``: the board
+sends to HOST:PORT, the host listens on it). :func:`link_url` is the one place they become a URL;
 :func:`open_transport` opens it.
 """
 
@@ -26,7 +27,12 @@ from skinhil.transports import (
     open_link,
 )
 from skinhil.transports.base import MAX_BAUD, MIN_BAUD
-from skinhil.transports.can import DEFAULT_CAN_BITRATE, DEFAULT_CAN_INTERFACE
+from skinhil.transports.can import (
+    DEFAULT_CAN_BITRATE,
+    DEFAULT_CAN_INTERFACE,
+    format_bus_kwargs,
+    parse_bus_kwargs,
+)
 from skinhil.transports.udp import DEFAULT_UDP_BITRATE, UDP_LISTEN_HOST
 
 MAX_BITRATE = 100_000_000
@@ -38,11 +44,20 @@ bitrate_value = integer(1, MAX_BITRATE, "bitrate")
 SHORTHAND_SCHEMES: dict[str, str] = {"port": "serial", "can": "can", "udp": "udp"}
 """The shorthand options and the link scheme each one's value is the target of."""
 SHORTHAND_OPTIONS: dict[str, tuple[str, ...]] = {
-    "serial": ("baud",), "can": ("interface", "fd", "bitrate", "data_bitrate"),
+    "serial": ("baud",), "can": ("interface", "fd", "bitrate", "data_bitrate", "bus_kwargs"),
     "udp": ("bitrate",)}
 """The rate and layout options each shorthand's scheme takes, as its URL options."""
-LINK_OPTIONS = ("baud", "interface", "fd", "bitrate", "data_bitrate")
+LINK_OPTIONS = ("baud", "interface", "fd", "bitrate", "data_bitrate", "bus_kwargs")
 """Every rate and layout option (dest names): each goes with the shorthands that take it."""
+
+
+def bus_kwargs_value(text: str) -> str:
+    """argparse type: ``--bus-kwargs`` (``KEY=VALUE,...`` or a JSON object), checked and
+    written as the ``bus_kwargs`` option of a ``can:`` link URL."""
+    try:
+        return format_bus_kwargs(parse_bus_kwargs(text))
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def add_transport_args(parser: argparse.ArgumentParser, udp_listen: bool = False,
@@ -79,7 +94,8 @@ def add_transport_args(parser: argparse.ArgumentParser, udp_listen: bool = False
                             f"{DEFAULT_BAUD})")
     group.add_argument("--interface", default=None, metavar="NAME",
                        help="python-can interface: socketcan, virtual, pcan, kvaser, slcan, "
-                            f"udp_multicast, ... (default: {DEFAULT_CAN_INTERFACE})")
+                            "udp_multicast, ... (default: python-can's own configuration, "
+                            f"CAN_INTERFACE or ~/.canrc, else {DEFAULT_CAN_INTERFACE})")
     group.add_argument("--fd", action="store_true", default=None,
                        help="use CAN FD (64-byte frames)")
     group.add_argument("--bitrate", type=bitrate_value, default=None, metavar="N",
@@ -87,6 +103,10 @@ def add_transport_args(parser: argparse.ArgumentParser, udp_listen: bool = False
                             f"); UDP wire budget (default: {DEFAULT_UDP_BITRATE})")
     group.add_argument("--data-bitrate", type=bitrate_value, default=None, metavar="N",
                        help="CAN FD data-phase bitrate, bits/s (default: same as --bitrate)")
+    group.add_argument("--bus-kwargs", type=bus_kwargs_value, default=None,
+                       metavar="KEY=VALUE,...",
+                       help="further python-can Bus arguments for a vendor adapter, "
+                            "KEY=VALUE,... or a JSON object (e.g. sjw_abr=8,tseg1_abr=31)")
 
 
 def link_url(args: argparse.Namespace) -> LinkUrl | None:

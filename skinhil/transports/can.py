@@ -8,10 +8,12 @@ from __future__ import annotations
 
 import collections
 import errno
+import json
 import logging
 import socket
 import threading
 import time
+from collections.abc import Mapping
 from typing import Any
 
 from skinhil.errors import TransportError
@@ -26,7 +28,10 @@ CAN_RCVBUF_BYTES = 8 * 1024 * 1024
 DEFAULT_CAN_BITRATE = 1_000_000
 """Default CAN (arbitration phase) bitrate (bits/s)."""
 DEFAULT_CAN_INTERFACE = "socketcan"
-"""python-can interface used when none is given."""
+"""python-can interface used when neither the caller nor python-can's own configuration
+(``CAN_INTERFACE``, ``~/.canrc``, ``can.rc``) names one."""
+OWN_BUS_KEYS = ("channel", "interface", "fd", "bitrate", "data_bitrate")
+"""``can.Bus`` arguments the link sets itself: extra bus keyword arguments may not give them."""
 CAN_RX_QUEUE_FRAMES = 1_000_000
 """Frames the CAN reader thread holds before it counts overflows."""
 
@@ -34,11 +39,16 @@ CAN_RX_QUEUE_FRAMES = 1_000_000
 class CanTransport(Transport[list[Any]]):
     """A CAN bus through python-can's ``can.Bus``: any interface (socketcan, virtual, ...).
 
-    ``channel`` and ``interface`` go to ``can.Bus``; ``fd`` enables CAN FD; ``bitrate`` and
-    ``data_bitrate`` (bits/s) configure adapters that take them and set the wire budget
-    (SocketCAN takes its bitrate from ``ip link``; vcan has none, so the budget is all that
-    paces it). A reader thread drains the bus continuously, so the kernel's socket buffer
-    never overflows silently; ``rx_overflows`` counts frames the thread had to discard.
+    ``channel`` and ``interface`` go to ``can.Bus``; ``interface`` None (and ``bitrate``
+    None) take python-can's own configuration (``CAN_INTERFACE`` / ``CAN_BITRATE``,
+    ``~/.canrc``: :func:`configured_bus`), else :data:`DEFAULT_CAN_INTERFACE` (and
+    :data:`DEFAULT_CAN_BITRATE`); ``fd`` enables CAN FD; ``bitrate`` and ``data_bitrate``
+    (bits/s) configure adapters that take them and set the wire budget (SocketCAN takes its
+    bitrate from ``ip link``; vcan has none, so the budget is all that paces it);
+    ``bus_kwargs`` are further ``can.Bus`` keyword arguments for vendor adapters
+    (:func:`parse_bus_kwargs`). A reader thread drains the bus continuously, so the kernel's
+    socket buffer never overflows silently; ``rx_overflows`` counts frames the thread
+    had to discard.
     """
 
     kind = "can"
@@ -46,15 +56,27 @@ class CanTransport(Transport[list[Any]]):
     carries_frames = True
     unit = "frames"
 
-    def __init__(self, channel: str, interface: str = DEFAULT_CAN_INTERFACE, fd: bool = False,
-                 bitrate: int = DEFAULT_CAN_BITRATE, data_bitrate: int | None = None) -> None:
+    def __init__(self, channel: str, interface: str | None = None, fd: bool = False,
+                 bitrate: int | None = None, data_bitrate: int | None = None,
+                 bus_kwargs: Mapping[str, Any] | None = None) -> None:
         import can
 
+        configured = configured_bus(channel) if interface is None or bitrate is None else {}
+        from_config = interface is None and "interface" in configured
+        if interface is None:
+            interface = str(configured.get("interface", DEFAULT_CAN_INTERFACE))
+        if bitrate is None:
+            bitrate = int(configured.get("bitrate") or DEFAULT_CAN_BITRATE)
         self.channel = channel
         self.interface = interface
         self.fd = bool(fd)
         self.can_fd = self.fd
         self.bitrate = check_bitrate(bitrate)
+        try:
+            self.bus_kwargs = _checked_bus_kwargs(bus_kwargs or {})
+        except ValueError as exc:
+            raise TransportError(str(exc)) from None
+        """Further ``can.Bus`` keyword arguments (vendor adapters' own settings)."""
         self.data_bitrate = None if data_bitrate is None else check_bitrate(
             data_bitrate, "data bitrate")
         if self.data_bitrate is not None and not self.fd:
@@ -64,6 +86,7 @@ class CanTransport(Transport[list[Any]]):
                                   "bitrate": self.bitrate}
         if self.data_bitrate is not None:
             kwargs["data_bitrate"] = self.data_bitrate
+        kwargs.update(self.bus_kwargs)
         if interface == "socketcan":
             kwargs.pop("bitrate")
             if not hasattr(socket, "AF_CAN"):
@@ -74,8 +97,10 @@ class CanTransport(Transport[list[Any]]):
         try:
             self._bus = can.Bus(**kwargs)
         except can.CanInterfaceNotImplementedError as exc:
-            raise TransportError(f"CAN interface {interface!r} is not available: {exc}; "
-                                 "see python-can's list of interfaces (socketcan, virtual, "
+            where = (" (named by python-can's configuration: CAN_INTERFACE or ~/.canrc)"
+                     if from_config else "")
+            raise TransportError(f"CAN interface {interface!r}{where} is not available: {exc};"
+                                 " see python-can's list of interfaces (socketcan, virtual, "
                                  "pcan, kvaser, slcan, ...)") from None
         except OSError as exc:
             if exc.errno in (errno.EAFNOSUPPORT, errno.EPROTONOSUPPORT):
@@ -117,14 +142,17 @@ class CanTransport(Transport[list[Any]]):
 
     @classmethod
     def from_url(cls, url: LinkUrl, role: Role) -> CanTransport:
-        """``can:CHANNEL?interface=NAME&fd=1&bitrate=N&data_bitrate=N``; either role."""
-        url.check_options(("interface", "fd", "bitrate", "data_bitrate"))
-        bitrate = url.int_option("bitrate", DEFAULT_CAN_BITRATE)
-        return cls(url.require_target("can:vcan0?fd=1"),
-                   url.options.get("interface", DEFAULT_CAN_INTERFACE),
-                   fd=cls.url_can_fd(url),
-                   bitrate=DEFAULT_CAN_BITRATE if bitrate is None else bitrate,
-                   data_bitrate=url.int_option("data_bitrate", None))
+        """``can:CHANNEL?interface=NAME&fd=1&bitrate=N&data_bitrate=N&bus_kwargs=K=V,...``;
+        either role. Without ``interface`` (``bitrate``) python-can's configuration gives it
+        (:func:`configured_bus`)."""
+        url.check_options(("interface", "fd", "bitrate", "data_bitrate", "bus_kwargs"))
+        try:
+            bus_kwargs = parse_bus_kwargs(url.options.get("bus_kwargs", ""))
+        except ValueError as exc:
+            raise TransportError(f"link URL {url}: {exc}") from None
+        return cls(url.require_target("can:vcan0?fd=1"), url.options.get("interface"),
+                   fd=cls.url_can_fd(url), bitrate=url.int_option("bitrate", None),
+                   data_bitrate=url.int_option("data_bitrate", None), bus_kwargs=bus_kwargs)
 
     @property
     def name(self) -> str:
@@ -133,7 +161,8 @@ class CanTransport(Transport[list[Any]]):
     @property
     def url(self) -> str:
         return format_url("can", self.channel, interface=self.interface, fd=self.fd,
-                          bitrate=self.bitrate, data_bitrate=self.data_bitrate)
+                          bitrate=self.bitrate, data_bitrate=self.data_bitrate,
+                          bus_kwargs=format_bus_kwargs(self.bus_kwargs) or None)
 
     def _read_loop(self) -> None:
         import can
@@ -222,6 +251,71 @@ class CanTransport(Transport[list[Any]]):
             self._bus.shutdown()
         except Exception as exc:  # a vanished adapter may fail to close; nothing to recover
             log.debug("closing %s: %s", self.channel, exc)
+
+
+def configured_bus(channel: str) -> dict[str, Any]:
+    """python-can's own configuration for ``channel``, as ``can.Bus(channel=...)`` reads it
+    (``can.util.load_config``'s sources, first wins): ``can.rc``, the environment
+    (``CAN_INTERFACE``, ``CAN_BITRATE``, ...) and its files (``~/.canrc``, ``~/.can``,
+    ``/etc/can.conf``); the legacy ``bustype`` read as ``interface``. No ``interface`` key
+    when none names one; an unknown one is refused by ``can.Bus`` when the link opens."""
+    import can
+    import can.util
+
+    out: dict[str, Any] = {}
+    for source in (can.rc, can.util.load_environment_config(),
+                   can.util.load_file_config()):
+        config = dict(source)
+        if "bustype" in config and not config.get("interface"):
+            config["interface"] = config.pop("bustype")
+        for key, value in config.items():
+            if key not in out and value not in (None, ""):
+                out[key] = can.util.cast_from_string(value) if isinstance(value, str) else value
+    return out
+
+
+def parse_bus_kwargs(text: str) -> dict[str, Any]:
+    """Extra ``can.Bus`` keyword arguments from ``KEY=VALUE,KEY=VALUE`` (each value read as
+    python-can reads its configuration files: integers, floats, booleans, else text) or from
+    a JSON object; empty text gives none. :class:`ValueError` saying what to write when the
+    text is neither, or names an argument the link sets itself (:data:`OWN_BUS_KEYS`)."""
+    from can.util import cast_from_string
+
+    text = text.strip()
+    if not text:
+        return {}
+    if text.startswith("{"):
+        try:
+            parsed = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise ValueError(f"bus keyword arguments {text!r} are not a JSON object ({exc.msg}):"
+                             " give KEY=VALUE,... or {\"KEY\": VALUE}") from None
+        if not isinstance(parsed, dict):
+            raise ValueError(f"bus keyword arguments {text!r} are not a JSON object: give "
+                             "KEY=VALUE,... or {\"KEY\": VALUE}")
+        return _checked_bus_kwargs(parsed)
+    out: dict[str, Any] = {}
+    for item in text.split(","):
+        key, sep, value = item.partition("=")
+        key = key.strip()
+        if not sep or not key.isidentifier():
+            raise ValueError(f"bus keyword argument {item!r} is not KEY=VALUE: give e.g. "
+                             "sjw_abr=8,tseg1_abr=31")
+        out[key] = cast_from_string(value.strip())
+    return _checked_bus_kwargs(out)
+
+
+def format_bus_kwargs(kwargs: Mapping[str, Any]) -> str:
+    """``kwargs`` as :func:`parse_bus_kwargs` reads them back (JSON; empty when none)."""
+    return json.dumps(dict(kwargs), separators=(",", ":")) if kwargs else ""
+
+
+def _checked_bus_kwargs(kwargs: Mapping[str, Any]) -> dict[str, Any]:
+    for key in kwargs:
+        if key in OWN_BUS_KEYS:
+            raise ValueError(f"bus keyword argument {key!r} is one skinhil sets: give it as "
+                             f"--{key.replace('_', '-')} (or {key}= in the link URL)")
+    return dict(kwargs)
 
 
 _VCAN_HOWTO = ("'sudo modprobe vcan && sudo ip link add dev vcan0 type vcan && "
