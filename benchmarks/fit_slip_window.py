@@ -2,7 +2,7 @@
 ``slip_time_us`` from each touch the receiver detects) from each slip onset of the board's
 rule (the first tick of gross slip once the touch has lasted 20 ms), on calibration runs of
 the suite's ``slip`` case on training seeds (task_calibration.py), and prints the slip
-response window of the board's score (skinhil/scoring/tasks.py ``SLIP_WINDOW_US``): the
+response window of the board's score (skinhil/tasks/slip.py ``SLIP_WINDOW_US``): the
 latencies' QUANTILE (the largest: the window must not cut a detection of the reference)
 plus the live path's margin (LIVE_MARGIN_US), rounded up to ROUND_US.
 
@@ -21,7 +21,8 @@ from task_calibration import REPO, calibration_args, calibration_run, detected_t
 sys.path.insert(0, str(REPO))
 
 from skinhil.receiver.task_decoders import slip_time_us  # noqa: E402
-from skinhil.scoring.tasks import SETTLE_US, SLIP_WINDOW_US  # noqa: E402
+from skinhil.scoring.tasks import SETTLE_US  # noqa: E402
+from skinhil.tasks.slip import SLIP_WINDOW_US  # noqa: E402
 from skinhil.world.truth import SLIP_STATES  # noqa: E402
 
 QUANTILE = 1.0

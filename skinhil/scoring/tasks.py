@@ -20,8 +20,9 @@ the trial's truth at the answer's tick (the last tick of the trial once it has e
 - VIBRATION: the class is the frequency played in the scene nearest the answer; right when
   it is the trial's (the error in Hz is kept too);
 - SLIP: a matched answer is a detection (``right``), its latency the score; its window is
-  :data:`SLIP_WINDOW_US` from the slip's onset, so an answer during the stick (before the
-  slip) or past that window is a false alarm (or late).
+  :data:`skinhil.tasks.slip.SLIP_WINDOW_US` from the slip's onset (the task's
+  ``window_us``), so an answer during the stick (before the slip) or past that window is a
+  false alarm (or late).
 
 Every answer lands in exactly one counter: right, wrong, duplicates, late, false_alarms,
 while_stopped; every trial is matched, missed or pending.
@@ -49,12 +50,6 @@ lift-offs stay one touch."""
 SLIP_GAP_US = 200_000
 """A slip ends only after this long (µs) without gross slip: stick-slip chatter, and the
 unloading slip as a sliding object is lifted, belong to the slip before."""
-SLIP_WINDOW_US = 150_000
-"""A SLIP answers a slip only within this long (µs) of its onset (the response window of
-the other tasks is a touch's; a slip's onset is the instant the stick ends): the reference
-receiver's slip latency on training seeds fits inside it
-(``benchmarks/fit_slip_window.py``), and a blind cadence or a delay after each touch lands
-in it only by chance."""
 SAMPLE_US = 50_000
 """The truth file's values of a touch are those this long (µs) after its onset."""
 SETTLE_US = 20_000
@@ -138,8 +133,7 @@ class TaskScoreboard:
         if self.classes_hz:
             kinds.add(TrialKind.VIBRATING_TOUCH)
         self.tasks = {wire_id: TaskScore(t, OnsetMatcher(
-                          min(window_us, SLIP_WINDOW_US) if t.trials is TrialKind.SLIP
-                          else window_us))
+                          window_us if t.window_us is None else min(window_us, t.window_us)))
                       for wire_id, t in registry.tasks().items()
                       if t.trials in kinds and (only is None or t.name in only)}
         """Per posed task id (id order): its score."""
@@ -244,8 +238,8 @@ class TaskScoreboard:
         """Per task name: the headline ``score``, counters, accuracy, error and latency
         percentiles (JSON-ready); with ``with_verdicts``, every answer's verdict too.
 
-        ``score`` charges every answer (SPEC.md §3.5.4, :func:`headline`; SLIP's by
-        :func:`detection_headline`); None before the first trial or answer."""
+        ``score`` charges every answer (SPEC.md §3.5.4, :func:`headline`; a detection
+        task's, SLIP's, by :func:`detection_headline`); None before the first trial or answer."""
         out: dict[str, dict[str, Any]] = {}
         for s in self.tasks.values():
             matched = s.counts["right"] + s.counts["wrong"]
@@ -255,8 +249,7 @@ class TaskScoreboard:
             d: dict[str, Any] = {
                 "score": (detection_headline(s.counts["right"], s.hedges, s.matcher.onsets,
                                              answers - matched)
-                          if s.task.trials is TrialKind.SLIP
-                          else headline(s.counts["right"], s.hedges, charged)),
+                          if s.task.detection else headline(s.counts["right"], s.hedges, charged)),
                 "trials": s.matcher.onsets, "answers": answers,
                 **{o: s.counts[o] for o in OUTCOMES},
                 "matched": matched, "misses": s.matcher.misses, "pending": s.matcher.pending,

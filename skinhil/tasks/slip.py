@@ -8,6 +8,13 @@ from typing import Any
 import protocols
 from skinhil.tasks.task import TaskDef, TrialKind
 
+SLIP_WINDOW_US = 150_000
+"""A SLIP answers a slip only within this long (µs) of its onset (the response window of
+the other tasks is a touch's; a slip's onset is the instant the stick ends): the reference
+receiver's slip latency on training seeds fits inside it
+(``benchmarks/fit_slip_window.py``), and a blind cadence or a delay after each touch lands
+in it only by chance."""
+
 
 def summary(score: Any, board: Any) -> dict[str, Any]:
     """False alarms per minute of board time (None before any time passed)."""
@@ -17,4 +24,5 @@ def summary(score: Any, board: Any) -> dict[str, Any]:
 
 
 TASK = TaskDef(layout=protocols.ANSWER_LAYOUTS[protocols.Task.SLIP], trials=TrialKind.SLIP,
-               summary=summary, reference="skinhil.receiver.task_decoders:slip_time_us")
+               summary=summary, reference="skinhil.receiver.task_decoders:slip_time_us",
+               window_us=SLIP_WINDOW_US, detection=True)

@@ -70,7 +70,11 @@ class TaskDef:
     ``oracle_values(truth)`` the true answer from a
     truth-file trial line (a dict); ``reference`` the receiver's decoder of its reference
     answer (``module:function``, read by the reference answerer; empty: none);
-    ``summary(score, judging)`` extra keys of its score-file entry.
+    ``summary(score, judging)`` extra keys of its score-file entry; ``window_us`` how long
+    (µs) after a trial's onset an answer may match it (None: the board's response window;
+    the shorter of the two applies); ``detection``: its answers carry no value to be wrong,
+    so its headline charges every answer that matches no trial against a detection
+    (:func:`skinhil.scoring.headline.detection_headline`).
     """
 
     layout: protocols.AnswerLayout
@@ -82,6 +86,8 @@ class TaskDef:
     reference: str = ""
     summary: Callable[[Any, Any], dict[str, Any]] = field(
         default=lambda score, judging: {})
+    window_us: int | None = None
+    detection: bool = False
 
     @property
     def wire_id(self) -> int:
