@@ -46,8 +46,6 @@ DEFAULT_IN_BANNER: dict[tuple[str, str], str] = {
     ("simulate", "snr_db"): "its result line prints the SNR and the seed",
 }
 """A command whose default differs from :data:`SHARED_DEFAULTS`, and where it prints it."""
-JSON_PENDING = frozenset({"demo", "reproduce"})
-"""Commands that print results but have no --json yet (issue 45)."""
 NO_RESULTS = frozenset({"dbc", "completion"})
 """Commands whose output is the artefact itself (a DBC, a completion script)."""
 
@@ -139,8 +137,6 @@ def test_model_falls_back_everywhere() -> None:
 
 @pytest.mark.parametrize("name", sorted(set(SUBCOMMANDS) - NO_RESULTS))
 def test_json_on_every_command_that_prints_results(name: str) -> None:
-    if name in JSON_PENDING:
-        pytest.xfail(f"{name} prints results without --json yet")
     action = _options(COMMANDS[name]).get("--json")
     assert action is not None
     assert name in ("serve", "listen") or action.help == JSON_HELP, name
@@ -163,6 +159,28 @@ def test_pty_json_names_both_ends() -> None:
     finally:
         proc.send_signal(signal.SIGINT)
         proc.wait(timeout=30)
+
+
+def test_demo_json_is_one_object_on_stdout() -> None:
+    """The shortest demo (one lift of the grasp task, no controller: nothing to train): its
+    stdout is exactly one JSON object with the board's score; banners went to stderr.
+    (``reproduce --json`` is checked in tests/test_reproduce.py's quick run.)"""
+    import json
+
+    from tests.harness.serve import RUN_DIR, serve_env
+
+    proc = subprocess.run([sys.executable, "-m", "skinhil", "demo", "--task", "grasp",
+                           "--lifts", "1", "--controller", "off", "--json"],
+                          capture_output=True, text=True, env=serve_env(), cwd=RUN_DIR,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    result = json.loads(proc.stdout)
+    assert proc.stdout.count("\n") == 1 and isinstance(result, dict)
+    assert {"task", "lifts", "snr_db", "seed", "controller", "grips", "board_score",
+            "wall_s"} <= set(result)
+    assert result["task"] == "grasp" and result["grips"] is None
+    assert result["board_score"]["grasp"]["lifts"] == 1, result["board_score"]["grasp"]
+    assert "board:" in proc.stderr
 
 
 def test_exit_code_table_in_every_help() -> None:

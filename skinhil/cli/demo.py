@@ -15,14 +15,16 @@ and cached under ``$XDG_CACHE_HOME/skinhil`` (``~/.cache/skinhil``).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
+import sys
 import time
 from pathlib import Path
 from typing import Any
 
 from skinhil.cli import demo_grasp
-from skinhil.cli.conventions import MODEL_HELP
+from skinhil.cli.conventions import MODEL_HELP, add_json_option, print_json
 from skinhil.cli.demo_cache import DEMO_REST_S, cached_model
 from skinhil.cli.kernel_notice import announce_cold_cache
 from skinhil.cli.lab_outputs import (
@@ -87,6 +89,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="--task grasp: the reference grip controller (default), or none: the "
                         "hand keeps its constant low grip")
     add_lab_output_args(p)
+    add_json_option(p)
 
 
 def print_beside(own: dict[str, Any], board: dict[str, Any]) -> None:
@@ -113,6 +116,19 @@ def print_beside(own: dict[str, Any], board: dict[str, Any]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """The demo; with ``--json`` everything it prints goes to stderr and its result is one
+    JSON object on stdout."""
+    if not args.json:
+        _play(args)
+        return 0
+    with contextlib.redirect_stdout(sys.stderr):
+        result = _play(args)
+    print_json(result)
+    return 0
+
+
+def _play(args: argparse.Namespace) -> dict[str, Any]:
+    """Play the task of ``args``; its result (``--json``'s object)."""
     if args.task == "grasp":
         return demo_grasp.run(args)
     if args.lifts != DEFAULT_LIFTS or args.controller != "reflex":
@@ -158,12 +174,18 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"the board stopped with status {status}: "
                           f"{err.strip().splitlines()[-1] if err.strip() else 'no message'}")
     info = summary(receiver, time.monotonic() - t_link)
-    print()
-    print_summary(info, names)
-    if board_score is not None:
-        print_beside(info, board_score)
-    if out.strip():
-        print(f"board: {out.strip().splitlines()[-1]}")
-    print(f"demo: {args.duration_s:g} s of board time at {args.snr_db:g} dB, "
-          f"{time.monotonic() - t_start:.1f} s wall in all")
-    return 0
+    wall_s = time.monotonic() - t_start
+    if not args.json:
+        print()
+        print_summary(info, names)
+        if board_score is not None:
+            print_beside(info, board_score)
+        if out.strip():
+            print(f"board: {out.strip().splitlines()[-1]}")
+        print(f"demo: {args.duration_s:g} s of board time at {args.snr_db:g} dB, "
+              f"{wall_s:.1f} s wall in all")
+    return {"task": "directions", "duration_s": args.duration_s, "snr_db": args.snr_db,
+            "seed": args.seed, "model": str(Path(model_path).resolve()),
+            "receiver": info, "board_score": board_score,
+            "wall_s": round(wall_s, 3)}
+

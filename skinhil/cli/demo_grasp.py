@@ -101,8 +101,8 @@ def print_lifts(scores: dict[str, Any]) -> None:
               f"{t['slip_distance_mm']:>5.2f} mm  {t['peak_grip_n']:>7.2f} N  {econ:>7}")
 
 
-def run(args: argparse.Namespace) -> int:
-    """The grasp demo (module docstring)."""
+def run(args: argparse.Namespace) -> dict[str, Any]:
+    """The grasp demo (module docstring); its result (``demo --json``'s object)."""
     given = [opt for opt, dest in (("--lsl", "lsl"), ("--psp-sensors", "psp_sensors"),
                                    ("--model", "model"))
              if getattr(args, dest, None) is not None]
@@ -159,13 +159,18 @@ def run(args: argparse.Namespace) -> int:
         raise ConfigError(f"the board stopped with status {status}: "
                           f"{err.strip().splitlines()[-1] if err.strip() else 'no score'}")
     scores = board_score["grasp"]
-    if not args.quiet:
-        print_lifts(scores)
-    print(grasp_text(scores))
-    if controller is not None:
-        c = controller.as_dict()
-        print(f"controller: {c['sent']} GRIPs sent ({c['acked']} ACK, {c['nacked']} NACK, "
-              f"{c['unanswered']} unanswered), {c['unsent']} not sent (no room on the link)")
-    print(f"demo: {args.lifts} lifts at {args.snr_db:g} dB, controller {args.controller}, "
-          f"{time.monotonic() - t_start:.1f} s wall in all", flush=True)
-    return 0
+    c = controller.as_dict() if controller is not None else None
+    wall_s = time.monotonic() - t_start
+    if not args.json:
+        if not args.quiet:
+            print_lifts(scores)
+        print(grasp_text(scores))
+        if c is not None:
+            print(f"controller: {c['sent']} GRIPs sent ({c['acked']} ACK, {c['nacked']} "
+                  f"NACK, {c['unanswered']} unanswered), {c['unsent']} not sent (no room on "
+                  "the link)")
+        print(f"demo: {args.lifts} lifts at {args.snr_db:g} dB, controller "
+              f"{args.controller}, {wall_s:.1f} s wall in all", flush=True)
+    return {"task": "grasp", "lifts": args.lifts, "snr_db": args.snr_db, "seed": args.seed,
+            "controller": args.controller, "grips": c, "board_score": board_score,
+            "wall_s": round(wall_s, 3)}
