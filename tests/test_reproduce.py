@@ -26,12 +26,21 @@ LABELS = tuple(f"{m}/{r}/paper" for m in ("linear", "geometric") for r in ("leng
 """--quick runs the paper's amplitude only (the amplitude factor: the cause rule's test)."""
 
 
-def test_quick_reproduce_writes_figures_claims_and_sensor_table(tmp_path: Path) -> None:
+def test_quick_reproduce_writes_figures_claims_and_sensor_table(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     start = time.perf_counter()
     # the quick run on a 2 x 2 grid, one repeat: every figure, claim row and table of the
     # report (the whole --quick run is timed by benchmarks/bench_reproduce.py)
     assert main(["reproduce", "--quick", "--grid", "2", "--repeats", "1", "--workers", "2",
-                 "--out", str(tmp_path), "--no-progress"]) == 0
+                 "--out", str(tmp_path), "--no-progress", "--json"]) == 0
+    # --json: stdout is one JSON object naming the report, the figures and every verdict
+    out = json.loads(capsys.readouterr().out)
+    assert Path(out["report"]) == (tmp_path / "REPORT.md").resolve() and not out["search_only"]
+    assert {Path(f).name for f in out["figures"]} >= {n for n in FIGURES if "_small" not in n}
+    assert sorted(out["runs"]) == sorted(LABELS)
+    assert all([v["claim"] for v in out["runs"][label]] == list(CLAIM_KEYS)
+               and all(isinstance(v["reproduced"], bool) for v in out["runs"][label])
+               for label in LABELS)
     print(f"reproduce --quick: {time.perf_counter() - start:.1f} s")  # timed by benchmarks
     for name in (n for n in FIGURES if "_small" not in n):
         data = (tmp_path / name).read_bytes()

@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from dataclasses import replace
 from pathlib import Path
 
+from skinhil.cli.conventions import add_json_option, print_json
 from skinhil.cli.values import integer
 from skinhil.reproduce import ReproduceConfig, reproduce
+from skinhil.reproduce.report import verdicts
+from skinhil.reproduce.run import ReproduceOutcome
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
@@ -40,6 +44,7 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                         "open choices searched) and cache it in DIR/paper_search.json, which "
                         "a later run in DIR reads")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_json_option(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -57,17 +62,29 @@ def run(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         done = sorted(p.name for p in Path(args.out).glob("*") if not p.name.startswith("."))
         print(f"reproduce: stopped after {time.monotonic() - t0:.1f} s; {len(done)} files "
-              f"complete in {args.out}{': ' + ', '.join(done) if done else ''}", flush=True)
+              f"complete in {args.out}{': ' + ', '.join(done) if done else ''}", flush=True,
+              file=sys.stderr if args.json else sys.stdout)
         raise
+    if args.json:
+        print_json(as_json(outcome, search_only=args.search_only))
+        return 0
     if args.search_only:
         print(f"wrote {outcome.report} in {outcome.seconds:.1f} s")
         return 0
     print(f"wrote {outcome.report} and {len(outcome.figures)} figures in "
           f"{outcome.seconds:.1f} s")
     for r in outcome.results:
-        from skinhil.reproduce.report import verdicts
-
         for v, _ in verdicts(r):
             print(f"  {r.label:24s} {v.key:4s} {'yes' if v.reproduced else 'NO ':3s}  "
                   f"{v.claim}")
     return 0
+
+
+def as_json(outcome: ReproduceOutcome, search_only: bool) -> dict[str, object]:
+    """``--json``'s object: the report's path, the figures written, the wall time (s) and,
+    per run (mechanics/readout/amplitude), each claim's verdict."""
+    return {"report": str(outcome.report.resolve()), "search_only": search_only,
+            "figures": [str(f.resolve()) for f in outcome.figures],
+            "seconds": round(outcome.seconds, 3),
+            "runs": {r.label: [{"claim": v.key, "text": v.claim, "reproduced": v.reproduced}
+                               for v, _ in verdicts(r)] for r in outcome.results}}
