@@ -3,9 +3,13 @@ tactile-v1 --baselines`` on seeds drawn at run time, the reference receiver as t
 the bench's own pty pair, the reference, random and oracle answerers (and the grasp's
 reference controller) beside it at the same seeds.
 
-It writes the report card's figures, with the machine, its load, the command and the date,
-to benchmarks/results/suite/bench_suite.json, and renders the docs table from that file between the
-markers of docs/suites.md (never typed by hand). ``--render`` renders the table from the
+It writes each task's scores (the decoder's and every baseline's, with their 95 % intervals)
+as a benchmark result through ``results.py`` (benchmarks/results/bench_suite.json: the
+machine, the load, the command, the date), the whole report card to
+benchmarks/results/suite/bench_suite.json, and renders the docs table from the card between
+the markers of docs/suites.md (never typed by hand). One seed of every case with the
+baselines plays 6 cases x 4 answerers, each a few seconds of board time and the start of a
+board and a listener. ``--render`` renders the table from the
 results file alone. The full run plays 6 cases x 5 seeds x 4 answerers in real time: run it on
 a quiet machine (``nice``).
 
@@ -30,6 +34,7 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+import results as bench_results  # noqa: E402
 from machine import describe, load_average  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[1]
@@ -65,6 +70,24 @@ def cell(entry: dict | None) -> str:
         return "n/a"
     lo, hi = entry["interval"]
     return f"{entry['score']:.2f} [{lo:.2f}, {hi:.2f}] ({entry['right']}/{entry['charged']})"
+
+
+def figures(card: dict, wall_s: float) -> list[dict]:
+    """The card's scores as result figures: per task, the decoder's and each baseline's score
+    and 95 % interval bounds (a score n/a is left out), and the run's wall time."""
+    rows = list(card["tasks"].items()) + ([("grasp", card["grasp"])] if "grasp" in card else [])
+    out = [bench_results.figure("wall time of the bench run", wall_s, "s")]
+    for task, entry in rows:
+        who = [("decoder", entry), *((w, entry["baselines"].get(w)) for w in card["baselines"])]
+        for name, e in who:
+            if e is None or e["score"] is None:
+                continue
+            lo, hi = e["interval"]
+            unit = f"score (right/charged, {e['right']}/{e['charged']})"
+            out += [bench_results.figure(f"{task} {name} score", round(e["score"], 4), unit),
+                    bench_results.figure(f"{task} {name} 95 % low", round(lo, 4), unit),
+                    bench_results.figure(f"{task} {name} 95 % high", round(hi, 4), unit)]
+    return out
 
 
 def table(results: dict) -> str:
@@ -109,6 +132,7 @@ def main() -> None:
     ap.add_argument("--smoke", action="store_true",
                     help="the force case, one seed, no baselines, a model of no skill; "
                          "writes neither the results file nor the docs")
+    bench_results.add_arguments(ap)
     args = ap.parse_args()
     if args.render:
         render(json.loads(args.results.read_text(encoding="utf-8")), args.docs)
@@ -144,6 +168,8 @@ def main() -> None:
                "load": f"{load} at the start, {load_average()} at the end",
                "wall_s": round(wall_s, 1), "card": card}
     print(table(results), flush=True)
+    bench_results.publish(args, "bench_suite", "tactile-v1 report card: scores and 95 % "
+                          "intervals per task and answerer", figures(card, round(wall_s, 1)))
     if not args.smoke:
         args.results.parent.mkdir(parents=True, exist_ok=True)
         args.results.write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")

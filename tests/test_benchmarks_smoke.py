@@ -40,7 +40,6 @@ RESULTS_ENV = "SKINHIL_BENCH_RESULTS"
 RESULTS = BENCHMARKS / "results"
 """The committed results the docs' benchmarks page is built from."""
 WRITES_NO_RESULT = {
-    "bench_suite.py": "its report card has a format of its own (benchmarks/results/suite/)",
     "contact_figures.py": "draws the docs' contact figures: no machine-dependent figure",
     "strain_bound.py": "a model measurement: the same on every machine",
     "task_calibration.py": "the fits' shared calibration runs",

@@ -18,7 +18,7 @@ from firmware_sim.grip_replay import replay_grips
 from skinhil.model.timeline import Timeline
 from skinhil.plant import GraspParams, lift_scene
 from skinhil.receiver.grip_loop import GripLoop
-from skinhil.receiver.grip_reflex import GripController, LoadReadout, SlipReflex
+from skinhil.receiver.grip_reflex import GripController, LoadReadout, ReflexParams, SlipReflex
 from skinhil.receiver.receiver import ReceiverListener
 from skinhil.transports import PtyMasterTransport, SerialTransport
 
@@ -111,7 +111,10 @@ def test_a_closed_loop_session_replays_bit_for_bit() -> None:
         board = _board(host.slave_path)
         # a crude readout: the population's rate as a load, so the grip follows the activity
         readout = LoadReadout(np.full(board.sensor.model.n_springs, 4e-4), -0.05, 0.02, 0.002)
-        controller = GripController(host, SlipReflex(readout))
+        # a lively controller (a high ratio, a fast release), so that it grips often
+        lively = ReflexParams(ratio=1.7, max_grip_n=1.4, reflex_n=0.06, reflex_step_n=0.15,
+                              hold_release_n_per_s=5.0)
+        controller = GripController(host, SlipReflex(readout, lively))
         loop = GripLoop(host, [controller])
 
         def receive() -> None:

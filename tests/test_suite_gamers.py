@@ -25,11 +25,12 @@ from harness.serve import ServeProcess
 from harness.suite_play import SNR_DB, Played, play_case, receiver_with, tick_of
 
 import protocols
+from skinhil.cli.demo_grasp import readout_training_runs
 from skinhil.plant import GraspParams
 from skinhil.receiver.answer import DecisionAnswerer
 from skinhil.receiver.grip_loop import GripLoop
 from skinhil.receiver.grip_reflex import GripController, LoadReadout, SlipReflex
-from skinhil.receiver.grip_training import fit_readout
+from skinhil.receiver.grip_training import SUITE_TRAINING_GRIPS_N, fit_readout
 from skinhil.receiver.task_answer import TaskAnswerer
 from skinhil.scoring import DecisionScoreboard
 from skinhil.suites import suite_trials
@@ -231,9 +232,10 @@ MARGIN = 0.25
 
 @cache
 def _grasp_reference() -> Played:
-    """The reference grip controller (its load readout fitted on simulated lifts, as
-    ``demo --task grasp`` fits it) closing the loop on :data:`SEED`."""
-    readout: LoadReadout = fit_readout(SNR_DB)
+    """The reference grip controller (its load readout fitted on the suite's training
+    lifts, as ``listen --grip-readout``'s is fitted) closing the loop on :data:`SEED`."""
+    readout: LoadReadout = fit_readout(SNR_DB, runs=readout_training_runs(),
+                                       grips_n=SUITE_TRAINING_GRIPS_N)
     return play_case(_ref("grasp"), SEED, listening=lambda end: [
         GripLoop(end, [GripController(end, SlipReflex(readout))])])
 
@@ -261,11 +263,6 @@ GRIPPERS: dict[str, Any] = {
     "dither": lambda d: g.dither(0.6, 1.6, 0.1, d),
 }
 
-REFERENCE_FAILS = ("the reference controller breaks the fragile objects of tactile-v1:grasp "
-                   "(its load readout is fitted on the 50 g default object), so no blind "
-                   "grip is well below it")
-
-
 @cache
 def _gripped(name: str) -> Played:
     d = suite_trials(_ref("grasp"), SEED).duration_s
@@ -280,7 +277,6 @@ def test_a_blind_grip_wins_at_most_one_kind_of_object(name: str) -> None:
     assert grasp["score"] <= 0.5, grasp
 
 
-@pytest.mark.xfail(reason=REFERENCE_FAILS, strict=True)
 @pytest.mark.parametrize("name", list(GRIPPERS))
 def test_a_blind_grip_scores_well_below_the_reference_controller(name: str) -> None:
     reference = _grasp_reference().score("grasp")

@@ -8,12 +8,20 @@ campaign's runner plays it: one way to run a case. The decoder's run goes into `
 (``summary.json``, ``junit.xml``, ``cases/``); each baseline's into ``OUT/baselines/NAME``.
 The oracle answers each case from the truth an earlier run of it recorded (the decoder's,
 else a baseline's: the world's mechanics do not depend on the noise).
+
+The reference receiver's model and the grip controller's readout are copied into
+``OUT/inputs`` before the first case and every case reads the copies: the shared cache they
+come from (``skinhil.cli.demo_cache``) drops the files of other package sources, so a
+process of another checkout could delete them under a long run (its listeners then exit 2,
+the cases are the rig's errors and their scores n/a), and the run's folder keeps what its
+answerers used.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import hashlib
+import shutil
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -88,13 +96,41 @@ def baseline_folder(out: Path, name: str) -> Path:
     return out / "baselines" / name
 
 
+INPUTS_NAME = "inputs"
+"""The folder of ``OUT`` that holds the answerers' model and readout copies."""
+
+
+def keep_inputs(link: BenchLink, folder: Path) -> BenchLink:
+    """``link`` reading copies in ``folder`` of its model and grip readout files."""
+    copies: dict[str, Path] = {}
+    for name in ("model", "grip_readout"):
+        path: Path | None = getattr(link, name)
+        if path is None:
+            continue
+        folder.mkdir(parents=True, exist_ok=True)
+        target = folder / path.name
+        if not target.exists():
+            try:
+                shutil.copyfile(path, target)
+            except OSError as exc:
+                raise ConfigError(f"'{path}' cannot be copied into '{folder}' "
+                                  f"({exc.strerror or exc}): give a writable --out") from None
+        copies[name] = target
+    return dataclasses.replace(link, **copies)  # type: ignore[arg-type]
+
+
 def run_suite(campaign: Campaign, out: Path, link: BenchLink, link_text: str,
               stop: threading.Event, baseline_link: BenchLink | None = None,
               on_case: Callable[[str, dict[str, Any] | None], None] | None = None
               ) -> SuiteRun:
     """Play ``campaign`` (:func:`suite_campaign`) on ``link``, then, with ``baseline_link``
     (the bench's own link and the reference receiver's model), each of :data:`BASELINES`
-    at the same cases and seeds; ``on_case(who, record)`` after each case."""
+    at the same cases and seeds; ``on_case(who, record)`` after each case. The links read
+copies of their files in ``OUT/inputs`` (module docstring)."""
+    link = keep_inputs(link, out / INPUTS_NAME)
+    if baseline_link is not None:
+        baseline_link = keep_inputs(baseline_link, out / INPUTS_NAME)
+
     def hook(who: str) -> Callable[[dict[str, Any] | None], None] | None:
         return None if on_case is None else (lambda record: on_case(who, record))
 

@@ -31,7 +31,7 @@ from skinhil.plant.report import grasp_text
 from skinhil.plant.truth_file import HeldTruthReader
 from skinhil.receiver.grip_loop import GripLoop
 from skinhil.receiver.grip_reflex import GripController, LoadReadout, SlipReflex
-from skinhil.receiver.grip_training import fit_readout
+from skinhil.receiver.grip_training import SUITE_TRAINING_GRIPS_N, TrainingLifts, fit_readout
 from skinhil.receiver.receiver import ReceiverListener
 from skinhil.receiver.session import run_against_board, serve_command
 from skinhil.temp_folders import TempFolder
@@ -40,6 +40,30 @@ from skinhil.view.grasp_trace import GraspTrace
 
 TAIL_PERIOD_S = 0.05
 """Seconds between reads of the board's truth file for the live view."""
+
+
+READOUT_CASE = "tactile-v1:grasp"
+"""The suite case whose lifts the reference controller's readout is fitted on."""
+READOUT_SEEDS = (1, 2, 3)
+"""Its training seeds the readout is fitted on (none an evaluation seed)."""
+
+
+def readout_training_runs() -> tuple[TrainingLifts, ...]:
+    """The lifts of :data:`READOUT_CASE` at :data:`READOUT_SEEDS`: light fragile and heavy
+    sturdy objects, never those ``bench --suite`` draws."""
+    from skinhil.suites import suite, suite_trials
+
+    name = READOUT_CASE.split(":")[0]
+    out: list[TrainingLifts] = []
+    for seed in READOUT_SEEDS:
+        if seed not in suite(name).training_seeds:
+            raise ConfigError(f"seed {seed} is not a training seed of {name}")
+        trials = suite_trials(READOUT_CASE, seed)
+        scene, params = trials.scenario.scene, trials.grasp
+        if scene is None or params is None:
+            raise ConfigError(f"{READOUT_CASE} holds no object to fit a grip readout on")
+        out.append((scene, trials.duration_s, params))
+    return tuple(out)
 
 
 def cached_readout(snr_db: float, baud: int, seed: int) -> Path:
@@ -57,7 +81,8 @@ def cached_readout(snr_db: float, baud: int, seed: int) -> Path:
     print(f"fitting the grip controller's load readout at {snr_db:g} dB on simulated lifts "
           f"(first use; cached in {path.parent})", flush=True)
     with board_warming(baud, snr_db, seed):
-        readout = fit_readout(snr_db)
+        readout = fit_readout(snr_db, runs=readout_training_runs(),
+                              grips_n=SUITE_TRAINING_GRIPS_N)
     readout.save(path)
     for old in path.parent.glob(f"grip-readout-{snr_db:g}dB-*.npz"):
         if old != path:

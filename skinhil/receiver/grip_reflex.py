@@ -42,18 +42,26 @@ class ReflexParams:
     """The controller's constants (module docstring); times in s, forces in N."""
 
     low_grip_n: float = 0.3
-    max_grip_n: float = 1.4
-    ratio: float = 1.7
-    """Grip per newton of load read: above the slip ratio 1.25 of the default object."""
+    max_grip_n: float = 1.65
+    """Below the lowest break force of a sturdy object (tactile-v1: 1.7 N)."""
+    ratio: float = 1.4
+    """Grip per newton of load read: the slip ratio 1.25 (friction coefficient 0.8) with a
+    12 % safety margin (a human hand keeps 10-40 %)."""
     bin_s: float = 0.002
-    tau_s: float = 0.02
-    reflex_n: float = 0.06
+    tau_s: float = 0.03
+    reflex_n: float = 0.15
     reflex_s: float = 0.02
-    reflex_step_n: float = 0.15
+    reflex_step_n: float = 0.05
     hold_s: float = 0.1
     deadband_n: float = 0.04
     release_n_per_s: float = 5.0
-    """The grip comes down at most this fast (N/s): a dip of the reading does not let go."""
+    """The grip comes down at most this fast (N/s) with the hand empty (a load read below
+    ``empty_n``)."""
+    hold_release_n_per_s: float = 1.0
+    """The grip comes down at most this fast (N/s) while it holds a load: a dip of the
+    reading does not let go."""
+    empty_n: float = 0.1
+    """A load read below this (N) is an empty hand."""
     max_rate_n_per_s: float = 100.0
     """The board's rate bound (SPEC.md §3.5.6): no GRIP asks more."""
 
@@ -69,6 +77,8 @@ class ReflexParams:
         "hold_s": positive("s"),
         "deadband_n": positive("N"),
         "release_n_per_s": positive("N/s"),
+        "hold_release_n_per_s": positive("N/s"),
+        "empty_n": positive("N"),
         "max_rate_n_per_s": positive("N/s"),
     }
 
@@ -114,21 +124,27 @@ class ChannelRates:
 
 @dataclass(frozen=True)
 class LoadReadout:
-    """A linear load estimate (N) from the channels' rates: ``rates @ weights + bias``."""
+    """A linear load estimate (N) from the channels' rates and the grip the controller
+    asks: ``rates @ weights + grip_weight * grip_n + bias``. The grip term is the
+    controller's own command (an efference copy, never the board's truth): the skin's rates
+    rise with the grip as with the load, and it takes the grip's share out of the reading,
+    so that a firmer grip does not read as a heavier object."""
 
     weights: np.ndarray
     bias: float
     tau_s: float
     bin_s: float
+    grip_weight: float = 0.0
+    """N of load per N of grip asked."""
 
-    def estimate(self, rates: np.ndarray) -> float:
-        """The load (N) the rates (spikes/s) say."""
-        return float(rates @ self.weights) + self.bias
+    def estimate(self, rates: np.ndarray, grip_n: float = 0.0) -> float:
+        """The load (N) the rates (spikes/s) say at the grip ``grip_n`` (N) asked."""
+        return float(rates @ self.weights) + self.grip_weight * grip_n + self.bias
 
     def save(self, path: Path) -> None:
         """Write it as plain data (npz)."""
         np.savez(path, weights=self.weights, bias=self.bias, tau_s=self.tau_s,
-                 bin_s=self.bin_s)
+                 bin_s=self.bin_s, grip_weight=self.grip_weight)
 
     @staticmethod
     def load(path: Path, n_channels: int) -> LoadReadout:
@@ -136,7 +152,8 @@ class LoadReadout:
         try:
             with np.load(path, allow_pickle=False) as z:
                 out = LoadReadout(np.asarray(z["weights"], dtype=np.float64),
-                                  float(z["bias"]), float(z["tau_s"]), float(z["bin_s"]))
+                                  float(z["bias"]), float(z["tau_s"]), float(z["bin_s"]),
+                                  float(z["grip_weight"]) if "grip_weight" in z else 0.0)
         except (OSError, KeyError, ValueError) as exc:
             raise ConfigError(f"'{path}' is not a grip readout ({exc}): delete it to fit "
                               "it again") from None
@@ -165,7 +182,7 @@ class SlipReflex:
         p = self.params
         out: list[tuple[int, float]] = []
         for t_us in self.rates.bins(events):
-            load = self.readout.estimate(self.rates.rates)
+            load = self.readout.estimate(self.rates.rates, self.grip_n)
             self.load_n = load
             recent = self._recent
             recent.append((t_us, load))
@@ -180,7 +197,8 @@ class SlipReflex:
             if abs(want - self.grip_n) < p.deadband_n:
                 continue
             room = p.max_rate_n_per_s * 1e-3 * 0.9  # one tick's worth: bunched GRIPs pass
-            step = max(-p.release_n_per_s * p.bin_s, min(room, want - self.grip_n))
+            release = p.release_n_per_s if load < p.empty_n else p.hold_release_n_per_s
+            step = max(-release * p.bin_s, min(room, want - self.grip_n))
             self.grip_n = round(self.grip_n + step, 6)
             out.append((t_us, self.grip_n))
         return out
