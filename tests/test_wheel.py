@@ -43,7 +43,7 @@ def venv(tmp_path_factory: pytest.TempPathFactory) -> Path:
     src = root / "src"
     for name in PACKAGES:
         shutil.copytree(REPO / name, src / name, ignore=shutil.ignore_patterns("__pycache__"))
-    for name in ("pyproject.toml", "README.md"):
+    for name in ("pyproject.toml", "setup.py", "README.md"):
         shutil.copy2(REPO / name, src / name)
     dist = root / "dist"
     subprocess.run([sys.executable, "-m", "pip", "wheel", str(src), "--no-deps",

@@ -142,6 +142,10 @@ ZIG_KN = (ZIG_TABLE & np.uint64(_KN_MASK)).astype(np.int64)
 """Per layer, the fast path's bound: ``|value| < ZIG_KN[layer]`` takes ``value·ZIG_WN[layer]``."""
 
 
+TAIL_BOUND = math.sqrt(-2.0 * math.log(2.0**-33))
+"""The largest |z| a normal reaches: the radius of the smallest uniform, u = 2^-33 (≈ 6.7637)."""
+
+
 def seed_keys(seed: int | np.random.SeedSequence | None, shape: int | tuple[int, ...]
               ) -> np.ndarray:
     """Random uint64 keys of ``shape`` (one per channel and trial) derived from ``seed``."""
