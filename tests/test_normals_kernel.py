@@ -137,3 +137,41 @@ def test_the_tail_bound_is_the_radius_of_the_smallest_uniform() -> None:
 
 def test_the_path_in_use_is_one_the_cpu_runs() -> None:
     assert normals_path() in supported_paths()
+
+
+BOARD_SPIKES = """
+import hashlib, sys
+sys.path.insert(0, {tests!r})
+import protocols
+from firmware_sim.board import Board, BoardConfig
+from harness.golden import GoldenLink, capture_bytes
+from skinhil.model.normals import normals_path
+from skinhil.model.timeline import Timeline
+config = BoardConfig(seed=46, snr_db=10.0, size=(34, 34),
+                     schedule_mode=Timeline.SCHEDULE_RANDOM)
+link = GoldenLink(False)
+board = Board(config, lambda: link)
+board.warm_up()
+board.queue_session(protocols.SessionReason.START)
+for k in range(300):
+    link.tick = k
+    board.tick()
+board.finish(protocols.RunEndReason.DURATION)
+data = capture_bytes(link)
+print(normals_path(), board.summary().generated, hashlib.sha256(data).hexdigest())
+"""
+
+
+def test_every_path_gives_the_same_spikes_on_a_34x34_board() -> None:
+    # 300 ticks of a 34x34 board at 10 dB off the clock (tests/harness/golden.py's link):
+    # the same capture, byte for byte, whichever path draws the noise
+    runnable = supported_paths()
+    code = BOARD_SPIKES.format(tests=str(REPO / "tests"))
+    out = {}
+    for path in runnable:
+        done = _run(code, path)
+        assert done.returncode == 0, done.stderr
+        out[path] = done.stdout.strip()
+    assert [o.split()[0] for o in out.values()] == list(runnable)
+    assert all(int(o.split()[1]) > 1000 for o in out.values()), out  # the noise fires
+    assert len({o.split()[2] for o in out.values()}) == 1, out
