@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from skinhil import NeuronPopulation
 from skinhil.model.normals import PATH_ENV, fill_normals, normals_path, supported_paths
 from skinhil.model.rng import TAIL_BOUND, seed_keys
 
@@ -175,3 +176,30 @@ def test_every_path_gives_the_same_spikes_on_a_34x34_board() -> None:
     assert [o.split()[0] for o in out.values()] == list(runnable)
     assert all(int(o.split()[1]) > 1000 for o in out.values()), out  # the noise fires
     assert len({o.split()[2] for o in out.values()}) == 1, out
+
+
+def test_noise_driven_firing_matches_numpy_normals() -> None:
+    # 4,000 neurons for 0.3 s at 10 dB under a current that alone never fires them: their
+    # spike counts under the kernel's normals and under numpy's (the same model in float64)
+    # agree within 5 standard errors
+    n, steps, dt_ms, current = 4000, 3000, 0.1, 0.005
+    assert not NeuronPopulation(n, seed=1).step_block(np.full((steps, n), current),
+                                                      dt_ms * 1e-3).any()
+    ours = NeuronPopulation(n, snr_db=10.0, seed=1).step_block(
+        np.full((steps, n), current), dt_ms * 1e-3).sum(axis=0)
+    rng = np.random.default_rng(2)
+    sigma = math.sqrt(10.0**-1 * dt_ms)
+    v, u = np.full(n, -65.0), np.full(n, -13.0)
+    theirs = np.zeros(n)
+    for _ in range(steps):
+        v, u = (v + dt_ms * (0.04 * v * v + 5.0 * v + 140.0 - u + 500.0 * current),
+                u + dt_ms * 0.02 * (0.2 * v - u))
+        v = v + sigma * rng.standard_normal(n)
+        u = u + sigma * rng.standard_normal(n)
+        fired = v >= 30.0
+        theirs += fired
+        v[fired] = -65.0
+        u[fired] += 9.0
+    assert ours.mean() > 0.5  # the noise fires them
+    se = math.sqrt(ours.var() / n + theirs.var() / n)
+    assert abs(ours.mean() - theirs.mean()) < 5.0 * se, (ours.mean(), theirs.mean())
