@@ -19,7 +19,7 @@ REPO = Path(__file__).resolve().parents[1]
 PACKAGES = ("skinhil", "firmware_sim", "protocols")
 
 POINTED_AT = """
-import json, sys, sysconfig
+import importlib.util, json, sys, sysconfig
 from pathlib import Path
 import protocols, skinhil, firmware_sim
 from importlib import resources
@@ -29,6 +29,7 @@ paths = [protocols.DBC_PATH, protocols.DBC_FD_PATH, protocols.SPEC_PATH,
 paths += [Path(p.__file__).with_name("py.typed") for p in (skinhil, firmware_sim, protocols)]
 paths += [Path(str(resources.files("skinhil.view").joinpath("static", n)))
           for n in ("index.html", "view.js", "view.css")]
+paths += [importlib.util.find_spec("skinhil.model.normals._kernel").origin]  # built by the wheel
 print(json.dumps({"site": str(site), "paths": [str(Path(p).resolve()) for p in paths],
                   "missing": [str(p) for p in paths if not Path(p).is_file()],
                   "cases": len(json.loads(protocols.CONFORMANCE_PATH.read_text())["cases"])}))
@@ -42,8 +43,9 @@ def venv(tmp_path_factory: pytest.TempPathFactory) -> Path:
     root = tmp_path_factory.mktemp("wheel")
     src = root / "src"
     for name in PACKAGES:
-        shutil.copytree(REPO / name, src / name, ignore=shutil.ignore_patterns("__pycache__"))
-    for name in ("pyproject.toml", "README.md"):
+        shutil.copytree(REPO / name, src / name,
+                        ignore=shutil.ignore_patterns("__pycache__", "*.so"))
+    for name in ("pyproject.toml", "setup.py", "README.md"):
         shutil.copy2(REPO / name, src / name)
     dist = root / "dist"
     subprocess.run([sys.executable, "-m", "pip", "wheel", str(src), "--no-deps",

@@ -60,14 +60,8 @@ import numpy as np
 
 from skinhil.errors import ConfigError
 from skinhil.events import EVENT_DTYPE, make_events
-from skinhil.model.rng import (
-    fast_pair,
-    fill_normal_pairs,
-    mix64,
-    normal_pair,
-    seed_keys,
-    step_hash,
-)
+from skinhil.model.normals import normals_ext
+from skinhil.model.rng import seed_keys
 from skinhil.validation import (
     Constraints,
     StrOptions,
@@ -259,20 +253,14 @@ def _noise_and_threshold(v: np.ndarray, u: np.ndarray, zv: np.ndarray, zu: np.nd
                                                       v_peak)
 
 
-MISSED_BYTES = np.uint64(0x0202020202020202)
-"""Bit 1 of each of 8 spike bytes read as one word: the channels whose pair missed the
-normals' fast path (:func:`_diffusion_block`)."""
-
-
 @numba.njit(inline="always")
 def _diffusion_block(v: np.ndarray, u: np.ndarray, current: np.ndarray, keys: np.ndarray,
                      step: int, sigma: float, dt_ms: float, a: float, b: float, c: float,
-                     d: float, gain: float, v_peak: float,
-                     spikes: np.ndarray) -> None:  # pragma: no cover - compiled
+                     d: float, gain: float, v_peak: float, spikes: np.ndarray,
+                     zv: np.ndarray, zu: np.ndarray) -> None:  # pragma: no cover - compiled
     # steps 1-3 at step number ``step`` for one block of channels under the diffusion noise:
-    # one branch-free pass (it vectorises) with the normals' fast path, in which a channel
-    # whose pair missed it keeps Euler's v, u (noise 0, no spike) and its spike byte is 2;
-    # then a scan of the spike bytes, 8 at a time, finishes those with the slow path
+    # the C kernel fills the block's normals into the float32 scratch zv, zu (one call),
+    # then one branch-free pass does Euler, noise and threshold (it vectorises)
     n = v.shape[0]
     if sigma == 0.0:
         for i in range(n):
@@ -280,31 +268,12 @@ def _diffusion_block(v: np.ndarray, u: np.ndarray, current: np.ndarray, keys: np
             spikes[i], v[i], u[i] = _noise_then_threshold(vv, uu, 0.0, 0.0, 0.0, 0.0, c, d,
                                                           v_peak)
         return
-    h = step_hash(step)
-    flags = spikes.view(np.uint8)
+    normals_ext(keys.ctypes, n, step, zv.ctypes, zu.ctypes)
     for i in range(n):
         vv, uu = _euler(v[i], u[i], current[i], dt_ms, a, b, gain)
-        z1, z2, ok1, ok2 = fast_pair(mix64(keys[i] ^ h))
-        ok = ok1 & ok2
-        vv = vv + sigma * (z1 if ok else 0.0)
-        uu = uu + sigma * (z2 if ok else 0.0)
-        fired = (vv >= v_peak) & ok
-        flags[i] = fired + 2 * (not ok)
-        v[i] = c if fired else vv
-        u[i] = uu + d if fired else uu
-    whole = n // 8
-    words = flags[:8 * whole].view(np.uint64)
-    for j in range(whole + 1):  # (no call with an array inside: numba would count references)
-        if j < whole and not words[j] & MISSED_BYTES:
-            continue
-        for i in range(8 * j, min(8 * j + 8, n)):
-            if flags[i] > 1:  # v, u hold Euler's values: the noise and threshold now
-                z1, z2 = normal_pair(keys[i], step)
-                fired, vv, uu = _noise_then_threshold(v[i], u[i], z1, z2, sigma, sigma, c, d,
+        spikes[i], v[i], u[i] = _noise_then_threshold(vv, uu, np.float64(zv[i]),
+                                                      np.float64(zu[i]), sigma, sigma, c, d,
                                                       v_peak)
-                v[i] = vv
-                u[i] = uu
-                flags[i] = fired
 
 
 @numba.njit(cache=True, fastmath=False, nogil=True)
@@ -319,6 +288,8 @@ def _izhikevich_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray,
     sigma_step = math.sqrt(p.noise_var * dt_ms / p.ref_step_ms)  # diffusion σ per step (mV)
     first = p.clock[0]
     p.clock[0] += n_steps
+    zv = np.zeros(n, np.float32)  # a step's normals (C kernel), drawn before use
+    zu = np.zeros(n, np.float32)
     if not p.measured:  # block by block: each block's state used while in cache
         for k in range(n_steps):
             for bb in range(n_batch):
@@ -327,10 +298,8 @@ def _izhikevich_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray,
                     hi = min(n, lo + CHANNEL_BLOCK)
                     _diffusion_block(v[bb, lo:hi], u[bb, lo:hi], cur[lo:hi], keys[bb, lo:hi],
                                      first + k, sigma_step, dt_ms, p.a, p.b, c, d, p.gain,
-                                     p.v_peak, spikes[k, bb, lo:hi])
+                                     p.v_peak, spikes[k, bb, lo:hi], zv[lo:hi], zu[lo:hi])
         return
-    zv = np.zeros(n)  # this step's normals, drawn before use; zero without noise
-    zu = np.zeros(n)
     for k in range(n_steps):
         for bb in range(n_batch):
             vb = v[bb]
@@ -347,7 +316,7 @@ def _izhikevich_kernel(current: np.ndarray, dt_ms: float, spikes: np.ndarray,
             sv = math.sqrt(pv / n * p.noise_var)
             su = math.sqrt(pu / n * p.noise_var)
             if p.noise_var > 0.0:
-                fill_normal_pairs(keys[bb], first + k, zv, zu)
+                normals_ext(keys[bb].ctypes, n, first + k, zv.ctypes, zu.ctypes)
             _noise_and_threshold(vb, ub, zv, zu, sv, su, c, d, p.v_peak, spikes[k, bb])
 
 
@@ -369,11 +338,13 @@ def _izhikevich_parallel_kernel(current: np.ndarray, dt_ms: float, spikes: np.nd
         bb = job // n_blocks
         lo = (job % n_blocks) * CHANNEL_BLOCK
         hi = min(n, lo + CHANNEL_BLOCK)
+        zv = np.empty(hi - lo, np.float32)  # this job's normals (C kernel)
+        zu = np.empty(hi - lo, np.float32)
         for k in range(n_steps):
             _diffusion_block(v[bb, lo:hi], u[bb, lo:hi],
                              current[k, 0 if shared_input else bb, lo:hi], keys[bb, lo:hi],
                              first + k, sigma_step, dt_ms, a, b, c, d, gain, v_peak,
-                             spikes[k, bb, lo:hi])
+                             spikes[k, bb, lo:hi], zv, zu)
     p.clock[0] += n_steps
 
 
