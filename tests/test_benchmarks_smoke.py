@@ -90,7 +90,7 @@ def smoke_runs(results_root: Path
 
 def test_the_scripts_are_found() -> None:
     names = {p.name for p in scripts()}
-    assert {"bench_size.py", "bench_udp.py", "bench_live_hand.py"} <= names
+    assert {"bench_size.py", "bench_udp.py", "bench_live_hand.py", "bench_gamers.py"} <= names
     assert "machine.py" not in names  # a helper, not a script
 
 

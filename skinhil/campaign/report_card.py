@@ -70,7 +70,10 @@ def case_tasks(suite: Suite) -> dict[str, list[str]]:
             for c in suite.cases}
 
 
-def _pooled(rows: list[dict[str, Any]]) -> dict[str, Any]:
+def pooled(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """Rows of ``right`` and ``charged`` (one per seed) pooled: ``score`` the sum of right
+    over the sum of charged (None if nothing was charged), its 95 % Wilson ``interval``,
+    ``right``, ``charged``."""
     k = sum(r["right"] for r in rows)
     n = sum(r["charged"] for r in rows)
     ci = wilson_interval(k, n)
@@ -104,8 +107,8 @@ def build_card(suite: Suite, run: SuiteRun, draw_seed: int, seeds: list[int],
             continue
         for key in keys:
             rows = _rows(run.decoder, case, key)
-            entry = {"case": case, **_pooled(rows), "seeds": rows,
-                     "baselines": {name: _pooled(_rows(s, case, key))
+            entry = {"case": case, **pooled(rows), "seeds": rows,
+                     "baselines": {name: pooled(_rows(s, case, key))
                                    for name, s in run.baselines.items()}}
             if key == GRASP:
                 grasp = entry

@@ -5,7 +5,7 @@ listeners fed the board's stream as it leaves (the reference receiver's answerer
 controller), whose commands arrive at the board's next tick.
 
 The board decodes and scores every command as it does on any link; what comes back is what
-the score file holds (``tasks``, ``scoreboard``, ``grasp``), so a scripted decoder and a
+the score file holds (the DECISION scoreboard, ``tasks``, ``grasp``), so a scripted decoder and a
 baseline are scored by one path.
 """
 
@@ -22,11 +22,11 @@ import numpy as np
 
 import protocols
 from firmware_sim.board import Board, BoardConfig
+from firmware_sim.score import board_score
 from harness.golden import GoldenLink, _plain
 from skinhil.cli.serve import write_truth
 from skinhil.decoding.classifier import DirectionDecoder
 from skinhil.model.timeline import Timeline
-from skinhil.plant.report import plant_scores
 from skinhil.receiver.online import WindowDecoder
 from skinhil.receiver.receiver import Receiver, ReceiverListener
 from skinhil.receiver.training import feature_spec
@@ -93,14 +93,15 @@ class Played:
 
     trials: Trials
     scores: dict[str, Any]
+    """The run's score file (``serve --score``: :func:`firmware_sim.score.board_score`)."""
     truth: str
     """The run's truth file (``serve --truth``: markers and trials, JSON lines)."""
 
     def task(self, name: str) -> dict[str, Any]:
         """The score file's ``tasks.<name>``; ``classification`` is the DECISION
-        scoreboard's (SPEC.md §3.5.2)."""
+        scoreboard's, at the score file's top level (SPEC.md §3.5.2)."""
         if name == "classification":
-            return dict(self.scores["scoreboard"])
+            return {k: v for k, v in self.scores.items() if k not in ("tasks", "grasp")}
         return dict(self.scores["tasks"][name])
 
     def score(self, name: str) -> float:
@@ -139,11 +140,7 @@ def play_case(ref: str, seed: int, script: Script | None = None,
     board.finish(protocols.RunEndReason.DURATION)
     for reader in readers:
         reader.feed(_units(link, seen), tick_of(trials.duration_s) * TICK_S)
-    scores: dict[str, Any] = {"scoreboard": board.scoreboard.summary(),
-                              "tasks": board.tasks.summary(with_verdicts=True)
-                              if board.tasks is not None else {}}
-    if board.plant is not None:
-        scores["grasp"] = plant_scores(board.plant, board.truth)
+    scores = board_score(board)
     with tempfile.TemporaryDirectory() as tmp:
         write_truth(Path(tmp) / "truth.jsonl", board)
         truth = (Path(tmp) / "truth.jsonl").read_text(encoding="utf-8")
