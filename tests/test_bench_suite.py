@@ -90,8 +90,9 @@ def test_the_card_of_a_case_against_the_reference_receiver(model: Path, tmp_path
     entry = card["tasks"][CASE]
     own = score["tasks"][CASE]
     (row,) = entry["seeds"]
-    assert row == {"seed": seed, "score": row["score"], "right": own["right"],
-                   "charged": counts(score, CASE)[1], "outcome": record["outcome"]}
+    charged = own["trials"] + own["answers"] - own["matched"]
+    assert row == {"seed": seed, "score": row["score"], "right": round(own["score"] * charged),
+                   "charged": charged, "outcome": record["outcome"]}
     assert row["score"] == pytest.approx(own["score"], abs=1e-6)  # the score file's
     assert entry["charged"] == own["trials"] + own["answers"] - own["matched"] > 0
     assert entry["score"] == pytest.approx(own["score"], abs=1e-6)
@@ -220,3 +221,20 @@ def test_listen_grips_only_with_answer(tmp_path: Path, capsys: pytest.CaptureFix
                  str(model)]) == 2
     err = capsys.readouterr().err.strip()
     assert "--grip-readout" in err and "--answer" in err, err
+
+
+def test_pooled_counts_keep_each_tasks_own_rule() -> None:
+    """A seed's right and charged reproduce its headline score: a hedged right answer counts
+    for nothing, and a detection (SLIP) cancelled by unmatched answers counts nothing while
+    its denominator stays the trials (a blind SLIP cadence pools to 0, not to right over
+    every answer)."""
+    slip = {"tasks": {"slip": {"score": 0.0, "right": 5, "trials": 5, "answers": 40,
+                               "matched": 5}}}
+    assert counts(slip, "slip") == (0, 5)
+    slip["tasks"]["slip"].update(score=0.6, answers=7)  # 5 detections, 2 unmatched
+    assert counts(slip, "slip") == (3, 5)
+    force = {"tasks": {"force": {"score": 0.25, "right": 3, "trials": 6, "answers": 8,
+                                 "matched": 6}}}  # one right answer hedged
+    assert counts(force, "force") == (2, 8)
+    decisions = {"score": 0.5, "right": 2, "onsets": 2, "decisions": 2, "matched": 2}
+    assert counts(decisions, "classification") == (1, 2)

@@ -5,9 +5,10 @@ wire's versions, and the seeds drawn; as JSON (``report-card.json``, its schema
 ``skinhil/schemas/report-card.schema.json``) and Markdown (``report-card.md``).
 
 The numbers come from the board's score files only (each case's ``score.json``): a task's
-``right`` and ``charged`` (``tasks.<task>``: right, and trials + answers - matched, the
-denominator of its ``score``), the grasp's lifts won (``grasp.score`` x ``grasp.lifts``) and
-lifts; the pooled score is the sum of ``right`` over the sum of ``charged``. A case whose
+``charged`` (the denominator of its headline ``score`` under the task's rule: trials +
+answers - matched, or for a detection task the trials; :func:`counts`) and ``right`` (the
+score times charged), the grasp's lifts won and lifts; the pooled score is the sum of
+``right`` over the sum of ``charged``, so a seed's hedged or cancelled answers stay charged. A case whose
 board wrote no score file (the rig's error) adds nothing and is listed with its reason.
 """
 
@@ -24,6 +25,7 @@ from skinhil.campaign.interval import METHOD, wilson_interval
 from skinhil.campaign.suite_run import BASELINES, SuiteRun
 from skinhil.output_files import write_text
 from skinhil.suites import Suite
+from skinhil.tasks.registry import by_name
 
 FORMAT = "skinhil-report-card"
 VERSION = 1
@@ -44,23 +46,34 @@ def _score_file(record: Mapping[str, Any]) -> dict[str, Any] | None:
 
 
 def counts(score: Mapping[str, Any], task: str) -> tuple[int, int] | None:
-    """(right, charged) of ``task`` (or :data:`GRASP`) in a score file; None if it has
-    none. :data:`CLASSIFICATION` is the DECISION scoreboard's, at the score file's top level
-    (right, and onsets + decisions - matched: charged as a task's ``score``)."""
+    """(right, charged) of ``task`` (or :data:`GRASP`) in a score file, so that right /
+    charged is the file's own headline ``score`` under the task's rule (SPEC.md §3.5.4):
+    charged is the trials and every answer that answered no trial first, or for a detection
+    task (SLIP) the trials alone, and right the score times charged (a hedged right answer
+    and a detection cancelled by an unmatched answer count for nothing); for :data:`GRASP`
+    the lifts. None if the file has none. :data:`CLASSIFICATION` is the DECISION
+    scoreboard's, at the score file's top level."""
     if task == CLASSIFICATION and task not in (score.get("tasks") or {}):
         if "onsets" not in score:
             return None
-        return int(score["right"]), \
-            int(score["onsets"]) + int(score["decisions"]) - int(score["matched"])
+        return _scored(score, int(score["onsets"]) + int(score["decisions"])
+                       - int(score["matched"]))
     if task == GRASP:
         g = score.get("grasp")
         if not isinstance(g, Mapping) or not g.get("lifts"):
             return None
-        return round(float(g["score"] or 0.0) * int(g["lifts"])), int(g["lifts"])
+        return _scored(g, int(g["lifts"]))
     t = (score.get("tasks") or {}).get(task)
     if not isinstance(t, Mapping):
         return None
-    return int(t["right"]), int(t["trials"]) + int(t["answers"]) - int(t["matched"])
+    if by_name(task).detection:
+        return _scored(t, int(t["trials"]))
+    return _scored(t, int(t["trials"]) + int(t["answers"]) - int(t["matched"]))
+
+
+def _scored(scores: Mapping[str, Any], charged: int) -> tuple[int, int]:
+    # (the headline score times charged, charged): the score's numerator, whole
+    return round(float(scores.get("score") or 0.0) * charged), charged
 
 
 def case_tasks(suite: Suite) -> dict[str, list[str]]:
