@@ -31,7 +31,6 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
-import re
 import secrets
 import sys
 import time
@@ -43,7 +42,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "tests"), str(ROOT / "benchmarks")]
 
 import results as bench_results  # noqa: E402
-from bench_suite import cell  # noqa: E402
+from bench_suite import cell, put_between  # noqa: E402
 from harness import gamer_roster as roster  # noqa: E402
 from harness.suite_play import Played  # noqa: E402
 from machine import describe, load_average  # noqa: E402
@@ -164,12 +163,7 @@ def table(results: dict[str, Any]) -> str:
 
 def render(results: dict[str, Any], docs: Path) -> None:
     """Put :func:`table` between the markers of ``docs``."""
-    text = docs.read_text(encoding="utf-8")
-    pattern = re.compile(re.escape(BEGIN) + r".*?" + re.escape(END), re.S)
-    if not pattern.search(text):
-        raise SystemExit(f"{docs} has no {BEGIN} ... {END} markers")
-    docs.write_text(pattern.sub(lambda _: f"{BEGIN}\n{table(results)}\n{END}", text),
-                    encoding="utf-8")
+    put_between(docs, BEGIN, END, table(results))
 
 
 def main() -> None:

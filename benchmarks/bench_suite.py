@@ -111,14 +111,18 @@ def table(results: dict) -> str:
     return "\n".join(out)
 
 
+def put_between(docs: Path, begin: str, end: str, text: str) -> None:
+    """Put ``text`` between the markers ``begin`` and ``end`` of ``docs``."""
+    page = docs.read_text(encoding="utf-8")
+    pattern = re.compile(re.escape(begin) + r".*?" + re.escape(end), re.S)
+    if not pattern.search(page):
+        raise SystemExit(f"{docs} has no {begin} ... {end} markers")
+    docs.write_text(pattern.sub(lambda _: f"{begin}\n{text}\n{end}", page), encoding="utf-8")
+
+
 def render(results: dict, docs: Path) -> None:
     """Put :func:`table` between the markers of ``docs``."""
-    text = docs.read_text(encoding="utf-8")
-    pattern = re.compile(re.escape(BEGIN) + r".*?" + re.escape(END), re.S)
-    if not pattern.search(text):
-        raise SystemExit(f"{docs} has no {BEGIN} ... {END} markers")
-    docs.write_text(pattern.sub(lambda _: f"{BEGIN}\n{table(results)}\n{END}", text),
-                    encoding="utf-8")
+    put_between(docs, BEGIN, END, table(results))
 
 
 def main() -> None:
