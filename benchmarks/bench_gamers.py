@@ -42,12 +42,12 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "tests"), str(ROOT / "benchmarks")]
 
 import results as bench_results  # noqa: E402
-from bench_suite import cell, put_between  # noqa: E402
+from bench_suite import put_between  # noqa: E402
 from harness import gamer_roster as roster  # noqa: E402
 from harness.suite_play import Played  # noqa: E402
 from machine import describe, load_average  # noqa: E402
 
-from skinhil.campaign.report_card import GRASP, counts, pooled  # noqa: E402
+from skinhil.campaign.report_card import GRASP, cell, counts, pooled  # noqa: E402
 from skinhil.campaign.suite_run import draw_seeds  # noqa: E402
 from skinhil.suites import registry  # noqa: E402
 

@@ -37,6 +37,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import results as bench_results  # noqa: E402
 from machine import describe, load_average  # noqa: E402
 
+from skinhil.campaign.report_card import cell  # noqa: E402
+
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "benchmarks" / "results" / "suite" / "bench_suite.json"
 """A report card per run, apart from the figure files the benchmarks page renders."""
@@ -62,14 +64,6 @@ def quick_model(path: Path) -> None:
     rng = np.random.default_rng(0)
     x, y = rng.normal(size=(36, spec.n_features)), np.repeat(np.arange(9), 4)
     save_decoder(DirectionDecoder(spec).fit(x, y), path)
-
-
-def cell(entry: dict | None) -> str:
-    """A card entry as ``score [lo, hi] (right/charged)``."""
-    if entry is None or entry["score"] is None:
-        return "n/a"
-    lo, hi = entry["interval"]
-    return f"{entry['score']:.2f} [{lo:.2f}, {hi:.2f}] ({entry['right']}/{entry['charged']})"
 
 
 def figures(card: dict, wall_s: float) -> list[dict]:
@@ -100,7 +94,7 @@ def table(results: dict) -> str:
            f"{card['versions']['skinhil']}, seeds {', '.join(map(str, card['draw']['seeds']))} "
            f"(drawn with --seed {card['draw']['seed']}). Each cell: the score pooled over the "
            "seeds [95 % Wilson interval] (right/charged); the decoder is the reference "
-           "receiver on the bench's own link. "
+           "receiver on the bench's own link; n/a: the baseline answers no such trial. "
            f"Cases: {card['totals']['passed']} of {card['totals']['cases']} passed, "
            f"{card['totals']['errors']} errors of the rig.", "",
            "| " + " | ".join(["task", "decoder (reference receiver)", *who]) + " |",

@@ -8,8 +8,9 @@ The numbers come from the board's score files only (each case's ``score.json``):
 ``charged`` (the denominator of its headline ``score`` under the task's rule: trials +
 answers - matched, or for a detection task the trials; :func:`counts`) and ``right`` (the
 score times charged), the grasp's lifts won and lifts; the pooled score is the sum of
-``right`` over the sum of ``charged``, so a seed's hedged or cancelled answers stay charged. A case whose
-board wrote no score file (the rig's error) adds nothing and is listed with its reason.
+``right`` over the sum of ``charged``, so a seed's hedged or cancelled answers stay charged.
+A case whose board wrote no score file (the rig's error) adds nothing and is listed with its
+reason; a baseline that answered a task at no seed has no score for it (it does not play it).
 """
 
 from __future__ import annotations
@@ -109,6 +110,26 @@ def _rows(summary: Mapping[str, Any], case: str, task: str) -> list[dict[str, An
     return rows
 
 
+def answers_sent(score: Mapping[str, Any], task: str) -> int:
+    """How many answers to ``task`` a score file counts (DECISIONs for
+    :data:`CLASSIFICATION`, GRIPs accepted for :data:`GRASP`)."""
+    if task == CLASSIFICATION and task not in (score.get("tasks") or {}):
+        return int(score.get("decisions") or 0)
+    if task == GRASP:
+        return int(((score.get("grasp") or {}).get("grips") or {}).get("accepted") or 0)
+    return int(((score.get("tasks") or {}).get(task) or {}).get("answers") or 0)
+
+
+def _baseline(summary: Mapping[str, Any], case: str, task: str) -> dict[str, Any]:
+    """A baseline's pooled entry; its score and interval null where it answered ``task`` at
+    no seed (an answerer that does not play that task is no baseline of it)."""
+    entry = pooled(_rows(summary, case, task))
+    files = [_score_file(r) for r in summary["cases"] if r["scenario"] == case]
+    if not any(answers_sent(s, task) for s in files if s is not None):
+        entry.update(score=None, interval=None)
+    return entry
+
+
 def build_card(suite: Suite, run: SuiteRun, draw_seed: int, seeds: list[int],
                link: str) -> dict[str, Any]:
     """The card's JSON-ready data (module docstring)."""
@@ -121,7 +142,7 @@ def build_card(suite: Suite, run: SuiteRun, draw_seed: int, seeds: list[int],
         for key in keys:
             rows = _rows(run.decoder, case, key)
             entry = {"case": case, **pooled(rows), "seeds": rows,
-                     "baselines": {name: pooled(_rows(s, case, key))
+                     "baselines": {name: _baseline(s, case, key)
                                    for name, s in run.baselines.items()}}
             if key == GRASP:
                 grasp = entry
@@ -149,8 +170,9 @@ def build_card(suite: Suite, run: SuiteRun, draw_seed: int, seeds: list[int],
     return card
 
 
-def _cell(entry: Mapping[str, Any]) -> str:
-    if entry["score"] is None:
+def cell(entry: Mapping[str, Any] | None) -> str:
+    """A card entry as ``score [lo, hi] (right/charged)``, or ``n/a`` where it has no score."""
+    if entry is None or entry["score"] is None:
         return "n/a"
     lo, hi = entry["interval"]
     return f"{entry['score']:.2f} [{lo:.2f}, {hi:.2f}] ({entry['right']}/{entry['charged']})"
@@ -175,7 +197,7 @@ def card_markdown(card: Mapping[str, Any]) -> str:
     if "grasp" in card:
         rows.append(("grasp", card["grasp"]))
     for key, e in rows:
-        cells = [key, e["case"], _cell(e), *(_cell(e["baselines"][n]) if n in e["baselines"]
+        cells = [key, e["case"], cell(e), *(cell(e["baselines"][n]) if n in e["baselines"]
                                             else "n/a" for n in names)]
         lines.append("| " + " | ".join(cells) + " |")
     t = card["totals"]
