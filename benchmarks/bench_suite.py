@@ -4,7 +4,7 @@ the bench's own pty pair, the reference, random and oracle answerers (and the gr
 reference controller) beside it at the same seeds.
 
 It writes each task's scores (the decoder's and every baseline's, with their 95 % intervals)
-as a benchmark result through ``results.py`` (benchmarks/results/bench_suite.json: the
+as a benchmark result through ``results.py`` (benchmarks/results/suite.json: the
 machine, the load, the command, the date), the whole report card to
 benchmarks/results/suite/bench_suite.json, and renders the docs table from the card between
 the markers of docs/suites.md (never typed by hand). One seed of every case with the
@@ -166,7 +166,7 @@ def main() -> None:
                "load": f"{load} at the start, {load_average()} at the end",
                "wall_s": round(wall_s, 1), "card": card}
     print(table(results), flush=True)
-    bench_results.publish(args, "bench_suite", "tactile-v1 report card: scores and 95 % "
+    bench_results.publish(args, "suite", "tactile-v1 report card: scores and 95 % "
                           "intervals per task and answerer", figures(card, round(wall_s, 1)))
     if not args.smoke:
         args.results.parent.mkdir(parents=True, exist_ok=True)
