@@ -10,7 +10,7 @@ receiver's (from 3 ms before the detection, 50 ms long). fit_reference_answerers
 the fit with its provenance:
 
     python benchmarks/fit_force_line.py --snr-db 10 --seeds 1-20
-    python benchmarks/fit_force_line.py --smoke     # one seed, two trials only
+    python benchmarks/fit_force_line.py --smoke     # one seed, four trials only
 """
 
 from __future__ import annotations

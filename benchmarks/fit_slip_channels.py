@@ -9,7 +9,7 @@ slides, it fires at most STICK_MAX spikes in the stick window and at least RISE_
 the slip window. fit_reference_answerers.py stores the fit with its provenance:
 
     python benchmarks/fit_slip_channels.py --snr-db 10 --seeds 1-20
-    python benchmarks/fit_slip_channels.py --smoke     # one seed, two trials only
+    python benchmarks/fit_slip_channels.py --smoke     # one seed, four trials only
 """
 
 from __future__ import annotations

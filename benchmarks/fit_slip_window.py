@@ -7,7 +7,7 @@ latencies' QUANTILE (the largest: the window must not cut a detection of the ref
 plus the live path's margin (LIVE_MARGIN_US), rounded up to ROUND_US.
 
     python benchmarks/fit_slip_window.py --snr-db 10 --seeds 1-20
-    python benchmarks/fit_slip_window.py --smoke     # one seed, two trials only
+    python benchmarks/fit_slip_window.py --smoke     # one seed, four trials only
 """
 
 from __future__ import annotations

@@ -10,7 +10,7 @@ the detection, as the receiver's. The length chosen is the one that calls the mo
 touch-downs and releases releases (their mean share):
 
     python benchmarks/fit_touch_kind.py --snr-db 10 --seeds 1-20
-    python benchmarks/fit_touch_kind.py --smoke     # the force case, one seed, two trials only
+    python benchmarks/fit_touch_kind.py --smoke     # the force case, one seed, four trials only
 """
 
 from __future__ import annotations

@@ -10,7 +10,7 @@ latest touch-down left out, and their windows are the receiver's (from 3 ms befo
 detection, 50 ms long):
 
     python benchmarks/fit_touch_spikes.py --snr-db 10 --seeds 1-20
-    python benchmarks/fit_touch_spikes.py --smoke     # one seed, two trials only
+    python benchmarks/fit_touch_spikes.py --smoke     # one seed, four trials only
 """
 
 from __future__ import annotations

@@ -11,7 +11,7 @@ touch-down is a release or noise: left out). fit_reference_answerers.py stores t
 its provenance:
 
     python benchmarks/fit_vibration_classes.py --snr-db 10 --seeds 1-20
-    python benchmarks/fit_vibration_classes.py --smoke     # one seed, two trials only
+    python benchmarks/fit_vibration_classes.py --smoke     # one seed, four trials only
 """
 
 from __future__ import annotations

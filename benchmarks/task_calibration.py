@@ -36,7 +36,7 @@ MATCH_US = 50_000
 and noise, are left out)."""
 RELEASE_US = (-20_000, 60_000)
 """An onset within this (µs) of a touch's last touching tick is its release's."""
-SMOKE_TRIALS = 2
+SMOKE_TRIALS = 4
 """--smoke: trials of a case played (its first)."""
 
 
