@@ -46,6 +46,15 @@ def _score_file(record: Mapping[str, Any]) -> dict[str, Any] | None:
     return data if isinstance(data, dict) else None
 
 
+def _section(score: Mapping[str, Any], task: str) -> Mapping[str, Any] | None:
+    # the part of a score file that scores ``task``: the DECISION scoreboard's top level for
+    # CLASSIFICATION, ``grasp`` for GRASP, else ``tasks.<task>``; None if the file has none
+    if task == CLASSIFICATION and task not in (score.get("tasks") or {}):
+        return score if "onsets" in score else None
+    part = score.get("grasp") if task == GRASP else (score.get("tasks") or {}).get(task)
+    return part if isinstance(part, Mapping) else None
+
+
 def counts(score: Mapping[str, Any], task: str) -> tuple[int, int] | None:
     """(right, charged) of ``task`` (or :data:`GRASP`) in a score file, so that right /
     charged is the file's own headline ``score`` under the task's rule (SPEC.md §3.5.4):
@@ -54,27 +63,20 @@ def counts(score: Mapping[str, Any], task: str) -> tuple[int, int] | None:
     and a detection cancelled by an unmatched answer count for nothing); for :data:`GRASP`
     the lifts. None if the file has none. :data:`CLASSIFICATION` is the DECISION
     scoreboard's, at the score file's top level."""
-    if task == CLASSIFICATION and task not in (score.get("tasks") or {}):
-        if "onsets" not in score:
-            return None
-        return _scored(score, int(score["onsets"]) + int(score["decisions"])
-                       - int(score["matched"]))
-    if task == GRASP:
-        g = score.get("grasp")
-        if not isinstance(g, Mapping) or not g.get("lifts"):
-            return None
-        return _scored(g, int(g["lifts"]))
-    t = (score.get("tasks") or {}).get(task)
-    if not isinstance(t, Mapping):
+    s = _section(score, task)
+    if s is None:
         return None
-    if by_name(task).detection:
-        return _scored(t, int(t["trials"]))
-    return _scored(t, int(t["trials"]) + int(t["answers"]) - int(t["matched"]))
-
-
-def _scored(scores: Mapping[str, Any], charged: int) -> tuple[int, int]:
-    # (the headline score times charged, charged): the score's numerator, whole
-    return round(float(scores.get("score") or 0.0) * charged), charged
+    if task == GRASP:
+        charged = int(s.get("lifts") or 0)
+        if not charged:
+            return None
+    elif task == CLASSIFICATION and s is score:
+        charged = int(s["onsets"]) + int(s["decisions"]) - int(s["matched"])
+    elif by_name(task).detection:
+        charged = int(s["trials"])
+    else:
+        charged = int(s["trials"]) + int(s["answers"]) - int(s["matched"])
+    return round(float(s.get("score") or 0.0) * charged), charged
 
 
 def case_tasks(suite: Suite) -> dict[str, list[str]]:
@@ -113,11 +115,10 @@ def _rows(summary: Mapping[str, Any], case: str, task: str) -> list[dict[str, An
 def answers_sent(score: Mapping[str, Any], task: str) -> int:
     """How many answers to ``task`` a score file counts (DECISIONs for
     :data:`CLASSIFICATION`, GRIPs accepted for :data:`GRASP`)."""
-    if task == CLASSIFICATION and task not in (score.get("tasks") or {}):
-        return int(score.get("decisions") or 0)
+    s = _section(score, task) or {}
     if task == GRASP:
-        return int(((score.get("grasp") or {}).get("grips") or {}).get("accepted") or 0)
-    return int(((score.get("tasks") or {}).get(task) or {}).get("answers") or 0)
+        return int((s.get("grips") or {}).get("accepted") or 0)
+    return int(s.get("decisions" if s is score else "answers") or 0)
 
 
 def _baseline(summary: Mapping[str, Any], case: str, task: str) -> dict[str, Any]:
