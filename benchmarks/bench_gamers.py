@@ -42,7 +42,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "tests"), str(ROOT / "benchmarks")]
 
 import results as bench_results  # noqa: E402
-from bench_suite import put_between  # noqa: E402
+from bench_suite import keep_table, put_between  # noqa: E402
 from harness import gamer_roster as roster  # noqa: E402
 from harness.suite_play import Played  # noqa: E402
 from machine import describe, load_average  # noqa: E402
@@ -212,10 +212,7 @@ def main() -> None:
                           "of decoders that read no spike, beside the random answerer and the "
                           "reference grip controller", figures(rows, wall_s, wall_s / count))
     if not args.smoke:
-        args.results.parent.mkdir(parents=True, exist_ok=True)
-        args.results.write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
-        render(results, args.docs)
-        print(f"wrote {args.results} and the table of {args.docs}")
+        keep_table(results, args.results, args.docs, render)
 
 
 if __name__ == "__main__":

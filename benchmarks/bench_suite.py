@@ -31,6 +31,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -114,6 +115,15 @@ def put_between(docs: Path, begin: str, end: str, text: str) -> None:
     docs.write_text(pattern.sub(lambda _: f"{begin}\n{text}\n{end}", page), encoding="utf-8")
 
 
+def keep_table(results: dict, path: Path, docs: Path, render: Callable[[dict, Path], None]
+               ) -> None:
+    """Write ``results`` to ``path`` and ``render`` its table into ``docs``."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
+    render(results, docs)
+    print(f"wrote {path} and the table of {docs}")
+
+
 def render(results: dict, docs: Path) -> None:
     """Put :func:`table` between the markers of ``docs``."""
     put_between(docs, BEGIN, END, table(results))
@@ -169,10 +179,7 @@ def main() -> None:
     bench_results.publish(args, "suite", "tactile-v1 report card: scores and 95 % "
                           "intervals per task and answerer", figures(card, round(wall_s, 1)))
     if not args.smoke:
-        args.results.parent.mkdir(parents=True, exist_ok=True)
-        args.results.write_text(json.dumps(results, indent=1) + "\n", encoding="utf-8")
-        render(results, args.docs)
-        print(f"wrote {args.results} and the table of {args.docs}")
+        keep_table(results, args.results, args.docs, render)
 
 
 if __name__ == "__main__":
